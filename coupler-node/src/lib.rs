@@ -1,0 +1,4 @@
+//! The coupler: the time loop, the handshake, the conservation ledger, the MCAP record, replay
+//! and inspection, and the launcher that starts and supervises the nodes.
+
+#![warn(missing_docs)]

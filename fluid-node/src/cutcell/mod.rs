@@ -1,0 +1,1 @@
+//! Pure cut-cell geometry (no IO, no clock).

@@ -1,0 +1,1 @@
+//! Pure finite-volume core (no IO, no clock).

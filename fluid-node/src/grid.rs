@@ -1,0 +1,110 @@
+//! The Cartesian grid: 1, 2 or 3 active axes chosen at run time.
+//!
+//! Cells are numbered with x fastest: `idx = i + n_x (j + n_y k)`. Inactive axes have one cell
+//! and unit width, so a 2-D grid holds `n_x n_y` cells and its "volume" is an area.
+
+/// A uniform Cartesian grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    /// Number of active axes (1, 2 or 3).
+    pub dim: usize,
+    /// Lower corner [m] (inactive axes: 0).
+    pub lower: [f64; 3],
+    /// Upper corner [m] (inactive axes: 1).
+    pub upper: [f64; 3],
+    /// Cells per axis (inactive axes: 1).
+    pub cells: [usize; 3],
+    /// Cell width per axis [m] (inactive axes: 1).
+    pub dx: [f64; 3],
+}
+
+/// Why a grid cannot be built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridError(pub String);
+
+impl std::fmt::Display for GridError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for GridError {}
+
+impl Grid {
+    /// Builds a grid from per-axis corners and counts (all of the same length 1, 2 or 3).
+    pub fn new(lower: &[f64], upper: &[f64], cells: &[usize]) -> Result<Grid, GridError> {
+        let dim = lower.len();
+        if !(1..=3).contains(&dim) || upper.len() != dim || cells.len() != dim {
+            return Err(GridError(format!(
+                "grid needs 1 to 3 axes with matching lengths, got lower {lower:?}, upper {upper:?}, cells {cells:?}"
+            )));
+        }
+        let mut grid = Grid {
+            dim,
+            lower: [0.0; 3],
+            upper: [1.0; 3],
+            cells: [1; 3],
+            dx: [1.0; 3],
+        };
+        for axis in 0..dim {
+            if !(upper[axis] > lower[axis]) || cells[axis] == 0 {
+                return Err(GridError(format!(
+                    "axis {axis}: need upper > lower and cells > 0, got {} .. {} with {} cells",
+                    lower[axis], upper[axis], cells[axis]
+                )));
+            }
+            grid.lower[axis] = lower[axis];
+            grid.upper[axis] = upper[axis];
+            grid.cells[axis] = cells[axis];
+            grid.dx[axis] = (upper[axis] - lower[axis]) / cells[axis] as f64;
+        }
+        Ok(grid)
+    }
+
+    /// Total number of cells.
+    pub fn n_cells(&self) -> usize {
+        self.cells[0] * self.cells[1] * self.cells[2]
+    }
+
+    /// Linear index of cell `(i, j, k)`.
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        debug_assert!(i < self.cells[0] && j < self.cells[1] && k < self.cells[2]);
+        i + self.cells[0] * (j + self.cells[1] * k)
+    }
+
+    /// Inverse of [`Grid::index`].
+    #[inline]
+    pub fn ijk(&self, idx: usize) -> [usize; 3] {
+        let i = idx % self.cells[0];
+        let rest = idx / self.cells[0];
+        [i, rest % self.cells[1], rest / self.cells[1]]
+    }
+
+    /// Centre of cell `(i, j, k)`; inactive coordinates are 0.
+    pub fn cell_center(&self, ijk: [usize; 3]) -> [f64; 3] {
+        let mut x = [0.0; 3];
+        for axis in 0..self.dim {
+            x[axis] = self.lower[axis] + (ijk[axis] as f64 + 0.5) * self.dx[axis];
+        }
+        x
+    }
+
+    /// Volume of one cell (area in 2-D, length in 1-D).
+    pub fn cell_volume(&self) -> f64 {
+        self.dx[..self.dim].iter().product()
+    }
+
+    /// The cell holding point `x` (only the first `dim` coordinates are read), if inside.
+    pub fn locate(&self, x: &[f64]) -> Option<[usize; 3]> {
+        let mut ijk = [0; 3];
+        for axis in 0..self.dim {
+            let s = (x[axis] - self.lower[axis]) / self.dx[axis];
+            if !(s >= 0.0 && s <= self.cells[axis] as f64) {
+                return None;
+            }
+            ijk[axis] = (s.floor() as usize).min(self.cells[axis] - 1);
+        }
+        Some(ijk)
+    }
+}

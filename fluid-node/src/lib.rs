@@ -1,0 +1,13 @@
+//! The fluid node: Euler equations of an ideal gas on a Cartesian grid (finite volumes, OSMP
+//! flux with directional splitting, Lax–Friedrichs beside vacuum), the cut-cell geometry of the
+//! embedded solid, and the process that wires them to the bus.
+//!
+//! - [`grid`]: the Cartesian grid (1, 2 or 3 active axes).
+//! - [`fv`]: the pure finite-volume core (no IO, no clock).
+//! - [`cutcell`]: the pure cut-cell geometry (no IO, no clock).
+
+#![warn(missing_docs)]
+
+pub mod cutcell;
+pub mod fv;
+pub mod grid;

@@ -1,0 +1,1 @@
+//! The iceoryx2 transport (placeholder until the bus lands).

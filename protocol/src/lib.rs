@@ -1,0 +1,21 @@
+//! Messages exchanged between the co-simulation nodes, their encoding, the scene schema, and
+//! (feature `bus`) the iceoryx2 transport that carries them.
+//!
+//! - [`wire`]: message types, pure data.
+//! - [`codec`]: a 24-byte header plus the bincode 2 payload; version checks.
+//! - [`scene`]: the scene file schema and its validation.
+//! - `bus` (feature `bus`): the only module that touches iceoryx2.
+//!
+//! Invariant: apart from `bus`, this crate does no IO: no files, sockets, threads, clocks or
+//! environment variables.
+
+#![deny(missing_docs)]
+
+pub mod codec;
+pub mod scene;
+pub mod wire;
+
+#[cfg(feature = "bus")]
+pub mod bus;
+
+pub use wire::PROTOCOL_VERSION;

@@ -1,0 +1,1 @@
+//! Pure DEM core (no IO, no clock).
