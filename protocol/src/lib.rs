@@ -4,15 +4,17 @@
 //! - [`wire`]: message types, pure data.
 //! - [`codec`]: a 24-byte header plus the bincode 2 payload; version checks.
 //! - [`scene`]: the scene file schema and its validation.
+//! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
 //!
 //! Invariant: apart from `bus`, this crate does no IO: no files, sockets, threads, clocks or
-//! environment variables.
+//! environment variables (the in-memory transport's deadline is its only use of time).
 
 #![deny(missing_docs)]
 
 pub mod codec;
 pub mod scene;
+pub mod transport;
 pub mod wire;
 
 #[cfg(feature = "bus")]

@@ -1,0 +1,130 @@
+//! What the node loops and the coupler need from a transport, and an in-memory one.
+//!
+//! [`Transport`] is implemented by the iceoryx2 bus (`bus::Bus`, feature `bus`) and by
+//! [`MemoryTransport`], which runs all three roles in one process (tests, and the baseline the
+//! cost of the bus is measured against). Frames are the bytes of [`crate::codec`].
+
+use std::collections::VecDeque;
+use std::sync::mpsc;
+use std::time::Duration;
+
+use crate::wire::NodeKind;
+
+/// Why a send or receive failed.
+#[derive(Debug, thiserror::Error, Clone, PartialEq, Eq)]
+pub enum TransportError {
+    /// Nothing arrived before the deadline.
+    #[error("no message from {} within {waited:?}", peer.map_or("any peer", |p| p.name()))]
+    Timeout {
+        /// Who was waited for (`None`: any peer).
+        peer: Option<NodeKind>,
+        /// How long.
+        waited: Duration,
+    },
+    /// The peer process is gone (crashed, killed, or closed its end).
+    #[error("{0} node is gone (died or stopped answering)")]
+    PeerDead(NodeKind),
+    /// A termination signal arrived (Ctrl-C, SIGTERM).
+    #[error("interrupted by a signal")]
+    Interrupted,
+    /// Anything else, with the transport's message.
+    #[error("transport: {0}")]
+    Other(String),
+}
+
+/// A message transport between the coupler and the nodes.
+pub trait Transport {
+    /// The role of this end.
+    fn me(&self) -> NodeKind;
+
+    /// Sends one frame to `to`.
+    fn send(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError>;
+
+    /// Waits at most `timeout` for a frame from `from` (`None`: from any peer). Frames from other
+    /// peers that arrive meanwhile are kept for later calls, never dropped.
+    fn recv(
+        &mut self,
+        from: Option<NodeKind>,
+        timeout: Duration,
+    ) -> Result<(NodeKind, Vec<u8>), TransportError>;
+}
+
+/// One end of an in-memory star: the coupler talks to each node, nodes talk to the coupler.
+pub struct MemoryTransport {
+    me: NodeKind,
+    senders: Vec<(NodeKind, mpsc::Sender<(NodeKind, Vec<u8>)>)>,
+    receiver: mpsc::Receiver<(NodeKind, Vec<u8>)>,
+    pending: VecDeque<(NodeKind, Vec<u8>)>,
+}
+
+impl MemoryTransport {
+    /// Builds the coupler's end and one end per node in `nodes`.
+    pub fn star(nodes: &[NodeKind]) -> (MemoryTransport, Vec<MemoryTransport>) {
+        let (coupler_tx, coupler_rx) = mpsc::channel();
+        let mut coupler = MemoryTransport {
+            me: NodeKind::Coupler,
+            senders: Vec::new(),
+            receiver: coupler_rx,
+            pending: VecDeque::new(),
+        };
+        let mut ends = Vec::new();
+        for &node in nodes {
+            let (tx, rx) = mpsc::channel();
+            coupler.senders.push((node, tx));
+            ends.push(MemoryTransport {
+                me: node,
+                senders: vec![(NodeKind::Coupler, coupler_tx.clone())],
+                receiver: rx,
+                pending: VecDeque::new(),
+            });
+        }
+        (coupler, ends)
+    }
+}
+
+impl Transport for MemoryTransport {
+    fn me(&self) -> NodeKind {
+        self.me
+    }
+
+    fn send(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError> {
+        let (_, tx) = self
+            .senders
+            .iter()
+            .find(|(peer, _)| *peer == to)
+            .ok_or_else(|| TransportError::Other(format!("{} has no link to {to}", self.me)))?;
+        tx.send((self.me, frame.to_vec()))
+            .map_err(|_| TransportError::PeerDead(to))
+    }
+
+    fn recv(
+        &mut self,
+        from: Option<NodeKind>,
+        timeout: Duration,
+    ) -> Result<(NodeKind, Vec<u8>), TransportError> {
+        let wanted = |peer: NodeKind| from.is_none_or(|f| f == peer);
+        if let Some(pos) = self.pending.iter().position(|(p, _)| wanted(*p)) {
+            return Ok(self.pending.remove(pos).expect("position is in range"));
+        }
+        let mut left = timeout;
+        loop {
+            // NOTE: `recv_timeout` is the only clock use here; it is the transport's deadline,
+            // not part of any result.
+            let started = std::time::Instant::now();
+            match self.receiver.recv_timeout(left) {
+                Ok((peer, frame)) if wanted(peer) => return Ok((peer, frame)),
+                Ok(other) => self.pending.push_back(other),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    return Err(TransportError::Timeout {
+                        peer: from,
+                        waited: timeout,
+                    });
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(TransportError::PeerDead(from.unwrap_or(NodeKind::Coupler)));
+                }
+            }
+            left = left.saturating_sub(started.elapsed());
+        }
+    }
+}
