@@ -2,3 +2,7 @@
 //! and inspection, and the launcher that starts and supervises the nodes.
 
 #![warn(missing_docs)]
+
+pub mod dt;
+pub mod ledger;
+pub mod scheme;

@@ -52,6 +52,12 @@ pub struct RunConfig {
     pub max_steps: Option<u64>,
     /// Worker threads per node for the solver cores (default 1; results do not depend on it).
     pub threads: u32,
+    /// Largest relative mass error the ledger accepts before it stops the run (default 1e-9;
+    /// checked only when the initial mass is not zero).
+    pub mass_tolerance: f64,
+    /// Largest relative energy error the ledger accepts (default: recorded, not checked).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy_tolerance: Option<f64>,
 }
 
 impl Default for RunConfig {
@@ -67,6 +73,8 @@ impl Default for RunConfig {
             dt_max: None,
             max_steps: None,
             threads: 1,
+            mass_tolerance: 1e-9,
+            energy_tolerance: None,
         }
     }
 }
@@ -322,7 +330,12 @@ impl Region {
     }
 }
 
-/// `fluid.pressure`: the field of the pressure double, `p(x) = value + gradient · x`.
+/// `fluid.pressure`: the field of the pressure double,
+/// `p(x, v) = value + gradient · x + impedance (v · n)`.
+///
+/// The impedance term (default 0) is the acoustic reaction of a gas to a wall moving at normal
+/// velocity `v · n` into it (`Z = ρ c`); it makes the loads depend on the trial motion, so the
+/// semi-implicit fixed point has something to converge.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PressureField {
@@ -331,6 +344,9 @@ pub struct PressureField {
     /// Pressure gradient [Pa/m] (default zero).
     #[serde(default)]
     pub gradient: Vec<f64>,
+    /// Acoustic impedance `Z` [Pa s/m] (default 0).
+    #[serde(default)]
+    pub impedance: f64,
 }
 
 /// `[solid]`.
@@ -692,6 +708,10 @@ impl Scene {
         let run = &self.run;
         positive("run.t_end", run.t_end)?;
         positive("run.tolerance", run.tolerance)?;
+        positive("run.mass_tolerance", run.mass_tolerance)?;
+        if let Some(e) = run.energy_tolerance {
+            positive("run.energy_tolerance", e)?;
+        }
         if run.max_iterations == 0 {
             return Err(invalid("run.max_iterations", "at least 1", "0".into()));
         }

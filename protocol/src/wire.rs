@@ -114,8 +114,6 @@ pub struct Hello {
     pub implementation: String,
     /// Optional features the node offers (for example `"checkpoint"`, `"fracture"`).
     pub capabilities: Vec<String>,
-    /// Operating-system process id, for supervision messages.
-    pub pid: u32,
 }
 
 /// The coupler's answer to a [`Hello`].
@@ -149,6 +147,8 @@ pub struct StepPlan {
     pub dt: f64,
     /// Coupling scheme of this step.
     pub scheme: Scheme,
+    /// `Some(k)`: the step ends exactly at the k-th output time; the nodes write output `k`.
+    pub output: Option<u32>,
 }
 
 /// Pressure loads the fluid applies to the solid, one entry per particle.
@@ -222,6 +222,8 @@ pub struct SolidState {
     pub velocity: Vec<f64>,
     /// Mid-step angular velocity `Ω^{n+1/2}` in the global frame [rad/s], `n_rot(dim)` each.
     pub angular_velocity: Vec<f64>,
+    /// Diameter `h_s` of each particle [m] (weights the rotation term of criterion (22)).
+    pub diameter: Vec<f64>,
     /// Wet surface at the end of the step `F^{n+1}`.
     pub surface: WetSurface,
 }
@@ -286,8 +288,6 @@ pub struct ConservedTotals {
     pub boundary_energy_out: f64,
     /// Links broken since the start (solid only).
     pub links_broken: u64,
-    /// Seconds the node spent computing during this step (not waiting), for the summary.
-    pub busy_s: f64,
 }
 
 /// A node's full state, opaque to the coupler (node-private bincode).

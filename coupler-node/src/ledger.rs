@@ -1,0 +1,176 @@
+//! The conservation ledger (DESIGN §3 step 6): the nodes' totals each step, the balance checked.
+//!
+//! Balances, with `0` the first report:
+//! - mass: fluid mass plus the mass that left through open boundaries stays at its initial value;
+//! - energy: Σ node energy + energy dissipated by broken links + energy that left through open
+//!   boundaries stays at its initial value (relative error, and error relative to the largest
+//!   energy exchanged through the interface, the measure of paper 003 Fig. 7);
+//! - interface: the work the fluid gives equals the work the solid receives.
+
+use protocol::wire::{ConservedTotals, NodeKind};
+use serde::Serialize;
+
+/// One step's balance.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LedgerEntry {
+    /// Step just completed.
+    pub step: u64,
+    /// Time at its end [s].
+    pub t: f64,
+    /// Fluid mass [kg].
+    pub fluid_mass: f64,
+    /// Fluid total energy [J].
+    pub fluid_energy: f64,
+    /// Solid kinetic + elastic energy [J].
+    pub solid_energy: f64,
+    /// Energy dissipated by broken links [J].
+    pub dissipated: f64,
+    /// |mass now − mass at start| / mass at start (0 when there is no mass).
+    pub mass_rel_err: f64,
+    /// |energy now − energy at start| / |energy at start|.
+    pub energy_rel_err: f64,
+    /// |energy now − energy at start| / largest |interface work| so far (0 without exchange).
+    pub energy_err_vs_exchange: f64,
+    /// Work given by the fluid through the interface [J].
+    pub work_fluid: f64,
+    /// Work received by the solid through the interface [J].
+    pub work_solid: f64,
+    /// Links broken so far.
+    pub links_broken: u64,
+}
+
+/// Running ledger.
+#[derive(Clone, Debug, Default)]
+pub struct Ledger {
+    initial_mass: Option<f64>,
+    initial_energy: Option<f64>,
+    max_exchange: f64,
+    /// Largest relative mass error seen.
+    pub max_mass_rel_err: f64,
+    /// Largest relative energy error seen.
+    pub max_energy_rel_err: f64,
+    /// Last entry.
+    pub last: Option<LedgerEntry>,
+}
+
+fn energy_of(t: &ConservedTotals) -> f64 {
+    t.energy + t.dissipated + t.boundary_energy_out
+}
+
+impl Ledger {
+    /// Takes the totals of the nodes present at the end of `step` and returns the balance.
+    /// Totals at step 0 before any motion should be reported first (`initial`).
+    pub fn update(
+        &mut self,
+        step: u64,
+        fluid: Option<&ConservedTotals>,
+        solid: Option<&ConservedTotals>,
+    ) -> LedgerEntry {
+        let mass = fluid.map_or(0.0, |f| f.mass + f.boundary_mass_out);
+        let energy = fluid.map_or(0.0, energy_of) + solid.map_or(0.0, energy_of);
+        let initial_mass = *self.initial_mass.get_or_insert(mass);
+        let initial_energy = *self.initial_energy.get_or_insert(energy);
+        let work_fluid = fluid.map_or(0.0, |f| f.interface_work);
+        let work_solid = solid.map_or(0.0, |s| s.interface_work);
+        self.max_exchange = self
+            .max_exchange
+            .max(work_fluid.abs())
+            .max(work_solid.abs());
+        let mass_rel_err = if initial_mass != 0.0 {
+            (mass - initial_mass).abs() / initial_mass.abs()
+        } else {
+            0.0
+        };
+        let energy_abs_err = (energy - initial_energy).abs();
+        let energy_rel_err = if initial_energy != 0.0 {
+            energy_abs_err / initial_energy.abs()
+        } else {
+            energy_abs_err
+        };
+        let energy_err_vs_exchange = if self.max_exchange > 0.0 {
+            energy_abs_err / self.max_exchange
+        } else {
+            0.0
+        };
+        self.max_mass_rel_err = self.max_mass_rel_err.max(mass_rel_err);
+        self.max_energy_rel_err = self.max_energy_rel_err.max(energy_rel_err);
+        let entry = LedgerEntry {
+            step,
+            t: fluid.or(solid).map_or(0.0, |x| x.t),
+            fluid_mass: fluid.map_or(0.0, |f| f.mass),
+            fluid_energy: fluid.map_or(0.0, |f| f.energy),
+            solid_energy: solid.map_or(0.0, |s| s.energy),
+            dissipated: fluid.map_or(0.0, |f| f.dissipated) + solid.map_or(0.0, |s| s.dissipated),
+            mass_rel_err,
+            energy_rel_err,
+            energy_err_vs_exchange,
+            work_fluid,
+            work_solid,
+            links_broken: solid.map_or(0, |s| s.links_broken),
+        };
+        self.last = Some(entry.clone());
+        entry
+    }
+}
+
+/// Checks that a totals message comes from the node it claims.
+pub fn sender_matches(from: NodeKind, totals: &ConservedTotals) -> bool {
+    from == totals.node
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protocol::wire::Stamp;
+
+    fn totals(node: NodeKind, mass: f64, energy: f64, out_m: f64, out_e: f64) -> ConservedTotals {
+        ConservedTotals {
+            stamp: Stamp::step(0),
+            node,
+            t: 0.0,
+            mass,
+            momentum: vec![0.0],
+            energy,
+            dissipated: 0.0,
+            interface_work: 0.0,
+            interface_impulse: vec![0.0],
+            boundary_mass_out: out_m,
+            boundary_energy_out: out_e,
+            links_broken: 0,
+        }
+    }
+
+    #[test]
+    fn boundary_outflow_is_not_an_error() {
+        let mut ledger = Ledger::default();
+        ledger.update(0, Some(&totals(NodeKind::Fluid, 2.0, 10.0, 0.0, 0.0)), None);
+        let e = ledger.update(1, Some(&totals(NodeKind::Fluid, 1.5, 7.0, 0.5, 3.0)), None);
+        assert_eq!(e.mass_rel_err, 0.0);
+        assert_eq!(e.energy_rel_err, 0.0);
+        let e = ledger.update(2, Some(&totals(NodeKind::Fluid, 1.5, 7.0, 0.25, 3.0)), None);
+        assert!((e.mass_rel_err - 0.125).abs() < 1e-15, "{}", e.mass_rel_err);
+        assert!((ledger.max_mass_rel_err - 0.125).abs() < 1e-15);
+    }
+
+    #[test]
+    fn energy_moves_between_nodes() {
+        let mut ledger = Ledger::default();
+        let mut s = totals(NodeKind::Solid, 0.0, 1.0, 0.0, 0.0);
+        ledger.update(
+            0,
+            Some(&totals(NodeKind::Fluid, 1.0, 4.0, 0.0, 0.0)),
+            Some(&s),
+        );
+        s.energy = 2.0;
+        s.interface_work = 1.0;
+        let mut f = totals(NodeKind::Fluid, 1.0, 3.0, 0.0, 0.0);
+        f.interface_work = 1.0;
+        let e = ledger.update(1, Some(&f), Some(&s));
+        assert_eq!(e.energy_rel_err, 0.0);
+        assert_eq!((e.work_fluid, e.work_solid), (1.0, 1.0));
+        s.energy = 2.5;
+        let e = ledger.update(2, Some(&f), Some(&s));
+        assert!((e.energy_rel_err - 0.1).abs() < 1e-15);
+        assert!((e.energy_err_vs_exchange - 0.5).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,363 @@
+//! The handshake without shared memory: fake nodes answer the coupler's actions.
+
+use super::*;
+use protocol::wire::{DtProposal, Hello, InterfaceLoads, WetSurface};
+
+/// A 2-D single-particle world: the fluid's load is `-c x_surface`, the solid's trial position is
+/// `a + b F`, so the fixed point is `x* = a / (1 + b c)` and plain iteration contracts by `b c`.
+struct World {
+    a: f64,
+    b: f64,
+    c: f64,
+    fluid_dt: f64,
+    solid_dt: f64,
+    surface_x: f64,
+    sent: Vec<(NodeKind, Message)>,
+}
+
+fn cfg(scheme: Scheme, relaxation: Relaxation, outputs: Vec<f64>) -> CouplerConfig {
+    CouplerConfig {
+        fluid: true,
+        solid: true,
+        scheme,
+        tolerance: 1e-12,
+        max_iterations: 50,
+        relaxation,
+        checkpoint_every: 0,
+        dt_cap: None,
+        outputs,
+        max_steps: None,
+        scene_hash: 7,
+        mass_tolerance: 1e-9,
+        energy_tolerance: None,
+    }
+}
+
+fn hello(node: NodeKind) -> Message {
+    Message::Hello(Hello {
+        node,
+        protocol_version: PROTOCOL_VERSION,
+        scene_hash: 7,
+        implementation: "test".into(),
+        capabilities: vec![],
+    })
+}
+
+fn totals(node: NodeKind, step: u64, mass: f64) -> Message {
+    Message::ConservedTotals(ConservedTotals {
+        stamp: Stamp::step(step),
+        node,
+        t: 0.0,
+        mass,
+        momentum: vec![0.0, 0.0],
+        energy: 1.0,
+        dissipated: 0.0,
+        interface_work: 0.0,
+        interface_impulse: vec![0.0, 0.0],
+        boundary_mass_out: 0.0,
+        boundary_energy_out: 0.0,
+        links_broken: 0,
+    })
+}
+
+fn state(stamp: Stamp, x: f64) -> SolidState {
+    SolidState {
+        stamp,
+        dim: 2,
+        position: vec![x, 0.0],
+        orientation: vec![0.0],
+        velocity: vec![0.0, 0.0],
+        angular_velocity: vec![0.0],
+        diameter: vec![1.0],
+        surface: WetSurface {
+            revision: 0,
+            dim: 2,
+            vertices: vec![x, 0.0, x + 1.0, 0.0],
+            elements: vec![0, 1],
+            element_particle: vec![0],
+            wet: vec![true],
+        },
+    }
+}
+
+fn proposal(step: u64, dt: f64) -> Message {
+    Message::DtProposal(DtProposal {
+        stamp: Stamp::step(step),
+        dt_max: dt,
+        limiter: "test".into(),
+    })
+}
+
+impl World {
+    fn new(a: f64, b: f64, c: f64) -> World {
+        World {
+            a,
+            b,
+            c,
+            fluid_dt: 0.1,
+            solid_dt: 0.3,
+            surface_x: 0.0,
+            sent: Vec::new(),
+        }
+    }
+
+    /// Runs the coupler until it finishes or fails; returns step reports.
+    fn run(&mut self, coupler: &mut Coupler) -> Result<(Vec<StepReport>, Finish), CouplerError> {
+        let mut inbox: VecDeque<(NodeKind, Message)> = VecDeque::new();
+        inbox.push_back((NodeKind::Fluid, hello(NodeKind::Fluid)));
+        inbox.push_back((NodeKind::Fluid, totals(NodeKind::Fluid, 0, 1.0)));
+        inbox.push_back((NodeKind::Solid, hello(NodeKind::Solid)));
+        inbox.push_back((NodeKind::Solid, totals(NodeKind::Solid, 0, 0.0)));
+        inbox.push_back((
+            NodeKind::Solid,
+            Message::SolidState(state(Stamp::step(0), 0.0)),
+        ));
+        // The fluid proposes before the coupler has seen the solid: it must be queued.
+        inbox.push_back((NodeKind::Fluid, proposal(0, self.fluid_dt)));
+        inbox.push_back((NodeKind::Solid, proposal(0, self.solid_dt)));
+        let mut reports = Vec::new();
+        let mut pending_decision_x = 0.0;
+        while let Some((from, msg)) = inbox.pop_front() {
+            for action in coupler.on_message(from, msg)? {
+                match action {
+                    Action::Send(to, msg) => {
+                        self.sent.push((to, msg.clone()));
+                        match (to, msg) {
+                            (NodeKind::Fluid, Message::StepPlan(p)) => {
+                                let f = -self.c * self.surface_x;
+                                inbox.push_back((NodeKind::Fluid, loads(p.stamp, f)));
+                            }
+                            (NodeKind::Fluid, Message::SolidState(s)) => {
+                                pending_decision_x = s.position[0];
+                            }
+                            (NodeKind::Fluid, Message::FixedPointDecision(d)) => {
+                                self.surface_x = pending_decision_x;
+                                let step = d.stamp.step;
+                                match d.decision {
+                                    Decision::Iterate => {
+                                        let stamp = Stamp {
+                                            step,
+                                            iteration: d.stamp.iteration + 1,
+                                        };
+                                        let f = -self.c * self.surface_x;
+                                        inbox.push_back((NodeKind::Fluid, loads(stamp, f)));
+                                    }
+                                    Decision::Accept => {
+                                        inbox.push_back((
+                                            NodeKind::Fluid,
+                                            totals(NodeKind::Fluid, step, 1.0),
+                                        ));
+                                        inbox.push_back((
+                                            NodeKind::Fluid,
+                                            proposal(step + 1, self.fluid_dt),
+                                        ));
+                                    }
+                                }
+                            }
+                            (NodeKind::Solid, Message::InterfaceLoads(l)) => {
+                                let x = self.a + self.b * l.force[0];
+                                inbox.push_back((
+                                    NodeKind::Solid,
+                                    Message::SolidState(state(l.stamp, x)),
+                                ));
+                            }
+                            (NodeKind::Solid, Message::FixedPointDecision(d)) => {
+                                if d.decision == Decision::Accept {
+                                    let step = d.stamp.step;
+                                    inbox.push_back((
+                                        NodeKind::Solid,
+                                        totals(NodeKind::Solid, step, 0.0),
+                                    ));
+                                    inbox.push_back((
+                                        NodeKind::Solid,
+                                        proposal(step + 1, self.solid_dt),
+                                    ));
+                                }
+                            }
+                            _ => {}
+                        }
+                    }
+                    Action::StepDone(r) => reports.push(r),
+                    Action::Checkpoint(_) => {}
+                    Action::Finished(f) => return Ok((reports, f)),
+                }
+            }
+        }
+        panic!("the fake nodes ran out of messages before the coupler finished");
+    }
+}
+
+fn loads(stamp: Stamp, f: f64) -> Message {
+    Message::InterfaceLoads(InterfaceLoads {
+        stamp,
+        dim: 2,
+        force: vec![f, 0.0],
+        torque: vec![0.0],
+    })
+}
+
+#[test]
+fn explicit_does_one_pass_per_step_and_agrees_on_dt() {
+    let mut world = World::new(1.0, 0.5, 0.5);
+    let mut coupler = Coupler::new(cfg(Scheme::Explicit, Relaxation::None, vec![0.25, 0.5]));
+    let (reports, finish) = world.run(&mut coupler).expect("the run completes");
+    assert_eq!(finish, Finish::Completed);
+    // dt = min(0.1, 0.3) = 0.1; 0.2 then output at 0.25 (dt 0.05); then 0.35, 0.45, 0.5.
+    let dts: Vec<f64> = reports.iter().map(|r| r.dt).collect();
+    let expected = [0.1, 0.1, 0.05, 0.1, 0.1, 0.05];
+    assert_eq!(dts.len(), expected.len(), "{dts:?}");
+    for (dt, e) in dts.iter().zip(expected) {
+        assert!((dt - e).abs() < 1e-15, "{dts:?}");
+    }
+    assert_eq!(reports[2].output, Some(0));
+    assert_eq!(reports[2].t, 0.25);
+    assert_eq!(reports[5].t, 0.5);
+    assert!(reports.iter().all(|r| r.iterations == 1));
+    assert_eq!(reports[0].limiter, "fluid:test");
+}
+
+#[test]
+fn semi_implicit_converges_to_the_fixed_point() {
+    let (a, b, c) = (1.0, 0.5, 0.5);
+    let mut world = World::new(a, b, c);
+    let mut coupler = Coupler::new(cfg(Scheme::SemiImplicit, Relaxation::None, vec![0.1]));
+    let (reports, _) = world.run(&mut coupler).expect("the run completes");
+    let r = &reports[0];
+    // Plain iteration contracts by b c = 0.25 per trial from |x* − 0| = 0.8.
+    let x_star = a / (1.0 + b * c);
+    assert!(
+        (world.surface_x - x_star).abs() < 1e-12,
+        "{}",
+        world.surface_x
+    );
+    assert!(r.residuals.last().copied().unwrap_or(1.0) <= 1e-12);
+    // Residual k is |x_{k+1} − x_k| = 0.8 · 0.25^k · (1 − 0.25) roughly: ratio 0.25.
+    for w in r.residuals.windows(2).take(10) {
+        assert!((w[1] / w[0] - 0.25).abs() < 1e-6, "{:?}", r.residuals);
+    }
+    assert!(
+        (19..=22).contains(&r.iterations),
+        "{} iterations",
+        r.iterations
+    );
+}
+
+#[test]
+fn aitken_needs_fewer_iterations() {
+    let (a, b, c) = (1.0, 0.9, 1.0);
+    let mut plain = World::new(a, b, c);
+    let mut plain_cfg = cfg(Scheme::SemiImplicit, Relaxation::None, vec![0.1]);
+    plain_cfg.max_iterations = 500;
+    let mut coupler = Coupler::new(plain_cfg);
+    let (plain_reports, _) = plain.run(&mut coupler).expect("plain converges");
+    let mut relaxed = World::new(a, b, c);
+    let mut coupler = Coupler::new(cfg(Scheme::SemiImplicit, Relaxation::Aitken, vec![0.1]));
+    let (aitken_reports, _) = relaxed.run(&mut coupler).expect("aitken converges");
+    let x_star = a / (1.0 + b * c);
+    assert!((relaxed.surface_x - x_star).abs() < 1e-12);
+    assert!(
+        plain_reports[0].iterations >= 2 * aitken_reports[0].iterations,
+        "plain {} vs aitken {}",
+        plain_reports[0].iterations,
+        aitken_reports[0].iterations
+    );
+}
+
+#[test]
+fn divergent_fixed_point_stops_with_a_report() {
+    let mut world = World::new(1.0, 1.5, 1.0);
+    let mut coupler = Coupler::new(cfg(Scheme::SemiImplicit, Relaxation::None, vec![0.1]));
+    let err = world.run(&mut coupler).expect_err("b c = 1.5 diverges");
+    match &err {
+        CouplerError::NotConverged {
+            step,
+            iterations,
+            residuals,
+            ..
+        } => {
+            assert_eq!((*step, *iterations), (0, 50));
+            assert_eq!(residuals.len(), 50);
+            assert!(residuals[49] > residuals[0]);
+        }
+        other => panic!("expected NotConverged, got {other}"),
+    }
+    assert!(
+        err.to_string()
+            .contains("fixed point not converged at step 0"),
+        "{err}"
+    );
+}
+
+#[test]
+fn version_mismatch_is_refused_at_hello() {
+    let mut coupler = Coupler::new(cfg(Scheme::Explicit, Relaxation::None, vec![1.0]));
+    let msg = Message::Hello(Hello {
+        node: NodeKind::Fluid,
+        protocol_version: PROTOCOL_VERSION + 1,
+        scene_hash: 7,
+        implementation: "test".into(),
+        capabilities: vec![],
+    });
+    let err = coupler
+        .on_message(NodeKind::Fluid, msg)
+        .expect_err("refused");
+    let text = err.to_string();
+    assert!(
+        text.contains(&format!("version {PROTOCOL_VERSION}")),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("version {}", PROTOCOL_VERSION + 1)),
+        "{text}"
+    );
+}
+
+#[test]
+fn scene_hash_mismatch_is_refused() {
+    let mut coupler = Coupler::new(cfg(Scheme::Explicit, Relaxation::None, vec![1.0]));
+    let msg = Message::Hello(Hello {
+        node: NodeKind::Solid,
+        protocol_version: PROTOCOL_VERSION,
+        scene_hash: 8,
+        implementation: "test".into(),
+        capabilities: vec![],
+    });
+    let err = coupler
+        .on_message(NodeKind::Solid, msg)
+        .expect_err("refused");
+    assert!(
+        matches!(
+            err,
+            CouplerError::Refused {
+                node: NodeKind::Solid,
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn out_of_order_message_is_an_error() {
+    let mut coupler = Coupler::new(cfg(Scheme::Explicit, Relaxation::None, vec![1.0]));
+    let err = coupler
+        .on_message(NodeKind::Fluid, loads(Stamp::step(0), 1.0))
+        .expect_err("loads before hello");
+    assert!(err.to_string().contains("InterfaceLoads"), "{err}");
+}
+
+#[test]
+fn criterion_22_weights_rotation_by_diameter() {
+    let a = state(Stamp::step(0), 0.0);
+    let mut b = state(Stamp::step(0), 3e-13);
+    assert!((criterion_22(&a, &b) - 3e-13).abs() < 1e-25);
+    b.orientation[0] = 1e-13;
+    b.diameter[0] = 2.0;
+    // 2 · 2√2 sin(0.5e-13) = 2√2 · 1e-13.
+    let expected = 3e-13 + 2.0 * std::f64::consts::SQRT_2 * 1e-13;
+    assert!(
+        (criterion_22(&a, &b) - expected).abs() < 1e-24,
+        "{}",
+        criterion_22(&a, &b)
+    );
+}
