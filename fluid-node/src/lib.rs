@@ -5,9 +5,14 @@
 //! - [`grid`]: the Cartesian grid (1, 2 or 3 active axes).
 //! - [`fv`]: the pure finite-volume core (no IO, no clock).
 //! - [`cutcell`]: the pure cut-cell geometry (no IO, no clock).
+//! - [`node`]: the node loop over any transport; [`double`]: the pressure double.
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "node")]
+pub mod cli;
 pub mod cutcell;
+pub mod double;
 pub mod fv;
 pub mod grid;
+pub mod node;

@@ -1,5 +1,5 @@
 //! `fluid-node` binary; all logic is in the library.
 
 fn main() -> std::process::ExitCode {
-    std::process::ExitCode::SUCCESS
+    fluid_node::cli::main()
 }

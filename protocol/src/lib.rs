@@ -6,6 +6,8 @@
 //! - [`scene`]: the scene file schema and its validation.
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
+//! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
+//!   replay double that plays them in step with the coupler.
 //!
 //! Invariant: apart from `bus`, this crate does no IO: no files, sockets, threads, clocks or
 //! environment variables (the in-memory transport's deadline is its only use of time).
@@ -19,5 +21,7 @@ pub mod wire;
 
 #[cfg(feature = "bus")]
 pub mod bus;
+#[cfg(feature = "replay")]
+pub mod replay;
 
 pub use wire::PROTOCOL_VERSION;

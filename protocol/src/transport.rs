@@ -128,3 +128,70 @@ impl Transport for MemoryTransport {
         }
     }
 }
+
+/// Why a node's exchange with the coupler ended.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The transport failed (timeout, dead coupler, signal).
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// A frame did not decode.
+    #[error("undecodable frame from the coupler: {0}")]
+    Decode(#[from] crate::codec::DecodeError),
+    /// The coupler refused this node at hello.
+    #[error("refused by the coupler: {0}")]
+    Refused(String),
+    /// The coupler sent something that does not fit the handshake.
+    #[error("unexpected message from the coupler: {0}")]
+    Unexpected(String),
+}
+
+/// A node's typed view of its transport to the coupler.
+pub struct Link<'a> {
+    transport: &'a mut dyn Transport,
+    timeout: Duration,
+    buf: Vec<u8>,
+}
+
+impl<'a> Link<'a> {
+    /// Wraps `transport`; every receive waits at most `timeout`.
+    pub fn new(transport: &'a mut dyn Transport, timeout: Duration) -> Link<'a> {
+        Link {
+            transport,
+            timeout,
+            buf: Vec::new(),
+        }
+    }
+
+    /// This end's role.
+    pub fn me(&self) -> NodeKind {
+        self.transport.me()
+    }
+
+    /// Encodes and sends `msg` to the coupler.
+    pub fn send(&mut self, msg: &crate::wire::Message) -> Result<(), LinkError> {
+        crate::codec::encode_into(self.transport.me(), msg, &mut self.buf);
+        self.transport.send(NodeKind::Coupler, &self.buf)?;
+        Ok(())
+    }
+
+    /// Waits for the coupler's next message.
+    pub fn recv(&mut self) -> Result<crate::wire::Message, LinkError> {
+        let (_, frame) = self.transport.recv(Some(NodeKind::Coupler), self.timeout)?;
+        let (_, msg) = crate::codec::decode(&frame)?;
+        Ok(msg)
+    }
+
+    /// Sends `hello` and waits for the coupler's welcome.
+    pub fn greet(&mut self, hello: crate::wire::Hello) -> Result<(), LinkError> {
+        self.send(&crate::wire::Message::Hello(hello))?;
+        match self.recv()? {
+            crate::wire::Message::Welcome(w) if w.accepted => Ok(()),
+            crate::wire::Message::Welcome(w) => Err(LinkError::Refused(w.reason)),
+            other => Err(LinkError::Unexpected(format!(
+                "{:?} instead of Welcome",
+                other.kind()
+            ))),
+        }
+    }
+}

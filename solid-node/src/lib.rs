@@ -3,7 +3,12 @@
 //! from mean vertices), and the process that wires it to the bus.
 //!
 //! - [`dem`]: the pure DEM core (no IO, no clock).
+//! - [`node`]: the node loop over any transport; [`double`]: the prescribed double.
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "node")]
+pub mod cli;
 pub mod dem;
+pub mod double;
+pub mod node;

@@ -1,5 +1,5 @@
 //! `solid-node` binary; all logic is in the library.
 
 fn main() -> std::process::ExitCode {
-    std::process::ExitCode::SUCCESS
+    solid_node::cli::main()
 }

@@ -1,0 +1,224 @@
+//! The fluid node's loop: receive → convert → advance → convert → send (DESIGN §3 from the
+//! fluid's side). Written against [`protocol::transport::Transport`] and [`FluidModel`], so the
+//! same loop runs the real solver and the pressure double, over the bus or in memory.
+
+use std::path::Path;
+
+use protocol::transport::{Link, LinkError};
+use protocol::wire::{
+    Checkpoint, ConservedTotals, Decision, DtProposal, Failure, Hello, InterfaceLoads, Message,
+    NodeKind, PROTOCOL_VERSION, SolidState, Stamp, StepPlan,
+};
+
+/// What the loop needs from a fluid implementation.
+pub trait FluidModel {
+    /// `"real"` or the double's name, sent in the hello.
+    fn implementation(&self) -> &'static str;
+    /// Spatial dimension.
+    fn dim(&self) -> usize;
+    /// Receives the wet surface at `t^0` (coupled runs), before the first step.
+    fn set_initial_surface(&mut self, _state: &SolidState) {}
+    /// Largest stable step and what limits it.
+    fn dt_max(&self) -> (f64, String);
+    /// Start of a step: fluxes over the grid ignoring the solid, and the directional pressures.
+    fn predict(&mut self, plan: &StepPlan) -> Result<(), String>;
+    /// Force and torque per particle on a trial solid state (eq. 23–25 of paper 003).
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads;
+    /// End of a step: the final solid state (`None` without a solid) is applied.
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String>;
+    /// Conserved totals after the last step.
+    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals;
+    /// Node-private state bytes.
+    fn checkpoint(&self) -> Vec<u8>;
+    /// Restores a checkpoint.
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), String>;
+    /// Writes output `k` at time `t` into `out` (fields, VTK).
+    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()>;
+    /// Appends one row to each probe after a step ending at `t`.
+    fn record_probes(&mut self, t: f64);
+    /// Writes the probe files into `out`.
+    fn write_probes(&self, out: &Path) -> std::io::Result<()>;
+}
+
+/// How the node's run ended.
+#[derive(Debug, thiserror::Error)]
+pub enum NodeError {
+    /// Exchange with the coupler failed.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// Numerical trouble, already reported to the coupler.
+    #[error("numerical failure at step {step}: {report}")]
+    Numerical {
+        /// Step.
+        step: u64,
+        /// Report.
+        report: String,
+    },
+    /// Writing outputs failed.
+    #[error("writing outputs to {dir}: {source}")]
+    Output {
+        /// The output directory.
+        dir: String,
+        /// The IO error.
+        source: std::io::Error,
+    },
+}
+
+/// What the loop needs from the scene.
+#[derive(Clone, Debug)]
+pub struct LoopConfig {
+    /// Hash of the resolved scene.
+    pub scene_hash: u64,
+    /// A solid node takes part.
+    pub coupled: bool,
+    /// Where outputs go (`None`: write nothing).
+    pub out: Option<std::path::PathBuf>,
+}
+
+/// Runs the fluid side of the handshake until the coupler's shutdown.
+pub fn run(
+    model: &mut dyn FluidModel,
+    link: &mut Link<'_>,
+    cfg: &LoopConfig,
+) -> Result<(), NodeError> {
+    link.greet(Hello {
+        node: NodeKind::Fluid,
+        protocol_version: PROTOCOL_VERSION,
+        scene_hash: cfg.scene_hash,
+        implementation: model.implementation().to_string(),
+        capabilities: vec!["checkpoint".into()],
+    })?;
+    link.send(&Message::ConservedTotals(model.totals(Stamp::step(0), 0.0)))?;
+    let mut surface = None;
+    if cfg.coupled {
+        match link.recv()? {
+            Message::SolidState(s) => {
+                model.set_initial_surface(&s);
+                surface = Some(s);
+            }
+            other => return Err(unexpected(&other, "the initial SolidState")),
+        }
+    }
+    let mut step = 0;
+    propose(model, link, step)?;
+    loop {
+        match link.recv()? {
+            Message::Shutdown(_) => break,
+            Message::CheckpointRequest(r) => {
+                let bytes = model.checkpoint();
+                link.send(&Message::Checkpoint(Checkpoint {
+                    stamp: r.stamp,
+                    node: NodeKind::Fluid,
+                    bytes,
+                }))?;
+            }
+            Message::Checkpoint(c) => {
+                model
+                    .restore(&c.bytes)
+                    .map_err(|e| fail(link, c.stamp, e))?;
+                step = c.stamp.step;
+                propose(model, link, step)?;
+            }
+            Message::StepPlan(plan) => {
+                step = plan.stamp.step;
+                model
+                    .predict(&plan)
+                    .map_err(|e| fail(link, plan.stamp, e))?;
+                if cfg.coupled {
+                    let mut trial = surface
+                        .take()
+                        .expect("a surface precedes every coupled step");
+                    let mut iteration = 0;
+                    loop {
+                        let mut loads = model.loads(&plan, &trial);
+                        loads.stamp = Stamp { step, iteration };
+                        link.send(&Message::InterfaceLoads(loads))?;
+                        trial = match link.recv()? {
+                            Message::SolidState(s) => s,
+                            other => return Err(unexpected(&other, "a trial SolidState")),
+                        };
+                        let decision = match link.recv()? {
+                            Message::FixedPointDecision(d) => d,
+                            other => return Err(unexpected(&other, "a FixedPointDecision")),
+                        };
+                        if decision.decision == Decision::Accept {
+                            break;
+                        }
+                        iteration = decision.stamp.iteration + 1;
+                    }
+                    model
+                        .correct(&plan, Some(&trial))
+                        .map_err(|e| fail(link, plan.stamp, e))?;
+                    surface = Some(trial);
+                } else {
+                    model
+                        .correct(&plan, None)
+                        .map_err(|e| fail(link, plan.stamp, e))?;
+                }
+                let t_end = plan.t + plan.dt;
+                model.record_probes(t_end);
+                if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
+                    model
+                        .write_output(k, t_end, out)
+                        .map_err(|source| NodeError::Output {
+                            dir: out.display().to_string(),
+                            source,
+                        })?;
+                }
+                link.send(&Message::ConservedTotals(
+                    model.totals(Stamp::step(step), t_end),
+                ))?;
+                step += 1;
+                propose(model, link, step)?;
+            }
+            other => {
+                return Err(unexpected(
+                    &other,
+                    "StepPlan, CheckpointRequest or Shutdown",
+                ));
+            }
+        }
+    }
+    if let Some(out) = &cfg.out {
+        model
+            .write_probes(out)
+            .map_err(|source| NodeError::Output {
+                dir: out.display().to_string(),
+                source,
+            })?;
+    }
+    Ok(())
+}
+
+fn propose(model: &dyn FluidModel, link: &mut Link<'_>, step: u64) -> Result<(), NodeError> {
+    let (dt_max, limiter) = model.dt_max();
+    link.send(&Message::DtProposal(DtProposal {
+        stamp: Stamp::step(step),
+        dt_max,
+        limiter,
+    }))?;
+    Ok(())
+}
+
+fn unexpected(msg: &Message, expected: &str) -> NodeError {
+    NodeError::Link(LinkError::Unexpected(format!(
+        "{:?} (step {}, iteration {}) while waiting for {expected}",
+        msg.kind(),
+        msg.stamp().step,
+        msg.stamp().iteration
+    )))
+}
+
+/// Reports numerical trouble to the coupler, then returns the error that ends the node.
+fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
+    // The coupler may already be gone; the local error is what matters then.
+    let _ = link.send(&Message::Failure(Failure {
+        stamp,
+        node: NodeKind::Fluid,
+        report: report.clone(),
+    }));
+    NodeError::Numerical {
+        step: stamp.step,
+        report,
+    }
+}

@@ -1,0 +1,157 @@
+//! The replay double: a node that plays back its recorded messages in step with the coupler.
+//!
+//! [`Script::from_mcap`] reads, from the bytes of a record, the two channels between the coupler
+//! and one node, in record order. [`play`] walks that script: a recorded node → coupler frame is
+//! sent as it was; a recorded coupler → node frame must be matched by what the coupler sends now
+//! (same kind, step and iteration), otherwise the double stops with a clear error naming what was
+//! asked and what the record holds. The coupler cannot tell it from the real node.
+
+use std::time::Duration;
+
+use crate::codec;
+use crate::transport::{Transport, TransportError};
+use crate::wire::{Message, MessageKind, NodeKind};
+
+/// Which way a recorded frame went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// Node → coupler.
+    FromNode,
+    /// Coupler → node.
+    ToNode,
+}
+
+/// One node's recorded frames in order.
+#[derive(Clone, Debug, Default)]
+pub struct Script {
+    /// The frames, in record order.
+    pub frames: Vec<(Direction, Vec<u8>)>,
+    /// Whether the record ended early (a killed run).
+    pub truncated: bool,
+}
+
+/// Why a record cannot be replayed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The bytes are not a readable MCAP record.
+    #[error("not a readable MCAP record: {0}")]
+    Mcap(String),
+    /// The record holds nothing for this node.
+    #[error(
+        "the record holds no messages of the {0} node (was it recorded with record = \"exchange\" or \"all\"?)"
+    )]
+    Empty(NodeKind),
+    /// The coupler asked for something the record does not hold.
+    #[error("replay double ({node}): {what}")]
+    Mismatch {
+        /// The replayed node.
+        node: NodeKind,
+        /// What differs.
+        what: String,
+    },
+    /// A transport failure.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+}
+
+impl Script {
+    /// Reads the frames exchanged with `node` from MCAP bytes (complete or truncated).
+    pub fn from_mcap(bytes: &[u8], node: NodeKind) -> Result<Script, ReplayError> {
+        let from_topic = format!("{}-to-coupler", node.name());
+        let to_topic = format!("coupler-to-{}", node.name());
+        let stream = mcap::MessageStream::new_with_options(
+            bytes,
+            mcap::read::Options::IgnoreEndMagic.into(),
+        )
+        .map_err(|e| ReplayError::Mcap(e.to_string()))?;
+        let mut script = Script::default();
+        for msg in stream {
+            let msg = match msg {
+                Ok(msg) => msg,
+                Err(_) if !script.frames.is_empty() => {
+                    script.truncated = true;
+                    break;
+                }
+                Err(e) => return Err(ReplayError::Mcap(e.to_string())),
+            };
+            let dir = if msg.channel.topic == from_topic {
+                Direction::FromNode
+            } else if msg.channel.topic == to_topic {
+                Direction::ToNode
+            } else {
+                continue;
+            };
+            script.frames.push((dir, msg.data.into_owned()));
+        }
+        if script.frames.is_empty() {
+            return Err(ReplayError::Empty(node));
+        }
+        Ok(script)
+    }
+}
+
+fn describe(frame: &[u8]) -> String {
+    match codec::decode_header(frame) {
+        Ok(h) => format!(
+            "{:?} step {} iteration {}",
+            h.kind, h.stamp.step, h.stamp.iteration
+        ),
+        Err(e) => format!("an undecodable frame ({e})"),
+    }
+}
+
+/// Plays `script` as node `me` over `transport`; returns when the coupler says shutdown or the
+/// script ends with the coupler's shutdown.
+pub fn play(
+    transport: &mut dyn Transport,
+    script: &Script,
+    timeout: Duration,
+) -> Result<(), ReplayError> {
+    let me = transport.me();
+    for (dir, frame) in &script.frames {
+        match dir {
+            Direction::FromNode => transport.send(NodeKind::Coupler, frame)?,
+            Direction::ToNode => {
+                let (_, got) = transport.recv(Some(NodeKind::Coupler), timeout)?;
+                let want = codec::decode_header(frame).map_err(|e| ReplayError::Mismatch {
+                    node: me,
+                    what: format!("recorded frame does not decode: {e}"),
+                })?;
+                let head = codec::decode_header(&got).map_err(|e| ReplayError::Mismatch {
+                    node: me,
+                    what: format!("the coupler sent a frame that does not decode: {e}"),
+                })?;
+                if head.kind == MessageKind::Shutdown {
+                    return Ok(());
+                }
+                if (head.kind, head.stamp) != (want.kind, want.stamp) {
+                    return Err(ReplayError::Mismatch {
+                        node: me,
+                        what: format!(
+                            "the coupler sent {} but the record holds {} at this point",
+                            describe(&got),
+                            describe(frame)
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    // The script is over: only a shutdown may follow.
+    let (_, got) = transport.recv(Some(NodeKind::Coupler), timeout)?;
+    match codec::decode(&got) {
+        Ok((_, Message::Shutdown(_))) => Ok(()),
+        _ => Err(ReplayError::Mismatch {
+            node: me,
+            what: format!(
+                "the coupler asked for {} after the end of the record{}",
+                describe(&got),
+                if script.truncated {
+                    " (the record was cut short)"
+                } else {
+                    ""
+                }
+            ),
+        }),
+    }
+}
