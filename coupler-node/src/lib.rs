@@ -6,3 +6,4 @@
 pub mod dt;
 pub mod ledger;
 pub mod scheme;
+pub mod driver;

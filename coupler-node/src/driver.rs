@@ -1,0 +1,409 @@
+//! The coupler's loop: frames in from the transport → record → state machine → frames out.
+//!
+//! The same loop drives the iceoryx2 bus and the in-memory transport. Every frame that crosses
+//! the coupler is handed to the [`RecordSink`] exactly as it crossed, before it is acted on;
+//! diagnostics follow each completed step, and the record is flushed at each step's end so a
+//! killed run leaves a file readable up to its last completed step.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use protocol::codec::{self, DecodeError};
+use protocol::transport::{Transport, TransportError};
+use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
+use serde::Serialize;
+
+use crate::scheme::{Action, Coupler, Finish, StepReport};
+
+/// Where the loop writes what it sees.
+pub trait RecordSink {
+    /// A frame that crossed the coupler (`from` → `to`), as bytes.
+    fn frame(&mut self, from: NodeKind, to: NodeKind, step: u64, wall_ns: u64, frame: &[u8])
+    -> Result<(), String>;
+    /// A node's checkpoint frame.
+    fn checkpoint(&mut self, node: NodeKind, step: u64, wall_ns: u64, frame: &[u8])
+    -> Result<(), String>;
+    /// One step's diagnostics as a JSON object.
+    fn diagnostics(&mut self, step: u64, wall_ns: u64, json: &[u8]) -> Result<(), String>;
+    /// The step is complete: make it durable.
+    fn end_step(&mut self) -> Result<(), String>;
+}
+
+/// A sink that keeps nothing (`record = "none"`).
+pub struct NoRecord;
+
+impl RecordSink for NoRecord {
+    fn frame(&mut self, _: NodeKind, _: NodeKind, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
+    fn checkpoint(&mut self, _: NodeKind, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
+    fn diagnostics(&mut self, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+        Ok(())
+    }
+    fn end_step(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Settings of the loop.
+#[derive(Clone, Debug)]
+pub struct DriverConfig {
+    /// Longest wait for any one message [s].
+    pub timeout: Duration,
+    /// Print a progress line on stderr.
+    pub progress: bool,
+    /// Scene name, for the progress line.
+    pub name: String,
+    /// End time [s], for the progress line.
+    pub t_end: f64,
+}
+
+/// Busy seconds per role.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Busy {
+    /// Waiting for the fluid's answers (its compute time plus transport).
+    pub fluid: f64,
+    /// Waiting for the solid's answers.
+    pub solid: f64,
+    /// The coupler's own work (state machine, encoding, recording).
+    pub coupler: f64,
+}
+
+/// Iteration statistics.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Iterations {
+    /// Mean solid trials per step.
+    pub mean: f64,
+    /// Largest number in one step.
+    pub max: u32,
+}
+
+/// `summary.json` (DESIGN §7).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// `"completed"`, `"max_steps"`, or the reason the run stopped.
+    pub status: String,
+    /// Coupling steps done.
+    pub steps: u64,
+    /// Time reached [s].
+    pub t_end: f64,
+    /// Wall-clock time of the loop [s].
+    pub wall_s: f64,
+    /// Busy seconds per node.
+    pub busy_s: Busy,
+    /// Fixed-point iterations.
+    pub coupling_iterations: Iterations,
+    /// Largest relative mass error of the ledger.
+    pub mass_rel_err: f64,
+    /// Largest relative energy error of the ledger.
+    pub energy_rel_err: f64,
+    /// Energy error relative to the largest interface exchange, at the end.
+    pub energy_err_vs_exchange: f64,
+    /// Links broken.
+    pub links_broken: u64,
+    /// Which implementation ran each side (`real`, `pressure`, `prescribed`, `replay:...`).
+    pub nodes: std::collections::BTreeMap<String, String>,
+}
+
+/// Why the loop stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum DriverError {
+    /// The handshake found a problem.
+    #[error(transparent)]
+    Coupler(#[from] crate::scheme::CouplerError),
+    /// The transport failed.
+    #[error(transparent)]
+    Transport(#[from] TransportError),
+    /// A frame did not decode.
+    #[error("undecodable frame from the {from} node: {source}")]
+    Decode {
+        /// Sender.
+        from: NodeKind,
+        /// The codec's error.
+        source: DecodeError,
+    },
+    /// Recording failed.
+    #[error("recording: {0}")]
+    Record(String),
+    /// A node's process ended or the supervisor asked to stop.
+    #[error("{0}")]
+    Aborted(String),
+}
+
+/// What the supervisor can tell the loop while it waits.
+#[derive(Clone, Debug, Default)]
+pub struct Abort {
+    flag: Arc<AtomicBool>,
+    reason: Arc<std::sync::Mutex<String>>,
+}
+
+impl Abort {
+    /// Asks the loop to stop with `reason`.
+    pub fn raise(&self, reason: String) {
+        *self.reason.lock().expect("abort reason lock") = reason;
+        self.flag.store(true, Ordering::SeqCst);
+    }
+
+    fn check(&self) -> Option<String> {
+        self.flag
+            .load(Ordering::SeqCst)
+            .then(|| self.reason.lock().expect("abort reason lock").clone())
+    }
+}
+
+fn wall_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
+}
+
+/// Runs the coupler until the run finishes or fails; returns the summary (its `status` says
+/// which) and the error, if any. Nodes are told to shut down in both cases.
+pub fn drive(
+    transport: &mut dyn Transport,
+    coupler: &mut Coupler,
+    sink: &mut dyn RecordSink,
+    cfg: &DriverConfig,
+    abort: &Abort,
+) -> (Summary, Option<DriverError>) {
+    let started = Instant::now();
+    let mut busy = Busy::default();
+    let mut progress = Progress::new(cfg);
+    let result = drive_inner(transport, coupler, sink, cfg, abort, &mut busy, &mut progress);
+    progress.finish();
+    let (mean, max) = coupler.iteration_stats();
+    let ledger = coupler.ledger();
+    let (status, error) = match result {
+        Ok(Finish::Completed) => ("completed".to_string(), None),
+        Ok(Finish::MaxSteps) => ("max_steps".to_string(), None),
+        Err(err) => {
+            let reason = err.to_string();
+            let stamp = Stamp::step(coupler.step());
+            for node in [NodeKind::Fluid, NodeKind::Solid] {
+                let present = match node {
+                    NodeKind::Fluid => coupler.config().fluid,
+                    _ => coupler.config().solid,
+                };
+                if present {
+                    let frame = codec::encode(
+                        NodeKind::Coupler,
+                        &Message::Shutdown(Shutdown {
+                            stamp,
+                            reason: ShutdownReason::Failure(reason.clone()),
+                        }),
+                    );
+                    let _ = sink.frame(NodeKind::Coupler, node, stamp.step, wall_ns(), &frame);
+                    let _ = transport.send(node, &frame);
+                }
+            }
+            let _ = sink.end_step();
+            (reason, Some(err))
+        }
+    };
+    let wall = started.elapsed().as_secs_f64();
+    busy.coupler = (wall - busy.fluid - busy.solid).max(0.0);
+    let summary = Summary {
+        scene: cfg.name.clone(),
+        status,
+        steps: coupler.step(),
+        t_end: coupler.time(),
+        wall_s: wall,
+        busy_s: busy,
+        coupling_iterations: Iterations { mean, max },
+        mass_rel_err: ledger.max_mass_rel_err,
+        energy_rel_err: ledger.max_energy_rel_err,
+        energy_err_vs_exchange: ledger.last.as_ref().map_or(0.0, |l| l.energy_err_vs_exchange),
+        links_broken: ledger.last.as_ref().map_or(0, |l| l.links_broken),
+        nodes: Default::default(),
+    };
+    (summary, error)
+}
+
+/// Diagnostics of one step as written to the record (topic `diagnostics`).
+#[derive(Serialize)]
+struct Diagnostics<'a> {
+    step: u64,
+    t: f64,
+    dt: f64,
+    limiter: &'a str,
+    iterations: u32,
+    residuals: &'a [f64],
+    relaxation: &'a [f64],
+    converged: bool,
+    output: Option<u32>,
+    ledger: &'a crate::ledger::LedgerEntry,
+    busy_s: &'a Busy,
+}
+
+fn drive_inner(
+    transport: &mut dyn Transport,
+    coupler: &mut Coupler,
+    sink: &mut dyn RecordSink,
+    cfg: &DriverConfig,
+    abort: &Abort,
+    busy: &mut Busy,
+    progress: &mut Progress,
+) -> Result<Finish, DriverError> {
+    // NOTE: waits are sliced so the supervisor's abort (a node process died) is seen within
+    // 100 ms even when the transport cannot tell.
+    let slice = Duration::from_millis(100).min(cfg.timeout);
+    let mut out = Vec::new();
+    loop {
+        let waiting_since = Instant::now();
+        let (from, frame) = loop {
+            if let Some(reason) = abort.check() {
+                return Err(DriverError::Aborted(reason));
+            }
+            match transport.recv(None, slice) {
+                Ok(got) => break got,
+                Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
+                Err(TransportError::Timeout { .. }) => {
+                    let who: Vec<&str> = coupler.waiting_for().iter().map(|n| n.name()).collect();
+                    return Err(DriverError::Aborted(format!(
+                        "{} node stopped answering: no message within {:?} at step {}",
+                        who.join(" and "),
+                        cfg.timeout,
+                        coupler.step()
+                    )));
+                }
+                Err(err) => return Err(err.into()),
+            }
+        };
+        let waited = waiting_since.elapsed().as_secs_f64();
+        match from {
+            NodeKind::Fluid => busy.fluid += waited,
+            NodeKind::Solid => busy.solid += waited,
+            NodeKind::Coupler => {}
+        }
+        let (header, msg) = match codec::decode(&frame) {
+            Ok(decoded) => decoded,
+            Err(DecodeError::VersionMismatch { expected, got }) => {
+                return Err(DriverError::Coupler(crate::scheme::CouplerError::Refused {
+                    node: from,
+                    reason: format!(
+                        "protocol version mismatch: coupler speaks version {expected}, {from} node speaks version {got}"
+                    ),
+                }));
+            }
+            Err(source) => return Err(DriverError::Decode { from, source }),
+        };
+        let now = wall_ns();
+        let record = if header.kind == MessageKind::Checkpoint {
+            sink.checkpoint(from, header.stamp.step, now, &frame)
+        } else {
+            sink.frame(from, NodeKind::Coupler, header.stamp.step, now, &frame)
+        };
+        record.map_err(DriverError::Record)?;
+        let actions = coupler.on_message(from, msg)?;
+        for action in actions {
+            match action {
+                Action::Send(to, msg) => {
+                    codec::encode_into(NodeKind::Coupler, &msg, &mut out);
+                    sink.frame(NodeKind::Coupler, to, msg.stamp().step, wall_ns(), &out)
+                        .map_err(DriverError::Record)?;
+                    transport.send(to, &out)?;
+                }
+                Action::Checkpoint(_) => {}
+                Action::StepDone(report) => {
+                    let json = serde_json::to_vec(&Diagnostics {
+                        step: report.step,
+                        t: report.t,
+                        dt: report.dt,
+                        limiter: &report.limiter,
+                        iterations: report.iterations,
+                        residuals: &report.residuals,
+                        relaxation: &report.relaxation,
+                        converged: true,
+                        output: report.output,
+                        ledger: &report.ledger,
+                        busy_s: busy,
+                    })
+                    .expect("diagnostics serialize");
+                    sink.diagnostics(report.step, wall_ns(), &json)
+                        .map_err(DriverError::Record)?;
+                    sink.end_step().map_err(DriverError::Record)?;
+                    progress.update(&report);
+                }
+                Action::Finished(finish) => {
+                    sink.end_step().map_err(DriverError::Record)?;
+                    return Ok(finish);
+                }
+            }
+        }
+    }
+}
+
+/// The progress line: simulated time, step, dt, iterations, ETA.
+struct Progress {
+    enabled: bool,
+    tty: bool,
+    started: Instant,
+    last: Option<Instant>,
+    t_end: f64,
+    name: String,
+    printed: bool,
+}
+
+impl Progress {
+    fn new(cfg: &DriverConfig) -> Progress {
+        use std::io::IsTerminal;
+        Progress {
+            enabled: cfg.progress,
+            tty: std::io::stderr().is_terminal(),
+            started: Instant::now(),
+            last: None,
+            t_end: cfg.t_end,
+            name: cfg.name.clone(),
+            printed: false,
+        }
+    }
+
+    fn update(&mut self, r: &StepReport) {
+        if !self.enabled {
+            return;
+        }
+        let every = if self.tty { 0.2 } else { 5.0 };
+        if self.last.is_some_and(|l| l.elapsed().as_secs_f64() < every) {
+            return;
+        }
+        self.last = Some(Instant::now());
+        let frac = (r.t / self.t_end).clamp(0.0, 1.0);
+        let elapsed = self.started.elapsed().as_secs_f64();
+        let eta = if frac > 0.0 {
+            elapsed * (1.0 - frac) / frac
+        } else {
+            0.0
+        };
+        let width = 24;
+        let filled = (frac * width as f64).round() as usize;
+        let bar: String = "#".repeat(filled) + &"-".repeat(width - filled);
+        let line = format!(
+            "{} [{bar}] t = {:.4e}/{:.4e} s ({:5.1}%) step {} dt {:.3e} it {} ETA {:.0} s",
+            self.name,
+            r.t,
+            self.t_end,
+            100.0 * frac,
+            r.step + 1,
+            r.dt,
+            r.iterations,
+            eta
+        );
+        if self.tty {
+            eprint!("\r{line}\x1b[K");
+        } else {
+            eprintln!("{line}");
+        }
+        self.printed = true;
+    }
+
+    fn finish(&mut self) {
+        if self.enabled && self.tty && self.printed {
+            eprintln!();
+        }
+    }
+}

@@ -1,0 +1,344 @@
+//! `coupler-node run`: validate the scene, start the nodes it needs, couple them, supervise them.
+//!
+//! The scene is validated before any process starts. The resolved scene (defaults filled in,
+//! `--fluid`/`--solid` choices applied) is written to `OUT/scene.toml` and every node reads that
+//! file, so all three hash the same text. Children run beside this executable; a child that
+//! exits early, or stops answering, ends the run with its name in the status. Ctrl-C or SIGTERM
+//! reach the coupler's bus waits as an interruption: the nodes are told to shut down and the
+//! record is finished.
+
+use std::path::{Path, PathBuf};
+use std::process::Stdio;
+use std::time::Duration;
+
+use anyhow::Context;
+use protocol::scene::{RecordLevel, Scene};
+use protocol::transport::Transport;
+use protocol::wire::NodeKind;
+
+use crate::driver::{self, Abort, DriverConfig, NoRecord, RecordSink, Summary};
+use crate::scheme::{Coupler, CouplerConfig};
+
+/// Options of `coupler-node run`.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Fluid implementation override (`real`, `pressure`, `replay:FILE`).
+    pub fluid: Option<String>,
+    /// Solid implementation override (`real`, `prescribed`, `replay:FILE`).
+    pub solid: Option<String>,
+    /// Deadline for any one message [s].
+    pub timeout: Duration,
+    /// Progress line on stderr.
+    pub progress: bool,
+    /// Explicit node binaries (default: beside this executable).
+    pub fluid_bin: Option<PathBuf>,
+    /// Explicit solid binary.
+    pub solid_bin: Option<PathBuf>,
+}
+
+/// Reads and validates a scene, applying implementation overrides; returns it with its path.
+pub fn load_scene(
+    path: &Path,
+    fluid: Option<&str>,
+    solid: Option<&str>,
+) -> anyhow::Result<Scene> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading scene {}", path.display()))?;
+    let name = path.display().to_string();
+    let mut scene = Scene::from_toml_str(&text, &name)?;
+    if let Some(choice) = fluid {
+        let f = scene
+            .fluid
+            .as_mut()
+            .with_context(|| format!("{name}: --fluid {choice} but the scene has no [fluid] section"))?;
+        f.node = choice.to_string();
+    }
+    if let Some(choice) = solid {
+        let s = scene
+            .solid
+            .as_mut()
+            .with_context(|| format!("{name}: --solid {choice} but the scene has no [solid] section"))?;
+        s.node = choice.to_string();
+    }
+    if fluid.is_some() || solid.is_some() {
+        // Validate again with the choices applied (a real node needs more keys than a double).
+        scene = Scene::from_toml_str(&scene.to_toml(), &name)?;
+    }
+    Ok(scene)
+}
+
+/// A short run id for the shared-memory prefix: scene name and process id.
+pub fn run_id(scene: &Scene) -> String {
+    let short: String = scene
+        .name
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric())
+        .take(12)
+        .collect();
+    format!("{short}{}", std::process::id())
+}
+
+/// The binary of a node: explicit path, `COSIM_<NODE>_BIN`, or beside this executable.
+pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
+    if let Some(p) = explicit {
+        return Ok(p.to_path_buf());
+    }
+    let var = format!("COSIM_{}_BIN", node.name().to_uppercase());
+    if let Ok(p) = std::env::var(&var) {
+        return Ok(PathBuf::from(p));
+    }
+    let exe = std::env::current_exe().context("locating this executable")?;
+    let dir = exe.parent().context("this executable has no directory")?;
+    let name = format!("{}-node{}", node.name(), std::env::consts::EXE_SUFFIX);
+    let path = dir.join(&name);
+    anyhow::ensure!(
+        path.exists(),
+        "{name} not found beside {} (build the workspace, or set {var})",
+        exe.display()
+    );
+    Ok(path)
+}
+
+/// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`).
+pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
+    let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    let mut nodes = Vec::new();
+    if let Some(f) = &scene.fluid {
+        nodes.push((NodeKind::Fluid, f.node.clone()));
+    }
+    if let Some(s) = &scene.solid {
+        nodes.push((NodeKind::Solid, s.node.clone()));
+    }
+    let binaries = nodes
+        .iter()
+        .map(|(node, _)| {
+            let explicit = match node {
+                NodeKind::Fluid => opts.fluid_bin.as_deref(),
+                _ => opts.solid_bin.as_deref(),
+            };
+            node_binary(*node, explicit)
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("creating output directory {}", opts.out.display()))?;
+    let resolved = opts.out.join("scene.toml");
+    std::fs::write(&resolved, scene.to_toml())
+        .with_context(|| format!("writing {}", resolved.display()))?;
+    let run_id = run_id(&scene);
+    protocol::bus::cleanup_run(&run_id).context("cleaning leftovers of an earlier run")?;
+    let peers: Vec<NodeKind> = nodes.iter().map(|(n, _)| *n).collect();
+    let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
+        .with_context(|| format!("opening the bus for run {run_id}"))?;
+
+    let mut children = Vec::new();
+    for ((node, implementation), binary) in nodes.iter().zip(&binaries) {
+        let mut cmd = tokio::process::Command::new(binary);
+        cmd.arg("--scene")
+            .arg(&resolved)
+            .arg("--run-id")
+            .arg(&run_id)
+            .arg("--out")
+            .arg(&opts.out)
+            .arg("--double")
+            .arg(implementation)
+            .arg("--timeout-s")
+            .arg(opts.timeout.as_secs_f64().to_string())
+            .stdin(Stdio::null())
+            .kill_on_drop(true);
+        children.push((*node, cmd));
+    }
+    let abort = Abort::default();
+    let supervisor = Supervisor::start(children, abort.clone())?;
+
+    let record_path = opts.out.join("exchange.mcap");
+    let mut sink: Box<dyn RecordSink> = match scene.run.record {
+        RecordLevel::None => Box::new(NoRecord),
+        level => Box::new(crate::record::FileSink::create(&record_path, level, &scene)?),
+    };
+    let mut coupler = Coupler::new(CouplerConfig::from_scene(&scene));
+    let cfg = DriverConfig {
+        timeout: opts.timeout,
+        progress: opts.progress,
+        name: scene.name.clone(),
+        t_end: scene.run.t_end,
+    };
+    let transport: &mut dyn Transport = &mut bus;
+    let (mut summary, error) = driver::drive(transport, &mut coupler, sink.as_mut(), &cfg, &abort);
+    let finished = sink.finish();
+    let exits = supervisor.stop(Duration::from_secs(2));
+    drop(bus);
+    let _ = protocol::bus::cleanup_run(&run_id);
+    // A node that died explains a lost peer better than the transport does.
+    if error.is_some()
+        && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
+    {
+        summary.status = format!("{node} node died ({}): {}", status.text, summary.status);
+    }
+    for (node, implementation) in &nodes {
+        summary
+            .nodes
+            .insert(node.name().to_string(), implementation.clone());
+    }
+    let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
+    std::fs::write(opts.out.join("summary.json"), json + "\n")
+        .with_context(|| format!("writing {}", opts.out.join("summary.json").display()))?;
+    finished.context("finishing the record")?;
+    if error.is_some() {
+        anyhow::bail!("{}", summary.status);
+    }
+    Ok(summary)
+}
+
+/// How a child ended.
+#[derive(Clone, Debug)]
+pub struct ExitInfo {
+    /// Exit code 0.
+    pub success: bool,
+    /// `exit code N`, `killed by signal N`, or `killed after the grace period`.
+    pub text: String,
+}
+
+/// Starts the children and watches them on a tokio runtime of its own thread.
+struct Supervisor {
+    stop: tokio::sync::oneshot::Sender<Duration>,
+    thread: std::thread::JoinHandle<Vec<(NodeKind, ExitInfo)>>,
+}
+
+fn describe(status: std::process::ExitStatus) -> ExitInfo {
+    use std::os::unix::process::ExitStatusExt;
+    let text = match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exit code {code}"),
+        (None, Some(sig)) => format!("killed by signal {sig}"),
+        _ => "ended".to_string(),
+    };
+    ExitInfo {
+        success: status.success(),
+        text,
+    }
+}
+
+impl Supervisor {
+    fn start(
+        children: Vec<(NodeKind, tokio::process::Command)>,
+        abort: Abort,
+    ) -> anyhow::Result<Supervisor> {
+        let (started_tx, started_rx) = std::sync::mpsc::channel();
+        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<Duration>();
+        let thread = std::thread::Builder::new()
+            .name("supervisor".into())
+            .spawn(move || {
+                let rt = tokio::runtime::Builder::new_current_thread()
+                    .enable_all()
+                    .build()
+                    .expect("a current-thread runtime builds");
+                rt.block_on(supervise(children, abort, started_tx, stop_rx))
+            })
+            .context("starting the supervisor thread")?;
+        match started_rx.recv() {
+            Ok(Ok(())) => Ok(Supervisor {
+                stop: stop_tx,
+                thread,
+            }),
+            Ok(Err(err)) => {
+                let _ = thread.join();
+                Err(anyhow::anyhow!(err))
+            }
+            Err(_) => anyhow::bail!("the supervisor thread ended before starting the nodes"),
+        }
+    }
+
+    /// Lets the children exit within `grace`, kills the rest, and returns how each ended.
+    fn stop(self, grace: Duration) -> Vec<(NodeKind, ExitInfo)> {
+        let _ = self.stop.send(grace);
+        self.thread.join().unwrap_or_default()
+    }
+}
+
+async fn supervise(
+    commands: Vec<(NodeKind, tokio::process::Command)>,
+    abort: Abort,
+    started: std::sync::mpsc::Sender<Result<(), String>>,
+    stop: tokio::sync::oneshot::Receiver<Duration>,
+) -> Vec<(NodeKind, ExitInfo)> {
+    let mut children = Vec::new();
+    for (node, mut cmd) in commands {
+        match cmd.spawn() {
+            Ok(child) => children.push((node, child)),
+            Err(err) => {
+                let _ = started.send(Err(format!("starting the {node} node: {err}")));
+                return Vec::new();
+            }
+        }
+    }
+    let _ = started.send(Ok(()));
+    let mut exits: Vec<(NodeKind, ExitInfo)> = Vec::new();
+    let mut stop = stop;
+    // Watch until the coupler says stop; an early exit of any child aborts the run.
+    let grace = loop {
+        let waits = children
+            .iter_mut()
+            .filter(|(node, _)| !exits.iter().any(|(n, _)| n == node))
+            .map(|(node, child)| {
+                let node = *node;
+                Box::pin(async move { (node, child.wait().await) })
+            })
+            .collect::<Vec<_>>();
+        if waits.is_empty() {
+            break (&mut stop).await.unwrap_or(Duration::ZERO);
+        }
+        tokio::select! {
+            grace = &mut stop => break grace.unwrap_or(Duration::ZERO),
+            ((node, status), _, _) = futures_select_all(waits) => {
+                let info = match status {
+                    Ok(s) => describe(s),
+                    Err(e) => ExitInfo { success: false, text: format!("wait failed: {e}") },
+                };
+                let reason = format!("{node} node exited before the end of the run ({})", info.text);
+                exits.push((node, info));
+                abort.raise(reason);
+            }
+        }
+    };
+    for (node, child) in children.iter_mut() {
+        if exits.iter().any(|(n, _)| n == node) {
+            continue;
+        }
+        let info = match tokio::time::timeout(grace, child.wait()).await {
+            Ok(Ok(status)) => describe(status),
+            Ok(Err(e)) => ExitInfo {
+                success: false,
+                text: format!("wait failed: {e}"),
+            },
+            Err(_) => {
+                let _ = child.kill().await;
+                ExitInfo {
+                    success: false,
+                    text: format!("killed after the {grace:?} grace period"),
+                }
+            }
+        };
+        exits.push((*node, info));
+    }
+    exits
+}
+
+/// Waits for the first of several futures (a small `select_all` without another crate).
+async fn futures_select_all<F, T>(futures: Vec<std::pin::Pin<Box<F>>>) -> (T, usize, ())
+where
+    F: std::future::Future<Output = T>,
+{
+    let mut futures = futures;
+    std::future::poll_fn(move |cx| {
+        for (i, f) in futures.iter_mut().enumerate() {
+            if let std::task::Poll::Ready(out) = f.as_mut().poll(cx) {
+                return std::task::Poll::Ready((out, i, ()));
+            }
+        }
+        std::task::Poll::Pending
+    })
+    .await
+}
