@@ -755,7 +755,7 @@ impl Scene {
             check_node_impl("fluid.node", &fluid.node, &["real", "pressure"], file)?;
             check_len("fluid.upper", &fluid.upper)?;
             check_len("fluid.lower", &fluid.lower)?;
-            if fluid.cells.len() != dim || fluid.cells.iter().any(|&n| n == 0) {
+            if fluid.cells.len() != dim || fluid.cells.contains(&0) {
                 return Err(invalid(
                     "fluid.cells",
                     &format!("{dim} positive cell counts"),

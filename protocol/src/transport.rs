@@ -49,10 +49,13 @@ pub trait Transport {
     ) -> Result<(NodeKind, Vec<u8>), TransportError>;
 }
 
+/// Sending half of a link: frames tagged with their sender.
+type FrameSender = mpsc::Sender<(NodeKind, Vec<u8>)>;
+
 /// One end of an in-memory star: the coupler talks to each node, nodes talk to the coupler.
 pub struct MemoryTransport {
     me: NodeKind,
-    senders: Vec<(NodeKind, mpsc::Sender<(NodeKind, Vec<u8>)>)>,
+    senders: Vec<(NodeKind, FrameSender)>,
     receiver: mpsc::Receiver<(NodeKind, Vec<u8>)>,
     pending: VecDeque<(NodeKind, Vec<u8>)>,
 }
