@@ -19,11 +19,22 @@ use crate::scheme::{Action, Coupler, Finish, StepReport};
 /// Where the loop writes what it sees.
 pub trait RecordSink {
     /// A frame that crossed the coupler (`from` → `to`), as bytes.
-    fn frame(&mut self, from: NodeKind, to: NodeKind, step: u64, wall_ns: u64, frame: &[u8])
-    -> Result<(), String>;
+    fn frame(
+        &mut self,
+        from: NodeKind,
+        to: NodeKind,
+        step: u64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String>;
     /// A node's checkpoint frame.
-    fn checkpoint(&mut self, node: NodeKind, step: u64, wall_ns: u64, frame: &[u8])
-    -> Result<(), String>;
+    fn checkpoint(
+        &mut self,
+        node: NodeKind,
+        step: u64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String>;
     /// One step's diagnostics as a JSON object.
     fn diagnostics(&mut self, step: u64, wall_ns: u64, json: &[u8]) -> Result<(), String>;
     /// The step is complete: make it durable.
@@ -174,7 +185,15 @@ pub fn drive(
     let started = Instant::now();
     let mut busy = Busy::default();
     let mut progress = Progress::new(cfg);
-    let result = drive_inner(transport, coupler, sink, cfg, abort, &mut busy, &mut progress);
+    let result = drive_inner(
+        transport,
+        coupler,
+        sink,
+        cfg,
+        abort,
+        &mut busy,
+        &mut progress,
+    );
     progress.finish();
     let (mean, max) = coupler.iteration_stats();
     let ledger = coupler.ledger();
@@ -217,7 +236,10 @@ pub fn drive(
         coupling_iterations: Iterations { mean, max },
         mass_rel_err: ledger.max_mass_rel_err,
         energy_rel_err: ledger.max_energy_rel_err,
-        energy_err_vs_exchange: ledger.last.as_ref().map_or(0.0, |l| l.energy_err_vs_exchange),
+        energy_err_vs_exchange: ledger
+            .last
+            .as_ref()
+            .map_or(0.0, |l| l.energy_err_vs_exchange),
         links_broken: ledger.last.as_ref().map_or(0, |l| l.links_broken),
         nodes: Default::default(),
     };

@@ -18,6 +18,7 @@ use protocol::wire::NodeKind;
 
 use crate::driver::{self, Abort, DriverConfig, NoRecord, RecordSink, Summary};
 use crate::scheme::{Coupler, CouplerConfig};
+use crate::sink::FileSink;
 
 /// Options of `coupler-node run`.
 #[derive(Clone, Debug)]
@@ -41,27 +42,21 @@ pub struct RunOptions {
 }
 
 /// Reads and validates a scene, applying implementation overrides; returns it with its path.
-pub fn load_scene(
-    path: &Path,
-    fluid: Option<&str>,
-    solid: Option<&str>,
-) -> anyhow::Result<Scene> {
+pub fn load_scene(path: &Path, fluid: Option<&str>, solid: Option<&str>) -> anyhow::Result<Scene> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading scene {}", path.display()))?;
     let name = path.display().to_string();
     let mut scene = Scene::from_toml_str(&text, &name)?;
     if let Some(choice) = fluid {
-        let f = scene
-            .fluid
-            .as_mut()
-            .with_context(|| format!("{name}: --fluid {choice} but the scene has no [fluid] section"))?;
+        let f = scene.fluid.as_mut().with_context(|| {
+            format!("{name}: --fluid {choice} but the scene has no [fluid] section")
+        })?;
         f.node = choice.to_string();
     }
     if let Some(choice) = solid {
-        let s = scene
-            .solid
-            .as_mut()
-            .with_context(|| format!("{name}: --solid {choice} but the scene has no [solid] section"))?;
+        let s = scene.solid.as_mut().with_context(|| {
+            format!("{name}: --solid {choice} but the scene has no [solid] section")
+        })?;
         s.node = choice.to_string();
     }
     if fluid.is_some() || solid.is_some() {
@@ -155,9 +150,14 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let supervisor = Supervisor::start(children, abort.clone())?;
 
     let record_path = opts.out.join("exchange.mcap");
-    let mut sink: Box<dyn RecordSink> = match scene.run.record {
-        RecordLevel::None => Box::new(NoRecord),
-        level => Box::new(crate::record::FileSink::create(&record_path, level, &scene)?),
+    let mut file_sink = match scene.run.record {
+        RecordLevel::None => None,
+        level => Some(FileSink::create(&record_path, level, &scene)?),
+    };
+    let mut no_record = NoRecord;
+    let sink: &mut dyn RecordSink = match file_sink.as_mut() {
+        Some(s) => s,
+        None => &mut no_record,
     };
     let mut coupler = Coupler::new(CouplerConfig::from_scene(&scene));
     let cfg = DriverConfig {
@@ -167,8 +167,8 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
         t_end: scene.run.t_end,
     };
     let transport: &mut dyn Transport = &mut bus;
-    let (mut summary, error) = driver::drive(transport, &mut coupler, sink.as_mut(), &cfg, &abort);
-    let finished = sink.finish();
+    let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);
+    let finished = file_sink.as_mut().map_or(Ok(()), FileSink::finish);
     let exits = supervisor.stop(Duration::from_secs(2));
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);

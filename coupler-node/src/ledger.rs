@@ -27,7 +27,7 @@ pub struct LedgerEntry {
     pub dissipated: f64,
     /// |mass now − mass at start| / mass at start (0 when there is no mass).
     pub mass_rel_err: f64,
-    /// |energy now − energy at start| / |energy at start|.
+    /// |energy now − energy at start| / max(|energy at start|, largest |interface work|).
     pub energy_rel_err: f64,
     /// |energy now − energy at start| / largest |interface work| so far (0 without exchange).
     pub energy_err_vs_exchange: f64,
@@ -82,8 +82,11 @@ impl Ledger {
             0.0
         };
         let energy_abs_err = (energy - initial_energy).abs();
-        let energy_rel_err = if initial_energy != 0.0 {
-            energy_abs_err / initial_energy.abs()
+        // NOTE: relative to the initial energy, or to the largest interface exchange when that
+        // is larger (a system that starts at rest has no initial energy to compare with).
+        let scale = initial_energy.abs().max(self.max_exchange);
+        let energy_rel_err = if scale > 0.0 {
+            energy_abs_err / scale
         } else {
             energy_abs_err
         };

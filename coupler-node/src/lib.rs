@@ -3,7 +3,11 @@
 
 #![warn(missing_docs)]
 
-pub mod dt;
-pub mod ledger;
-pub mod scheme;
+pub mod cli;
 pub mod driver;
+pub mod dt;
+pub mod launch;
+pub mod ledger;
+pub mod record;
+pub mod scheme;
+pub mod sink;

@@ -1,5 +1,5 @@
 //! `coupler-node` binary; all logic is in the library.
 
 fn main() -> std::process::ExitCode {
-    std::process::ExitCode::SUCCESS
+    coupler_node::cli::main()
 }

@@ -410,6 +410,7 @@ impl Coupler {
         }
         // Anything left must belong to a later phase of a node that is done with this one.
         if let Some((from, msg)) = self.queue.back()
+            && !matches!(self.phase, Phase::Greeting { .. })
             && self.waiting_for().contains(from)
         {
             return Err(CouplerError::Unexpected {
@@ -444,7 +445,11 @@ impl Coupler {
                 hello.contains(&from) && !totals.contains(&from)
             }
             (Phase::Greeting { hello, surface, .. }, Message::SolidState(_)) => {
-                from == NodeKind::Solid && hello.contains(&from) && !surface
+                // Forwarded to the fluid, which must have been welcomed first.
+                from == NodeKind::Solid
+                    && hello.contains(&from)
+                    && hello.contains(&NodeKind::Fluid)
+                    && !surface
             }
             (Phase::Proposals(got), Message::DtProposal(_)) => {
                 stamp.step == self.step && !got.iter().any(|g| g.0 == from)
