@@ -409,9 +409,18 @@ impl Coupler {
             self.handle(from, msg, &mut actions)?;
         }
         // Anything left must belong to a later phase of a node that is done with this one.
+        let greeting_kind = |m: &Message| {
+            matches!(
+                m,
+                Message::Hello(_)
+                    | Message::ConservedTotals(_)
+                    | Message::SolidState(_)
+                    | Message::DtProposal(_)
+            )
+        };
         if let Some((from, msg)) = self.queue.back()
-            && !matches!(self.phase, Phase::Greeting { .. })
             && self.waiting_for().contains(from)
+            && !(matches!(self.phase, Phase::Greeting { .. }) && greeting_kind(msg))
         {
             return Err(CouplerError::Unexpected {
                 from: *from,
