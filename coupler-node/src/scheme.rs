@@ -246,6 +246,9 @@ enum Phase {
     Loads(u32),
     Trial(u32),
     Totals(Vec<ConservedTotals>),
+    /// The last step is done: collect the proposals the nodes send after every step, so the
+    /// record holds the same messages whatever the timing, then shut down.
+    Closing(Vec<NodeKind>, Finish),
     Done,
 }
 
@@ -352,6 +355,7 @@ impl Coupler {
             Phase::Loads(_) => vec![NodeKind::Fluid],
             Phase::Trial(_) => vec![NodeKind::Solid],
             Phase::Totals(got) => self.missing(got.iter().map(|g| g.node)),
+            Phase::Closing(got, _) => self.missing(got.iter().copied()),
             Phase::Done => Vec::new(),
         }
     }
@@ -442,6 +446,7 @@ impl Coupler {
             Phase::Loads(k) => format!("InterfaceLoads for step {} iteration {k}", self.step),
             Phase::Trial(k) => format!("SolidState for step {} iteration {k}", self.step),
             Phase::Totals(_) => format!("ConservedTotals for step {}", self.step),
+            Phase::Closing(..) => format!("DtProposal for step {}", self.step),
             Phase::Done => "nothing (the run is over)".into(),
         }
     }
@@ -462,6 +467,9 @@ impl Coupler {
             }
             (Phase::Proposals(got), Message::DtProposal(_)) => {
                 stamp.step == self.step && !got.iter().any(|g| g.0 == from)
+            }
+            (Phase::Closing(got, _), Message::DtProposal(_)) => {
+                stamp.step == self.step && !got.contains(&from)
             }
             (Phase::Checkpoints(got), Message::Checkpoint(_)) => {
                 stamp.step == self.step && !got.contains(&from)
@@ -558,8 +566,10 @@ impl Coupler {
                         what: format!("time step proposal {} ({})", p.dt_max, p.limiter),
                     });
                 }
-                if let Phase::Proposals(got) = &mut self.phase {
-                    got.push((from, p.dt_max, p.limiter));
+                match &mut self.phase {
+                    Phase::Proposals(got) => got.push((from, p.dt_max, p.limiter)),
+                    Phase::Closing(got, _) => got.push(from),
+                    _ => {}
                 }
             }
             Message::Checkpoint(c) => {
@@ -652,6 +662,19 @@ impl Coupler {
                     }
                 }
                 Phase::Checkpoints(_) => self.start_step(actions),
+                Phase::Closing(_, finish) => {
+                    for node in self.cfg.nodes() {
+                        actions.push(Action::Send(
+                            node,
+                            Message::Shutdown(Shutdown {
+                                stamp: Stamp::step(self.step),
+                                reason: ShutdownReason::Completed,
+                            }),
+                        ));
+                    }
+                    actions.push(Action::Finished(finish));
+                    self.phase = Phase::Done;
+                }
                 Phase::Totals(got) => self.finish_step(got, actions)?,
                 other @ (Phase::Loads(_) | Phase::Trial(_) | Phase::Done) => {
                     self.phase = other;
@@ -856,17 +879,7 @@ impl Coupler {
             None
         };
         if let Some(finish) = finish {
-            for node in self.cfg.nodes() {
-                actions.push(Action::Send(
-                    node,
-                    Message::Shutdown(Shutdown {
-                        stamp: Stamp::step(self.step),
-                        reason: ShutdownReason::Completed,
-                    }),
-                ));
-            }
-            actions.push(Action::Finished(finish));
-            self.phase = Phase::Done;
+            self.phase = Phase::Closing(Vec::new(), finish);
         } else {
             self.phase = Phase::Proposals(Vec::new());
         }

@@ -10,8 +10,7 @@ use protocol::scene::Scene;
 use protocol::transport::{Link, Transport};
 use protocol::wire::NodeKind;
 
-use crate::double::PressureDouble;
-use crate::node::{self, FluidModel, LoopConfig, NodeError};
+use crate::node::{self, LoopConfig, NodeError};
 
 /// The fluid node of the co-simulation (normally started by `coupler-node run`).
 #[derive(Debug, Parser)]
@@ -82,19 +81,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         protocol::replay::play(&mut bus, &script, timeout)?;
         return Ok(());
     }
-    let mut model: Box<dyn FluidModel> = match double.as_str() {
-        "pressure" => Box::new(PressureDouble::new(
-            scene.dim(),
-            fluid
-                .pressure
-                .clone()
-                .context("--double pressure needs a [fluid.pressure] table in the scene")?,
-        )),
-        "real" => anyhow::bail!("the real fluid solver is not wired to the node yet"),
-        other => {
-            anyhow::bail!("unknown --double {other:?} (expected pressure or replay:FILE.mcap)")
-        }
-    };
+    let mut model = node::model_from_scene(&scene, &double).map_err(anyhow::Error::msg)?;
     if let Some(out) = &args.out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }

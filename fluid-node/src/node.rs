@@ -222,3 +222,27 @@ fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
         report,
     }
 }
+
+/// Builds the fluid implementation named `implementation` (`real` or `pressure`) for a scene.
+pub fn model_from_scene(
+    scene: &protocol::scene::Scene,
+    implementation: &str,
+) -> Result<Box<dyn FluidModel + Send>, String> {
+    let fluid = scene
+        .fluid
+        .as_ref()
+        .ok_or("the scene has no [fluid] section")?;
+    match implementation {
+        "pressure" => Ok(Box::new(crate::double::PressureDouble::new(
+            scene.dim(),
+            fluid
+                .pressure
+                .clone()
+                .ok_or("the pressure double needs a [fluid.pressure] table in the scene")?,
+        ))),
+        "real" => Err("the real fluid solver is not wired to the node yet".into()),
+        other => Err(format!(
+            "unknown fluid implementation {other:?} (expected real, pressure or replay:FILE.mcap)"
+        )),
+    }
+}

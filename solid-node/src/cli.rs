@@ -10,8 +10,7 @@ use protocol::scene::Scene;
 use protocol::transport::{Link, Transport};
 use protocol::wire::NodeKind;
 
-use crate::double::PrescribedDouble;
-use crate::node::{self, LoopConfig, NodeError, SolidModel};
+use crate::node::{self, LoopConfig, NodeError};
 
 /// The solid node of the co-simulation (normally started by `coupler-node run`).
 #[derive(Debug, Parser)]
@@ -82,19 +81,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         protocol::replay::play(&mut bus, &script, timeout)?;
         return Ok(());
     }
-    let mut model: Box<dyn SolidModel> = match double.as_str() {
-        "prescribed" => Box::new(PrescribedDouble::new(
-            scene.dim(),
-            solid
-                .prescribed
-                .as_ref()
-                .context("--double prescribed needs a [solid.prescribed] table in the scene")?,
-        )),
-        "real" => anyhow::bail!("the real solid solver is not wired to the node yet"),
-        other => {
-            anyhow::bail!("unknown --double {other:?} (expected prescribed or replay:FILE.mcap)")
-        }
-    };
+    let mut model = node::model_from_scene(&scene, &double).map_err(anyhow::Error::msg)?;
     if let Some(out) = &args.out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }

@@ -213,3 +213,27 @@ fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
         report,
     }
 }
+
+/// Builds the solid implementation named `implementation` (`real` or `prescribed`) for a scene.
+pub fn model_from_scene(
+    scene: &protocol::scene::Scene,
+    implementation: &str,
+) -> Result<Box<dyn SolidModel + Send>, String> {
+    let solid = scene
+        .solid
+        .as_ref()
+        .ok_or("the scene has no [solid] section")?;
+    match implementation {
+        "prescribed" => Ok(Box::new(crate::double::PrescribedDouble::new(
+            scene.dim(),
+            solid
+                .prescribed
+                .as_ref()
+                .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
+        ))),
+        "real" => Err("the real solid solver is not wired to the node yet".into()),
+        other => Err(format!(
+            "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
+        )),
+    }
+}

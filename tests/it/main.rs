@@ -1,1 +1,3 @@
 //! End-to-end and cross-crate tests (one test binary).
+
+mod doubles;
