@@ -83,7 +83,20 @@ pub enum DecodeError {
     },
 }
 
-fn bincode_config() -> impl bincode::config::Config {
+/// Largest number of payload bytes a decode will claim (1 GiB).
+///
+/// NOTE: without a limit, a corrupt length prefix makes bincode allocate that many bytes
+/// up front, which aborts the process (found by the decode-never-panics property test).
+pub const MAX_DECODE_LEN: usize = 1 << 30;
+
+/// The decoding configuration: [`bincode_config`] plus the [`MAX_DECODE_LEN`] limit (the limit
+/// does not change the encoding).
+fn bincode_decode_config() -> impl bincode::config::Config {
+    bincode_config().with_limit::<MAX_DECODE_LEN>()
+}
+
+fn bincode_config()
+-> bincode::config::Configuration<bincode::config::LittleEndian, bincode::config::Fixint> {
     // NOTE: fixed-width little-endian integers: the size of a frame depends only on the array
     // lengths, and f64 arrays are plain copies.
     bincode::config::standard()
@@ -159,7 +172,7 @@ pub fn decode_header(frame: &[u8]) -> Result<Header, DecodeError> {
 pub fn decode(frame: &[u8]) -> Result<(Header, Message), DecodeError> {
     let header = decode_header(frame)?;
     let (msg, read): (Message, usize) =
-        bincode::serde::decode_from_slice(&frame[HEADER_LEN..], bincode_config()).map_err(
+        bincode::serde::decode_from_slice(&frame[HEADER_LEN..], bincode_decode_config()).map_err(
             |err| DecodeError::Payload {
                 kind: header.kind,
                 reason: err.to_string(),
@@ -183,7 +196,7 @@ pub fn encode_blob<T: serde::Serialize>(value: &T) -> Vec<u8> {
 
 /// Decodes a node-private value written by [`encode_blob`].
 pub fn decode_blob<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, String> {
-    bincode::serde::decode_from_slice(bytes, bincode_config())
+    bincode::serde::decode_from_slice(bytes, bincode_decode_config())
         .map(|(v, _)| v)
         .map_err(|e| e.to_string())
 }
