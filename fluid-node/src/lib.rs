@@ -5,9 +5,13 @@
 //! - [`grid`]: the Cartesian grid (1, 2 or 3 active axes).
 //! - [`fv`]: the pure finite-volume core (no IO, no clock).
 //! - [`cutcell`]: the pure cut-cell geometry (no IO, no clock).
+//! - [`output`]: fluid CSV and legacy VTK writers.
+//! - [`report`]: work–precision study (wall time, CSV and SVG files).
 
 #![warn(missing_docs)]
 
 pub mod cutcell;
 pub mod fv;
 pub mod grid;
+pub mod output;
+pub mod report;

@@ -146,8 +146,9 @@ pub fn roe_strengths(roe: &RoeAverage, du: &State, gamma: f64) -> [f64; NQ] {
     let a_t1 = du[2] - v * du[0];
     let a_t2 = du[3] - w * du[0];
     let de = du[4] - a_t1 * v - a_t2 * w;
-    let a_ent = (gamma - 1.0) / (c * c) * (du[0] * (roe.h - u * u) + u * du[1] - de);
-    let a_minus = (du[0] * (u + c) - du[1] - c * a_ent) / (2.0 * c);
+    let inv_c = 1.0 / c;
+    let a_ent = (gamma - 1.0) * inv_c * inv_c * (du[0] * (roe.h - u * u) + u * du[1] - de);
+    let a_minus = (du[0] * (u + c) - du[1] - c * a_ent) * (0.5 * inv_c);
     let a_plus = du[0] - a_minus - a_ent;
     [a_minus, a_plus, a_ent, a_t1, a_t2]
 }
@@ -175,7 +176,6 @@ pub fn roe_star_states_positive(
     ur: &State,
     roe: &RoeAverage,
     alpha: &[f64; NQ],
-    gamma: f64,
 ) -> bool {
     let rm = roe_eigenvector(roe, WAVE_MINUS);
     let rp = roe_eigenvector(roe, WAVE_PLUS);
@@ -185,9 +185,9 @@ pub fn roe_star_states_positive(
         sl[q] += alpha[WAVE_MINUS] * rm[q];
         sr[q] -= alpha[WAVE_PLUS] * rp[q];
     }
-    let pl = primitive(&sl, gamma);
-    let pr = primitive(&sr, gamma);
-    sl[0] > 0.0 && sr[0] > 0.0 && pl.p > 0.0 && pr.p > 0.0
+    // p > 0 ⇔ 2ρE > |ρu|² when ρ > 0 (no division).
+    let p_pos = |s: &State| 2.0 * s[0] * s[4] > s[1] * s[1] + s[2] * s[2] + s[3] * s[3];
+    sl[0] > 0.0 && sr[0] > 0.0 && p_pos(&sl) && p_pos(&sr)
 }
 
 /// Einfeldt's HLLE flux with Roe-average signal speeds (Einfeldt et al. 1991): positively

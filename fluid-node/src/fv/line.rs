@@ -90,6 +90,8 @@ pub struct LineStats {
     pub hlle: u32,
     /// Cells whose faces were recomputed by the positivity fix.
     pub positivity_fixes: u32,
+    /// First interior cell still non-physical after the fixes.
+    pub first_bad: Option<u32>,
 }
 
 /// Reusable buffers of one line update (one per worker thread).
@@ -170,12 +172,15 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
     }
     update_cells(s, setup, 0, n);
     // A-posteriori positivity safeguard.
+    let mut clean = false;
     for _round in 0..MAX_FIXES {
         let mut changed = false;
+        clean = true;
         for m in 0..n {
             if state_ok(&s.new[m], gamma, setup.vacuum_rho, setup.vacuum_p) {
                 continue;
             }
+            clean = false;
             stats.positivity_fixes += 1;
             for f in [m, m + 1] {
                 let (ul, ur) = (s.u[ng - 1 + f], s.u[ng + f]);
@@ -200,7 +205,12 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
             break;
         }
         update_cells(s, setup, 0, n);
+        clean = false;
     }
+    stats.first_bad = (0..n)
+        .filter(|_| !clean)
+        .find(|&m| !state_ok(&s.new[m], gamma, setup.vacuum_rho, setup.vacuum_p))
+        .map(|m| m as u32);
     for k in &s.kind[..=n] {
         match k {
             FaceFlux::Hlle => stats.hlle += 1,
@@ -249,6 +259,7 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
     let len = n + 2 * ng;
     let radius = stencil_radius(order);
     let nw = n_waves(setup);
+    let inv_sigma = 1.0 / sigma;
     let _ = stats;
     s.bad_prefix[0] = 0;
     for l in 0..len - 1 {
@@ -268,12 +279,12 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
             let lam = roe_eigenvalues(&roe);
             let alpha = roe_strengths(&roe, &du, gamma);
             for k in 0..nw {
-                s.waves[k].set(l, lam[k], alpha[k], sigma);
+                s.waves[k].set(l, lam[k], alpha[k], sigma, inv_sigma);
             }
         } else {
             s.roe[l].valid = false;
             for k in 0..nw {
-                s.waves[k].set(l, 0.0, 0.0, sigma);
+                s.waves[k].set(l, 0.0, 0.0, sigma, inv_sigma);
             }
         }
         s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!valid);
@@ -292,7 +303,7 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
         let n_bad = s.bad_prefix[f + radius + 1] - s.bad_prefix[f - radius];
         let roe = s.roe[f];
         let alpha0: [f64; NQ] = std::array::from_fn(|k| s.waves[k].alpha[f]);
-        if n_bad > 0 || !roe_star_states_positive(ul, ur, &roe, &alpha0, gamma) {
+        if n_bad > 0 || !roe_star_states_positive(ul, ur, &roe, &alpha0) {
             s.face[fi] = flux_hlle(ul, ur, gamma);
             s.kind[fi] = FaceFlux::Hlle;
             continue;

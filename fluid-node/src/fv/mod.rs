@@ -52,6 +52,7 @@ pub mod line;
 pub mod osmp;
 pub mod solver;
 pub mod state;
+pub mod study;
 pub mod sweep;
 
 #[cfg(test)]

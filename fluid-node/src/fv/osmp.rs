@@ -27,11 +27,13 @@ pub const fn ghost_cells(order: u32) -> usize {
 /// order by order in `fv::tests::scalar_os_orders`.
 #[inline]
 pub fn accuracy_coefficients(nu: f64) -> [f64; 5] {
-    let c1 = (nu + 1.0) / 3.0;
-    let c2 = c1 * (nu - 2.0) / 4.0;
-    let c3 = c2 * (nu - 3.0) / 5.0;
-    let c4 = c3 * (nu + 2.0) / 6.0;
-    let c5 = c4 * (nu + 3.0) / 7.0;
+    // Multiplications by the reciprocals (divisions by constants are not folded by the
+    // compiler under IEEE semantics).
+    let c1 = (nu + 1.0) * (1.0 / 3.0);
+    let c2 = c1 * (nu - 2.0) * 0.25;
+    let c3 = c2 * (nu - 3.0) * 0.2;
+    let c4 = c3 * (nu + 2.0) * (1.0 / 6.0);
+    let c5 = c4 * (nu + 3.0) * (1.0 / 7.0);
     [c1, c2, c3, c4, c5]
 }
 
@@ -63,6 +65,10 @@ pub struct WaveLine {
     pub alpha: Vec<f64>,
     /// Courant number ν = σ|λ| [-].
     pub nu: Vec<f64>,
+    /// `1 / max(ν, EPS)` [-].
+    pub inv_nu: Vec<f64>,
+    /// `1 / max(|λ|, EPS)` [s/m].
+    pub inv_lam: Vec<f64>,
     /// `(1−ν) α` and `c_q(ν) (1−ν) α` for q = 1..5: `d[l][0]` is `(1−ν)α`, `d[l][q]` the
     /// product with `c_q`.
     pub d: Vec<[f64; 6]>,
@@ -76,19 +82,31 @@ impl WaveLine {
         self.lam.resize(n_interfaces, 0.0);
         self.alpha.resize(n_interfaces, 0.0);
         self.nu.resize(n_interfaces, 0.0);
+        self.inv_nu.resize(n_interfaces, 0.0);
+        self.inv_lam.resize(n_interfaces, 0.0);
         self.d.resize(n_interfaces, [0.0; 6]);
         self.dm4.resize(n_interfaces, 0.0);
     }
 
-    /// Fills `nu`, `d` at interface `l` from `lam`, `alpha` (`sigma = Δt/Δx` [s/m]).
+    /// Fills `nu`, `d` at interface `l` from `lam`, `alpha` (`sigma = Δt/Δx` [s/m],
+    /// `inv_sigma = 1/sigma`).
     #[inline]
-    pub fn set(&mut self, l: usize, lam: f64, alpha: f64, sigma: f64) {
+    pub fn set(&mut self, l: usize, lam: f64, alpha: f64, sigma: f64, inv_sigma: f64) {
         let nu = sigma * lam.abs();
         let c = accuracy_coefficients(nu);
         let d0 = (1.0 - nu) * alpha;
         self.lam[l] = lam;
         self.alpha[l] = alpha;
         self.nu[l] = nu;
+        // One division: 1/ν = (1/|λ|)/σ; the EPS floors keep both finite (for σ ≈ 1 s/m the
+        // floors coincide; elsewhere they only matter where the wave is absent).
+        let inv_lam = 1.0 / lam.abs().max(EPS);
+        self.inv_lam[l] = inv_lam;
+        self.inv_nu[l] = if nu > EPS {
+            inv_lam * inv_sigma
+        } else {
+            1.0 / EPS
+        };
         self.d[l] = [d0, c[0] * d0, c[1] * d0, c[2] * d0, c[3] * d0, c[4] * d0];
     }
 
@@ -132,17 +150,16 @@ impl WaveLine {
 pub fn osmp_psi(order: u32, wave: &WaveLine, f: usize) -> f64 {
     let p = os_unlimited(order, wave, f);
     let up = if wave.lam[f] > 0.0 { f - 1 } else { f + 1 };
-    let nu0 = wave.nu[f];
     let nu_up = wave.nu[up];
     let w0 = wave.alpha[f];
     let w_up = wave.alpha[up];
-    let a0 = wave.lam[f].abs().max(EPS);
+    let inv_a0 = wave.inv_lam[f];
     // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD, b_ul ↔ u^UL,
     // b_lc ↔ u^LC.
     let b_max = 2.0 * w0;
-    let b_ul = 2.0 * (1.0 - nu_up) * w_up / nu_up.max(EPS);
-    let b_md = w0 - wave.dm4[f] / a0;
-    let b_lc = (1.0 - nu_up) / nu0.max(EPS) * (w_up + wave.dm4[up] / a0);
+    let b_ul = 2.0 * (1.0 - nu_up) * w_up * wave.inv_nu[up];
+    let b_md = w0 - wave.dm4[f] * inv_a0;
+    let b_lc = (1.0 - nu_up) * wave.inv_nu[f] * (w_up + wave.dm4[up] * inv_a0);
     let lo1 = 0.0_f64.min(b_max).min(b_md);
     let hi1 = 0.0_f64.max(b_max).max(b_md);
     let lo2 = 0.0_f64.min(b_ul).min(b_lc);

@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use crate::fv::euler::{NQ, State};
-use crate::fv::line::{LineScratch, LineSetup, LineStats, advance_line, state_ok};
+use crate::fv::line::{LineScratch, LineSetup, LineStats, advance_line};
 use crate::fv::state::{BoundaryKind, FluidParams};
 use crate::grid::Grid;
 
@@ -192,21 +192,11 @@ pub fn sweep_axis(
                 gather(&mut line.u, u_in, nvar, &pencils, p, ng, &fr, bc);
                 let stats = advance_line(line, &setup);
                 let dst = &mut out_block[k * n * nvar..(k + 1) * n * nvar];
-                let mut trouble = None;
                 let base = pencils.base(p);
                 for m in 0..n {
                     from_local(&line.new[m], dim, &fr, &mut dst[m * nvar..(m + 1) * nvar]);
-                    if trouble.is_none()
-                        && !state_ok(
-                            &line.new[m],
-                            params.gamma,
-                            params.vacuum_rho,
-                            params.vacuum_p,
-                        )
-                    {
-                        trouble = Some(base + m * pencils.stride);
-                    }
                 }
+                let trouble = stats.first_bad.map(|m| base + m as usize * pencils.stride);
                 let mut outflow = [0.0; NQ];
                 for (side, sign, f) in [(0, -1.0, 0), (1, 1.0, n)] {
                     if open[side] {

@@ -28,7 +28,7 @@ fn advect_sine(n: usize, a: f64, order: u32, limited: bool) -> f64 {
     for _ in 0..steps {
         let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
         for l in 0..n + 2 * ng - 1 {
-            wave.set(l, a, ext[l + 1] - ext[l], sigma);
+            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
         }
         wave.compute_curvatures();
         for (fi, f) in flux.iter_mut().enumerate() {
@@ -85,7 +85,7 @@ fn limited_scheme_keeps_square_wave_bounded() {
     for _ in 0..200 {
         let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
         for l in 0..n + 2 * ng - 1 {
-            wave.set(l, a, ext[l + 1] - ext[l], sigma);
+            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
         }
         wave.compute_curvatures();
         let flux: Vec<f64> = (0..=n)
