@@ -6,6 +6,8 @@
 //! - [`fv`]: the pure finite-volume core (no IO, no clock).
 //! - [`cutcell`]: the pure cut-cell geometry (no IO, no clock).
 //! - [`node`]: the node loop over any transport; [`double`]: the pressure double.
+//! - [`output`]: fluid CSV and legacy VTK writers.
+//! - [`report`]: work–precision study (wall time, CSV and SVG files).
 
 #![warn(missing_docs)]
 
@@ -16,3 +18,5 @@ pub mod double;
 pub mod fv;
 pub mod grid;
 pub mod node;
+pub mod output;
+pub mod report;

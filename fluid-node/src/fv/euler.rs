@@ -1,0 +1,287 @@
+//! Ideal-gas Euler kernels in the frame of one sweep: equation of state, physical flux, Roe
+//! average and characteristic decomposition, and the first-order fallback fluxes (HLLE, HLLC,
+//! Lax–Friedrichs).
+//!
+//! A state is `[f64; 5]` in the *sweep frame*: `(ρ, ρ u_n, ρ u_t1, ρ u_t2, E)` where `n` is the
+//! sweep axis and `t1`, `t2` the other axes (inactive axes last, so their components stay 0).
+//! Units are SI: ρ [kg/m³], velocities [m/s], E and p [Pa].
+
+/// Number of components of a sweep-frame state.
+pub const NQ: usize = 5;
+
+/// A conserved state in the sweep frame.
+pub type State = [f64; NQ];
+
+/// Primitive variables of a sweep-frame state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Primitive {
+    /// Density ρ [kg/m³].
+    pub rho: f64,
+    /// Velocity `(u_n, u_t1, u_t2)` [m/s].
+    pub vel: [f64; 3],
+    /// Pressure p [Pa].
+    pub p: f64,
+}
+
+/// Primitive variables of `u` (`γ` the ratio of specific heats).
+///
+/// Vacuum-safe: with ρ ≤ 0 the velocity is taken as 0, so no division by zero happens.
+#[inline]
+pub fn primitive(u: &State, gamma: f64) -> Primitive {
+    let rho = u[0];
+    // NOTE: a vacuum cell (ρ = 0) has no velocity; taking 0 keeps the Lax–Friedrichs flux of
+    // paper 000 §3.2 free of divisions by ρ, as the paper requires.
+    let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
+    let vel = [u[1] * inv, u[2] * inv, u[3] * inv];
+    let kinetic = 0.5 * (u[1] * vel[0] + u[2] * vel[1] + u[3] * vel[2]);
+    Primitive {
+        rho,
+        vel,
+        p: (gamma - 1.0) * (u[4] - kinetic),
+    }
+}
+
+/// Conserved state from primitive variables.
+#[inline]
+pub fn conserved(w: &Primitive, gamma: f64) -> State {
+    let kinetic = 0.5 * w.rho * (w.vel[0] * w.vel[0] + w.vel[1] * w.vel[1] + w.vel[2] * w.vel[2]);
+    [
+        w.rho,
+        w.rho * w.vel[0],
+        w.rho * w.vel[1],
+        w.rho * w.vel[2],
+        w.p / (gamma - 1.0) + kinetic,
+    ]
+}
+
+/// Physical flux along the sweep axis, `F(U) = (ρu, ρu²+p, ρu v, ρu w, u(E+p))`.
+#[inline]
+pub fn physical_flux(u: &State, w: &Primitive) -> State {
+    let un = w.vel[0];
+    [
+        u[1],
+        u[1] * un + w.p,
+        u[2] * un,
+        u[3] * un,
+        un * (u[4] + w.p),
+    ]
+}
+
+/// Sound speed `c = sqrt(γ p / ρ)` [m/s], 0 for non-physical or vacuum states.
+#[inline]
+pub fn sound_speed(w: &Primitive, gamma: f64) -> f64 {
+    if w.rho > 0.0 && w.p > 0.0 {
+        (gamma * w.p / w.rho).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// Roe average between two cells and its eigenstructure along the sweep axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RoeAverage {
+    /// Averaged velocity `(u_n, u_t1, u_t2)` [m/s].
+    pub vel: [f64; 3],
+    /// Averaged total specific enthalpy H [J/kg].
+    pub h: f64,
+    /// Averaged sound speed c [m/s] (0 if the average is not physical).
+    pub c: f64,
+    /// Whether `c² > 0` and everything is finite.
+    pub valid: bool,
+}
+
+/// Wave order used everywhere: `u-c`, `u+c`, entropy `u`, shear `t1`, shear `t2`.
+pub const WAVE_MINUS: usize = 0;
+/// Index of the `u + c` wave.
+pub const WAVE_PLUS: usize = 1;
+/// Index of the entropy wave.
+pub const WAVE_ENTROPY: usize = 2;
+
+/// Roe average of two states with primitives `wl`, `wr` (Toro 2009, eq. 11.60).
+#[inline]
+pub fn roe_average(
+    ul: &State,
+    wl: &Primitive,
+    ur: &State,
+    wr: &Primitive,
+    gamma: f64,
+) -> RoeAverage {
+    if !(wl.rho > 0.0 && wr.rho > 0.0) {
+        return RoeAverage::default();
+    }
+    let sl = wl.rho.sqrt();
+    let sr = wr.rho.sqrt();
+    let inv = 1.0 / (sl + sr);
+    let hl = (ul[4] + wl.p) / wl.rho;
+    let hr = (ur[4] + wr.p) / wr.rho;
+    let vel = [
+        (sl * wl.vel[0] + sr * wr.vel[0]) * inv,
+        (sl * wl.vel[1] + sr * wr.vel[1]) * inv,
+        (sl * wl.vel[2] + sr * wr.vel[2]) * inv,
+    ];
+    let h = (sl * hl + sr * hr) * inv;
+    let q2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
+    let c2 = (gamma - 1.0) * (h - 0.5 * q2);
+    let valid = c2 > 0.0 && c2.is_finite() && h.is_finite();
+    RoeAverage {
+        vel,
+        h,
+        c: if valid { c2.sqrt() } else { 0.0 },
+        valid,
+    }
+}
+
+/// Eigenvalues of the Roe matrix in the wave order (`u-c`, `u+c`, `u`, `u`, `u`).
+#[inline]
+pub fn roe_eigenvalues(roe: &RoeAverage) -> [f64; NQ] {
+    let u = roe.vel[0];
+    [u - roe.c, u + roe.c, u, u, u]
+}
+
+/// Wave strengths `α = L ΔU` (Toro 2009, eqs. 11.68–11.70), in the wave order.
+#[inline]
+pub fn roe_strengths(roe: &RoeAverage, du: &State, gamma: f64) -> [f64; NQ] {
+    let [u, v, w] = roe.vel;
+    let c = roe.c;
+    let a_t1 = du[2] - v * du[0];
+    let a_t2 = du[3] - w * du[0];
+    let de = du[4] - a_t1 * v - a_t2 * w;
+    let inv_c = 1.0 / c;
+    let a_ent = (gamma - 1.0) * inv_c * inv_c * (du[0] * (roe.h - u * u) + u * du[1] - de);
+    let a_minus = (du[0] * (u + c) - du[1] - c * a_ent) * (0.5 * inv_c);
+    let a_plus = du[0] - a_minus - a_ent;
+    [a_minus, a_plus, a_ent, a_t1, a_t2]
+}
+
+/// Right eigenvector `k` (wave order) of the Roe matrix.
+#[inline]
+pub fn roe_eigenvector(roe: &RoeAverage, k: usize) -> State {
+    let [u, v, w] = roe.vel;
+    let c = roe.c;
+    match k {
+        WAVE_MINUS => [1.0, u - c, v, w, roe.h - u * c],
+        WAVE_PLUS => [1.0, u + c, v, w, roe.h + u * c],
+        WAVE_ENTROPY => [1.0, u, v, w, 0.5 * (u * u + v * v + w * w)],
+        3 => [0.0, 0.0, 1.0, 0.0, v],
+        _ => [0.0, 0.0, 0.0, 1.0, w],
+    }
+}
+
+/// Whether the two star states of the linearised Roe solution have ρ > 0 and p > 0.
+///
+/// They are `U_L + α₋ r₋` and `U_R − α₊ r₊` (the states on either side of the contact).
+#[inline]
+pub fn roe_star_states_positive(
+    ul: &State,
+    ur: &State,
+    roe: &RoeAverage,
+    alpha: &[f64; NQ],
+) -> bool {
+    let rm = roe_eigenvector(roe, WAVE_MINUS);
+    let rp = roe_eigenvector(roe, WAVE_PLUS);
+    let mut sl = *ul;
+    let mut sr = *ur;
+    for q in 0..NQ {
+        sl[q] += alpha[WAVE_MINUS] * rm[q];
+        sr[q] -= alpha[WAVE_PLUS] * rp[q];
+    }
+    // p > 0 ⇔ 2ρE > |ρu|² when ρ > 0 (no division).
+    let p_pos = |s: &State| 2.0 * s[0] * s[4] > s[1] * s[1] + s[2] * s[2] + s[3] * s[3];
+    sl[0] > 0.0 && sr[0] > 0.0 && p_pos(&sl) && p_pos(&sr)
+}
+
+/// Einfeldt's HLLE flux with Roe-average signal speeds (Einfeldt et al. 1991): positively
+/// conservative, first order. Falls back to Rusanov speeds if the Roe average is not physical.
+pub fn flux_hlle(ul: &State, ur: &State, gamma: f64) -> State {
+    let wl = primitive(ul, gamma);
+    let wr = primitive(ur, gamma);
+    let cl = sound_speed(&wl, gamma);
+    let cr = sound_speed(&wr, gamma);
+    let roe = roe_average(ul, &wl, ur, &wr, gamma);
+    let (mut bl, mut br) = (wl.vel[0] - cl, wr.vel[0] + cr);
+    if roe.valid {
+        bl = bl.min(roe.vel[0] - roe.c);
+        br = br.max(roe.vel[0] + roe.c);
+    } else {
+        let s = (wl.vel[0].abs() + cl).max(wr.vel[0].abs() + cr);
+        bl = bl.min(-s);
+        br = br.max(s);
+    }
+    let bl = bl.min(0.0);
+    let br = br.max(0.0);
+    let fl = physical_flux(ul, &wl);
+    let fr = physical_flux(ur, &wr);
+    let mut out = [0.0; NQ];
+    if br - bl <= 0.0 {
+        for q in 0..NQ {
+            out[q] = 0.5 * (fl[q] + fr[q]);
+        }
+        return out;
+    }
+    let inv = 1.0 / (br - bl);
+    for q in 0..NQ {
+        out[q] = (br * fl[q] - bl * fr[q] + bl * br * (ur[q] - ul[q])) * inv;
+    }
+    out
+}
+
+/// HLLC flux (Toro 2009, §10.4) with Einfeldt (Roe-average) signal speeds.
+pub fn flux_hllc(ul: &State, ur: &State, gamma: f64) -> State {
+    let wl = primitive(ul, gamma);
+    let wr = primitive(ur, gamma);
+    let cl = sound_speed(&wl, gamma);
+    let cr = sound_speed(&wr, gamma);
+    let roe = roe_average(ul, &wl, ur, &wr, gamma);
+    if !roe.valid || wl.rho <= 0.0 || wr.rho <= 0.0 {
+        return flux_hlle(ul, ur, gamma);
+    }
+    let sl = (wl.vel[0] - cl).min(roe.vel[0] - roe.c);
+    let sr = (wr.vel[0] + cr).max(roe.vel[0] + roe.c);
+    let fl = physical_flux(ul, &wl);
+    if sl >= 0.0 {
+        return fl;
+    }
+    let fr = physical_flux(ur, &wr);
+    if sr <= 0.0 {
+        return fr;
+    }
+    let (ml, mr) = (wl.rho * (sl - wl.vel[0]), wr.rho * (sr - wr.vel[0]));
+    let s_star = (wr.p - wl.p + wl.vel[0] * ml - wr.vel[0] * mr) / (ml - mr);
+    let star = |u: &State, w: &Primitive, s: f64| -> State {
+        let k = w.rho * (s - w.vel[0]) / (s - s_star);
+        [
+            k,
+            k * s_star,
+            k * w.vel[1],
+            k * w.vel[2],
+            k * (u[4] / w.rho + (s_star - w.vel[0]) * (s_star + w.p / (w.rho * (s - w.vel[0])))),
+        ]
+    };
+    let mut out = [0.0; NQ];
+    if s_star >= 0.0 {
+        let us = star(ul, &wl, sl);
+        for q in 0..NQ {
+            out[q] = fl[q] + sl * (us[q] - ul[q]);
+        }
+    } else {
+        let us = star(ur, &wr, sr);
+        for q in 0..NQ {
+            out[q] = fr[q] + sr * (us[q] - ur[q]);
+        }
+    }
+    out
+}
+
+/// Lax–Friedrichs flux `½(F_L + F_R) − Δx/(2Δt) (U_R − U_L)` (paper 000 §3.2), used beside
+/// vacuum cells; `sigma = Δt/Δx` [s/m].
+#[inline]
+pub fn flux_lax_friedrichs(ul: &State, ur: &State, sigma: f64, gamma: f64) -> State {
+    let fl = physical_flux(ul, &primitive(ul, gamma));
+    let fr = physical_flux(ur, &primitive(ur, gamma));
+    let k = 0.5 / sigma;
+    let mut out = [0.0; NQ];
+    for q in 0..NQ {
+        out[q] = 0.5 * (fl[q] + fr[q]) - k * (ur[q] - ul[q]);
+    }
+    out
+}

@@ -1,0 +1,564 @@
+//! [`FluidSolver`]: owns the state, the scratch buffers and the worker pool, and advances the
+//! flow by split steps; reports totals and trouble as data.
+
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use protocol::scene::FluidConfig;
+
+use crate::fv::euler::{NQ, Primitive, sound_speed};
+use crate::fv::line::{FluxKind, LineScratch, state_ok};
+use crate::fv::state::{FluidParams, FluidState, from_scene};
+use crate::fv::sweep::{PencilOut, pencil_to_cells, sweep_axis};
+use crate::grid::Grid;
+
+/// Cells per block of the fixed-order reductions (totals).
+const BLOCK_CELLS: usize = 4096;
+
+/// At most this many troubled cells are listed in one [`StepReport`].
+pub const MAX_TROUBLES: usize = 16;
+
+/// Conserved totals over the grid and what left through the domain faces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Totals {
+    /// Mass `Σ ρ V` [kg] (per unit length in 2-D, per unit area in 1-D).
+    pub mass: f64,
+    /// Momentum `Σ ρu V` per axis [kg m/s] (inactive axes 0).
+    pub momentum: [f64; 3],
+    /// Total energy `Σ E V` [J].
+    pub energy: f64,
+    /// Mass that left through the open (outflow) faces since the start [kg].
+    pub outflow_mass: f64,
+    /// Momentum that left through open and wall faces since the start (at walls: the wall
+    /// pressure impulse) [kg m/s].
+    pub outflow_momentum: [f64; 3],
+    /// Energy that left through the open faces since the start [J].
+    pub outflow_energy: f64,
+}
+
+/// What went wrong in a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum TroubleKind {
+    /// A value is NaN or infinite.
+    NonFinite,
+    /// ρ ≤ 0 outside a vacuum cell, or ρ < 0.
+    Density,
+    /// p ≤ 0 outside a vacuum cell, or p < 0.
+    Pressure,
+    /// The step was refused: `dt` not finite and positive, or above the CFL limit of the
+    /// scheme (Courant number > 1); `cell` and values are zero.
+    TimeStep,
+}
+
+/// A cell left non-physical by a sweep (the caller stops the run).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Trouble {
+    /// What is wrong.
+    pub kind: TroubleKind,
+    /// Sweep axis that produced it (0, 1, 2).
+    pub axis: usize,
+    /// Cell `(i, j, k)`.
+    pub cell: [usize; 3],
+    /// Cell centre [m].
+    pub position: [f64; 3],
+    /// Density [kg/m³].
+    pub rho: f64,
+    /// Velocity [m/s].
+    pub velocity: [f64; 3],
+    /// Pressure [Pa].
+    pub p: f64,
+}
+
+/// What one call of [`FluidSolver::advance`] did.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StepReport {
+    /// Step number (0 for the first step).
+    pub step: u64,
+    /// Time step [s].
+    pub dt: f64,
+    /// Time after the step [s].
+    pub time: f64,
+    /// Sweep axes in the order applied.
+    pub sweeps: Vec<usize>,
+    /// Faces that used Lax–Friedrichs (vacuum), summed over the sweeps.
+    pub lax_friedrichs_faces: u64,
+    /// Faces that used the HLLE fallback.
+    pub hlle_faces: u64,
+    /// Cells whose faces the positivity fix recomputed.
+    pub positivity_fixes: u64,
+    /// Amount that left through the domain faces during this step, `(mass, p_x, p_y, p_z,
+    /// energy)` [kg, kg m/s, J].
+    pub outflow: [f64; NQ],
+    /// Non-physical cells after a sweep (at most [`MAX_TROUBLES`]); empty when all is well.
+    pub troubles: Vec<Trouble>,
+}
+
+impl StepReport {
+    /// Whether the step produced no trouble.
+    pub fn ok(&self) -> bool {
+        self.troubles.is_empty()
+    }
+}
+
+/// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
+/// steps cover all permutations.
+///
+/// NOTE: paper 003 §3.4 step 1 and Tenaud's `mr_chorus.f90` cycle through the 6 permutations
+/// (second order every 6 steps); pairing each order with its reverse (`xyz`, `zyx`, ...) makes
+/// every two consecutive steps a Strang-type symmetric product, so the splitting is second
+/// order over each pair while all permutations are still visited.
+const ORDERS_3D: [[usize; 3]; 6] = [
+    [0, 1, 2],
+    [2, 1, 0],
+    [1, 2, 0],
+    [0, 2, 1],
+    [2, 0, 1],
+    [1, 0, 2],
+];
+
+/// Sweep axes of step `step` in dimension `dim`.
+pub fn sweep_order(dim: usize, step: u64) -> Vec<usize> {
+    match dim {
+        1 => vec![0],
+        2 => {
+            if step.is_multiple_of(2) {
+                vec![0, 1]
+            } else {
+                vec![1, 0]
+            }
+        }
+        _ => ORDERS_3D[(step % 6) as usize].to_vec(),
+    }
+}
+
+/// Checkpoint layout (node-private bytes, see [`FluidSolver::to_checkpoint`]).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Checkpoint {
+    version: u32,
+    cells: [u64; 3],
+    step: u64,
+    time: f64,
+    u: Vec<f64>,
+    outflow: [f64; NQ],
+    pbar: Vec<Vec<f64>>,
+}
+
+const CHECKPOINT_VERSION: u32 = 1;
+
+/// The finite-volume Euler solver on a Cartesian grid of 1, 2 or 3 dimensions.
+pub struct FluidSolver {
+    grid: Grid,
+    params: FluidParams,
+    state: FluidState,
+    buffer: Vec<f64>,
+    pencil_out: Vec<PencilOut>,
+    scratch: Vec<Mutex<LineScratch>>,
+    pool: rayon::ThreadPool,
+    pbar: Vec<Vec<f64>>,
+    n_blocks: usize,
+    step: u64,
+    time: f64,
+    outflow: [f64; NQ],
+}
+
+impl FluidSolver {
+    /// Builds the solver from the scene's `[fluid]` table with `threads` worker threads
+    /// (results do not depend on it).
+    pub fn from_scene(cfg: &FluidConfig, threads: usize) -> Result<FluidSolver, String> {
+        let (grid, params, state) = from_scene(cfg)?;
+        FluidSolver::new(grid, params, state, threads)
+    }
+
+    /// Builds the solver from parts (`state` must have `grid.dim + 2` values per cell).
+    pub fn new(
+        grid: Grid,
+        params: FluidParams,
+        state: FluidState,
+        threads: usize,
+    ) -> Result<FluidSolver, String> {
+        if state.nvar != grid.dim + 2 || state.u.len() != state.nvar * grid.n_cells() {
+            return Err(format!(
+                "state has {} values ({} per cell), grid needs {} per cell for {} cells",
+                state.u.len(),
+                state.nvar,
+                grid.dim + 2,
+                grid.n_cells()
+            ));
+        }
+        if let FluxKind::Osmp(order) = params.flux
+            && ![3, 5, 7].contains(&order)
+        {
+            return Err(format!("osmp order must be 3, 5 or 7, got {order}"));
+        }
+        let threads = threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| format!("building a pool of {threads} threads: {e}"))?;
+        let max_pencils = (0..grid.dim)
+            .map(|a| grid.n_cells() / grid.cells[a])
+            .max()
+            .unwrap_or(1);
+        let n_cells = grid.n_cells();
+        Ok(FluidSolver {
+            buffer: vec![0.0; state.u.len()],
+            pencil_out: vec![PencilOut::default(); max_pencils],
+            scratch: (0..threads)
+                .map(|_| Mutex::new(LineScratch::default()))
+                .collect(),
+            pool,
+            pbar: (0..grid.dim).map(|_| vec![0.0; n_cells]).collect(),
+            n_blocks: n_cells.div_ceil(BLOCK_CELLS),
+            grid,
+            params,
+            state,
+            step: 0,
+            time: 0.0,
+            outflow: [0.0; NQ],
+        })
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &FluidParams {
+        &self.params
+    }
+
+    /// The conserved state.
+    pub fn state(&self) -> &FluidState {
+        &self.state
+    }
+
+    /// Mutable conserved state (initial conditions of tests and benches).
+    pub fn state_mut(&mut self) -> &mut FluidState {
+        &mut self.state
+    }
+
+    /// Simulated time [s].
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken so far (selects the sweep permutation of the next step).
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
+    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure [Pa] of cell `idx`.
+    pub fn primitive(&self, idx: usize) -> (f64, [f64; 3], f64) {
+        self.state.primitive(idx, self.params.gamma)
+    }
+
+    /// Directional pressures `p̄_axis` [Pa] of the last step, one per cell: the pressure of the
+    /// state each sweep along `axis` started from (paper 003 §3.4 step 1). Zero before the
+    /// first step. Panics if `axis >= dim` (a bug in the caller).
+    pub fn directional_pressures(&self, axis: usize) -> &[f64] {
+        &self.pbar[axis]
+    }
+
+    /// Largest stable time step [s]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
+    /// every directional sweep runs at Courant number ≤ `cfl`. Infinite for a fluid at rest
+    /// with zero sound speed everywhere; NaN if a cell is non-finite.
+    pub fn max_dt(&self) -> f64 {
+        let grid = &self.grid;
+        let gamma = self.params.gamma;
+        let nvar = self.state.nvar;
+        let dim = grid.dim;
+        let rate = self.pool.install(|| {
+            self.state
+                .u
+                .par_chunks(nvar * BLOCK_CELLS)
+                .map(|chunk| {
+                    let mut acc: f64 = 0.0;
+                    for cell in chunk.chunks_exact(nvar) {
+                        let w = cell_primitive(cell, dim, gamma);
+                        let c = sound_speed(&w, gamma);
+                        for a in 0..dim {
+                            let r = (w.vel[a].abs() + c) / grid.dx[a];
+                            if !r.is_finite() {
+                                return f64::NAN;
+                            }
+                            acc = acc.max(r);
+                        }
+                    }
+                    acc
+                })
+                .reduce(
+                    || 0.0,
+                    |a, b| {
+                        if a.is_nan() || b.is_nan() {
+                            f64::NAN
+                        } else {
+                            a.max(b)
+                        }
+                    },
+                )
+        });
+        self.params.cfl / rate
+    }
+
+    /// Advances by one split step of length `dt` [s]: one full-`dt` sweep per active axis, in
+    /// the order [`sweep_order`] gives for the current step number. Never panics on numerical
+    /// trouble: it is listed in the report and the caller stops the run.
+    pub fn advance(&mut self, dt: f64) -> StepReport {
+        let order = sweep_order(self.grid.dim, self.step);
+        let mut report = StepReport {
+            step: self.step,
+            dt,
+            time: self.time,
+            sweeps: order.clone(),
+            ..StepReport::default()
+        };
+        let limit = self.max_dt() / self.params.cfl;
+        if !(dt.is_finite() && dt > 0.0 && dt <= limit * (1.0 + 1e-12)) {
+            report.troubles.push(Trouble {
+                kind: TroubleKind::TimeStep,
+                axis: 0,
+                cell: [0; 3],
+                position: [0.0; 3],
+                rho: dt,
+                velocity: [0.0; 3],
+                p: limit,
+            });
+            return report;
+        }
+        let area_dt: Vec<f64> = (0..self.grid.dim)
+            .map(|a| dt * self.grid.cell_volume() / self.grid.dx[a])
+            .collect();
+        for &axis in &order {
+            self.record_pressures(axis);
+            let grid = &self.grid;
+            let params = &self.params;
+            let (u, buffer) = (&self.state.u, &mut self.buffer);
+            let (scratch, pencil_out) = (&self.scratch, &mut self.pencil_out);
+            self.pool.install(|| {
+                sweep_axis(grid, params, axis, dt, u, buffer, scratch, pencil_out);
+            });
+            if axis == 0 {
+                std::mem::swap(&mut self.state.u, &mut self.buffer);
+            } else {
+                let (src, dst) = (&self.buffer, &mut self.state.u);
+                self.pool.install(|| pencil_to_cells(grid, axis, src, dst));
+            }
+            let count = self.grid.n_cells() / self.grid.cells[axis];
+            // Fixed-order sums over pencils.
+            for rep in &self.pencil_out[..count] {
+                for q in 0..NQ {
+                    report.outflow[q] += area_dt[axis] * rep.outflow[q];
+                }
+                report.lax_friedrichs_faces += u64::from(rep.stats.lax_friedrichs);
+                report.hlle_faces += u64::from(rep.stats.hlle);
+                report.positivity_fixes += u64::from(rep.stats.positivity_fixes);
+                if let Some(idx) = rep.trouble
+                    && report.troubles.len() < MAX_TROUBLES
+                {
+                    report.troubles.push(self.trouble_at(idx, axis));
+                }
+            }
+        }
+        for q in 0..NQ {
+            self.outflow[q] += report.outflow[q];
+        }
+        self.step += 1;
+        self.time += dt;
+        report.time = self.time;
+        report
+    }
+
+    /// Advances with CFL-limited steps until `t_end` [s] (the last step is shortened to land on
+    /// it) or `max_steps` steps or the first trouble; returns the last report and the steps
+    /// taken.
+    pub fn run_until(&mut self, t_end: f64, max_steps: u64) -> (u64, StepReport) {
+        let mut steps = 0;
+        let mut last = StepReport::default();
+        while self.time < t_end * (1.0 - 1e-14) && steps < max_steps {
+            let dt = self.max_dt().min(t_end - self.time);
+            last = self.advance(dt);
+            steps += 1;
+            if !last.ok() {
+                break;
+            }
+        }
+        (steps, last)
+    }
+
+    fn record_pressures(&mut self, axis: usize) {
+        let nvar = self.state.nvar;
+        let dim = self.grid.dim;
+        let gamma = self.params.gamma;
+        let (u, pbar) = (&self.state.u, &mut self.pbar[axis]);
+        self.pool.install(|| {
+            pbar.par_chunks_mut(BLOCK_CELLS)
+                .zip(u.par_chunks(BLOCK_CELLS * nvar))
+                .for_each(|(p, cells)| {
+                    for (p, cell) in p.iter_mut().zip(cells.chunks_exact(nvar)) {
+                        *p = cell_primitive(cell, dim, gamma).p;
+                    }
+                });
+        });
+    }
+
+    fn trouble_at(&self, idx: usize, axis: usize) -> Trouble {
+        let (rho, velocity, p) = self.primitive(idx);
+        let cell = self.state.cell(idx);
+        let kind = if cell.iter().any(|x| !x.is_finite()) || !p.is_finite() {
+            TroubleKind::NonFinite
+        } else if rho < 0.0 || (rho <= 0.0 && self.params.vacuum_rho <= 0.0) {
+            TroubleKind::Density
+        } else {
+            TroubleKind::Pressure
+        };
+        let ijk = self.grid.ijk(idx);
+        Trouble {
+            kind,
+            axis,
+            cell: ijk,
+            position: self.grid.cell_center(ijk),
+            rho,
+            velocity,
+            p,
+        }
+    }
+
+    /// Conserved totals, summed in a fixed order (blocks of cells, then blocks in order), so
+    /// the result does not depend on the thread count.
+    pub fn totals(&self) -> Totals {
+        let nvar = self.state.nvar;
+        let dim = self.grid.dim;
+        // NOTE: compensated (Neumaier) sums per block and over blocks, so that the totals are
+        // exact to a few ulps and a conservation check measures the scheme, not the sum.
+        let mut partial = vec![[Neumaier::default(); NQ]; self.n_blocks];
+        self.pool.install(|| {
+            partial
+                .par_iter_mut()
+                .zip(self.state.u.par_chunks(BLOCK_CELLS * nvar))
+                .for_each(|(acc, cells)| {
+                    for cell in cells.chunks_exact(nvar) {
+                        acc[0].add(cell[0]);
+                        for a in 0..dim {
+                            acc[1 + a].add(cell[1 + a]);
+                        }
+                        acc[4].add(cell[dim + 1]);
+                    }
+                });
+        });
+        let mut total = [Neumaier::default(); NQ];
+        for acc in &partial {
+            for q in 0..NQ {
+                total[q].add(acc[q].sum);
+                total[q].add(acc[q].comp);
+            }
+        }
+        let sum: [f64; NQ] = std::array::from_fn(|q| total[q].value());
+        let v = self.grid.cell_volume();
+        Totals {
+            mass: sum[0] * v,
+            momentum: [sum[1] * v, sum[2] * v, sum[3] * v],
+            energy: sum[4] * v,
+            outflow_mass: self.outflow[0],
+            outflow_momentum: [self.outflow[1], self.outflow[2], self.outflow[3]],
+            outflow_energy: self.outflow[4],
+        }
+    }
+
+    /// Whether every cell is physical (see `line::state_ok`); the first bad cell otherwise.
+    pub fn check_state(&self) -> Option<Trouble> {
+        let gamma = self.params.gamma;
+        (0..self.grid.n_cells())
+            .find(|&idx| {
+                let full = to_full(self.state.cell(idx), self.grid.dim);
+                !state_ok(&full, gamma, self.params.vacuum_rho, self.params.vacuum_p)
+            })
+            .map(|idx| self.trouble_at(idx, 0))
+    }
+
+    /// Node-private checkpoint bytes: state, step counter, time, outflow and directional
+    /// pressures (encoded with `protocol::codec::encode_blob`).
+    pub fn to_checkpoint(&self) -> Vec<u8> {
+        let c = Checkpoint {
+            version: CHECKPOINT_VERSION,
+            cells: self.grid.cells.map(|n| n as u64),
+            step: self.step,
+            time: self.time,
+            u: self.state.u.clone(),
+            outflow: self.outflow,
+            pbar: self.pbar.clone(),
+        };
+        protocol::codec::encode_blob(&c)
+    }
+
+    /// Restores a checkpoint written by [`FluidSolver::to_checkpoint`] for the same grid.
+    pub fn restore_checkpoint(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let c: Checkpoint = protocol::codec::decode_blob(bytes)?;
+        if c.version != CHECKPOINT_VERSION {
+            return Err(format!(
+                "checkpoint version {} (expected {CHECKPOINT_VERSION})",
+                c.version
+            ));
+        }
+        let cells = self.grid.cells.map(|n| n as u64);
+        if c.cells != cells
+            || c.u.len() != self.state.u.len()
+            || c.pbar.len() != self.pbar.len()
+            || c.pbar.iter().any(|p| p.len() != self.grid.n_cells())
+        {
+            return Err(format!(
+                "checkpoint for grid {:?} with {} values, this solver has {:?} with {}",
+                c.cells,
+                c.u.len(),
+                cells,
+                self.state.u.len()
+            ));
+        }
+        self.state.u = c.u;
+        self.step = c.step;
+        self.time = c.time;
+        self.outflow = c.outflow;
+        self.pbar = c.pbar;
+        Ok(())
+    }
+}
+
+/// Neumaier's compensated sum.
+#[derive(Clone, Copy, Debug, Default)]
+struct Neumaier {
+    sum: f64,
+    comp: f64,
+}
+
+impl Neumaier {
+    #[inline]
+    fn add(&mut self, x: f64) {
+        let t = self.sum + x;
+        if self.sum.abs() >= x.abs() {
+            self.comp += (self.sum - t) + x;
+        } else {
+            self.comp += (x - t) + self.sum;
+        }
+        self.sum = t;
+    }
+
+    fn value(&self) -> f64 {
+        self.sum + self.comp
+    }
+}
+
+/// A storage cell as a 5-component state `(ρ, ρu_x, ρu_y, ρu_z, E)`.
+#[inline]
+fn to_full(cell: &[f64], dim: usize) -> [f64; NQ] {
+    let mut s = [0.0; NQ];
+    s[0] = cell[0];
+    s[1..=dim].copy_from_slice(&cell[1..=dim]);
+    s[4] = cell[dim + 1];
+    s
+}
+
+#[inline]
+fn cell_primitive(cell: &[f64], dim: usize, gamma: f64) -> Primitive {
+    crate::fv::euler::primitive(&to_full(cell, dim), gamma)
+}

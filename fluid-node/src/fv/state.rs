@@ -1,0 +1,192 @@
+//! Solver parameters, the conserved state of the grid, and their construction from the scene.
+//!
+//! The state holds the interior cells only, `nvar = dim + 2` conserved values per cell in
+//! x-fastest order (`ρ, ρu_x[, ρu_y[, ρu_z]], E`): a 2-D scene allocates 2-D data with 4
+//! values per cell. Ghost layers, `ng = R + 1` cells deep (`R` the stencil radius of the
+//! flux, so `ng` = 3 for OSMP3/5, 4 for OSMP7, 2 for MUSCL–Hancock), live in each pencil's
+//! scratch line
+//! and are filled from the boundary conditions at every sweep (`sweep.rs`).
+
+use protocol::scene::{Boundary, FluidConfig};
+
+use crate::fv::euler::{Primitive, conserved};
+use crate::fv::line::FluxKind;
+use crate::grid::Grid;
+
+/// Parameters of the finite-volume solver, validated.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FluidParams {
+    /// Ratio of specific heats γ [-] (default 1.4).
+    pub gamma: f64,
+    /// CFL number of each directional sweep [-] (default 0.5).
+    pub cfl: f64,
+    /// Regular face flux (default OSMP order 5).
+    pub flux: FluxKind,
+    /// Boundary condition per axis and side `[low, high]` (inactive axes: ignored).
+    pub boundary: [[BoundaryKind; 2]; 3],
+    /// Vacuum density threshold [kg/m³] (default 1e-10).
+    pub vacuum_rho: f64,
+    /// Vacuum pressure threshold [Pa] (default 1e-10).
+    pub vacuum_p: f64,
+}
+
+/// One side of the domain (mirror of `protocol::scene::Boundary`, kept serializable here).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum BoundaryKind {
+    /// Reflecting slip wall: mirror ghosts, normal momentum negated.
+    Wall,
+    /// Periodic.
+    Periodic,
+    /// Zero-gradient outflow.
+    Outflow,
+}
+
+impl From<Boundary> for BoundaryKind {
+    fn from(b: Boundary) -> Self {
+        match b {
+            Boundary::Wall => BoundaryKind::Wall,
+            Boundary::Periodic => BoundaryKind::Periodic,
+            Boundary::Outflow => BoundaryKind::Outflow,
+        }
+    }
+}
+
+impl FluidParams {
+    /// Ghost cells per side needed by the flux.
+    pub fn ghost_cells(&self) -> usize {
+        self.flux.ghost_cells()
+    }
+}
+
+/// Conserved variables of every cell: `nvar` values per cell, x-fastest.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FluidState {
+    /// Values per cell: `dim + 2`.
+    pub nvar: usize,
+    /// `ρ` [kg/m³], momentum per axis [kg/(m² s)], total energy `E` [J/m³] per cell.
+    pub u: Vec<f64>,
+}
+
+impl FluidState {
+    /// A state of `n_cells` cells of dimension `dim`, all zero.
+    pub fn zeros(dim: usize, n_cells: usize) -> FluidState {
+        FluidState {
+            nvar: dim + 2,
+            u: vec![0.0; (dim + 2) * n_cells],
+        }
+    }
+
+    /// The conserved values of cell `idx`.
+    pub fn cell(&self, idx: usize) -> &[f64] {
+        &self.u[idx * self.nvar..(idx + 1) * self.nvar]
+    }
+
+    /// Sets cell `idx` from density [kg/m³], velocity [m/s] (first `dim` entries used) and
+    /// pressure [Pa].
+    pub fn set_primitive(&mut self, idx: usize, rho: f64, vel: [f64; 3], p: f64, gamma: f64) {
+        let dim = self.nvar - 2;
+        let w = Primitive { rho, vel, p };
+        let full = conserved(&w, gamma);
+        let cell = &mut self.u[idx * self.nvar..(idx + 1) * self.nvar];
+        cell[0] = full[0];
+        cell[1..=dim].copy_from_slice(&full[1..=dim]);
+        // Kinetic energy of the active components only.
+        let ke: f64 = (0..dim).map(|a| 0.5 * rho * vel[a] * vel[a]).sum();
+        cell[dim + 1] = p / (gamma - 1.0) + ke;
+    }
+
+    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure [Pa] of cell `idx`.
+    pub fn primitive(&self, idx: usize, gamma: f64) -> (f64, [f64; 3], f64) {
+        let dim = self.nvar - 2;
+        let cell = self.cell(idx);
+        let rho = cell[0];
+        let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
+        let mut vel = [0.0; 3];
+        let mut ke = 0.0;
+        for a in 0..dim {
+            vel[a] = cell[1 + a] * inv;
+            ke += 0.5 * cell[1 + a] * vel[a];
+        }
+        (rho, vel, (gamma - 1.0) * (cell[dim + 1] - ke))
+    }
+}
+
+/// Validates `cfg` and builds the grid, the parameters and the initial state: every
+/// `[[fluid.init]]` entry, in order, sets the cells whose centre lies in its region.
+///
+/// Errors (lowercase, with values): bad dimension or counts, γ ≤ 1, CFL outside (0, 1],
+/// order not 3/5/7, periodic on one side only, wrong velocity length, a cell no entry covers,
+/// a non-physical initial state (ρ < 0, p < 0 or non-finite).
+pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), String> {
+    let cells: Vec<usize> = cfg.cells.iter().map(|&n| n as usize).collect();
+    let grid = Grid::new(&cfg.lower, &cfg.upper, &cells).map_err(|e| e.to_string())?;
+    let dim = grid.dim;
+    if !(cfg.gamma > 1.0 && cfg.gamma.is_finite()) {
+        return Err(format!("fluid.gamma must be > 1, got {}", cfg.gamma));
+    }
+    if !(cfg.cfl > 0.0 && cfg.cfl <= 1.0) {
+        return Err(format!("fluid.cfl must be in (0, 1], got {}", cfg.cfl));
+    }
+    if ![3, 5, 7].contains(&cfg.flux.order) {
+        return Err(format!(
+            "fluid.flux.order must be 3, 5 or 7, got {}",
+            cfg.flux.order
+        ));
+    }
+    if !(cfg.vacuum.rho >= 0.0 && cfg.vacuum.p >= 0.0) {
+        return Err(format!(
+            "fluid.vacuum thresholds must be >= 0, got rho {} p {}",
+            cfg.vacuum.rho, cfg.vacuum.p
+        ));
+    }
+    let mut boundary = [[BoundaryKind::Outflow; 2]; 3];
+    for (axis, b) in boundary.iter_mut().enumerate().take(dim) {
+        let [lo, hi] = cfg.boundary.axis(axis);
+        if (lo == Boundary::Periodic) != (hi == Boundary::Periodic) {
+            return Err(format!(
+                "axis {axis}: periodic on both sides or on neither, got [{lo:?}, {hi:?}]"
+            ));
+        }
+        *b = [lo.into(), hi.into()];
+    }
+    let params = FluidParams {
+        gamma: cfg.gamma,
+        cfl: cfg.cfl,
+        flux: FluxKind::Osmp(cfg.flux.order),
+        boundary,
+        vacuum_rho: cfg.vacuum.rho,
+        vacuum_p: cfg.vacuum.p,
+    };
+    for (k, entry) in cfg.init.iter().enumerate() {
+        if !(entry.velocity.is_empty() || entry.velocity.len() == dim) {
+            return Err(format!(
+                "fluid.init[{k}].velocity: expected 0 or {dim} entries, got {}",
+                entry.velocity.len()
+            ));
+        }
+        let vel_ok = entry.velocity.iter().all(|v| v.is_finite());
+        let finite = entry.rho.is_finite() && entry.p.is_finite() && vel_ok;
+        if !(entry.rho >= 0.0 && entry.p >= 0.0 && finite) {
+            return Err(format!(
+                "fluid.init[{k}]: need finite rho >= 0, p >= 0, velocity, got rho {} p {} velocity {:?}",
+                entry.rho, entry.p, entry.velocity
+            ));
+        }
+    }
+    let mut state = FluidState::zeros(dim, grid.n_cells());
+    for idx in 0..grid.n_cells() {
+        let ijk = grid.ijk(idx);
+        let x = grid.cell_center(ijk);
+        let entry = cfg.init.iter().rev().find(|e| e.region.contains(&x[..dim]));
+        let Some(entry) = entry else {
+            return Err(format!(
+                "cell {ijk:?} at {:?} is covered by no [[fluid.init]] entry",
+                &x[..dim]
+            ));
+        };
+        let mut vel = [0.0; 3];
+        vel[..entry.velocity.len()].copy_from_slice(&entry.velocity);
+        state.set_primitive(idx, entry.rho, vel, entry.p, params.gamma);
+    }
+    Ok((grid, params, state))
+}

@@ -1,0 +1,93 @@
+//! Pure parts of convergence and work–precision studies on 1-D Riemann scenes: the exact
+//! reference read off the scene's initial data, solvers at a given resolution and flux, and
+//! the L1 error. Timing and files are in `crate::report`.
+
+use protocol::scene::FluidConfig;
+
+use crate::fv::exact_riemann::{ExactRiemann, Prim1};
+use crate::fv::{FluidSolver, FluxKind};
+
+/// The exact solution of a 1-D scene made of two constant states.
+#[derive(Clone, Copy, Debug)]
+pub struct RiemannReference {
+    /// The solved problem.
+    pub exact: ExactRiemann,
+    /// Position of the initial discontinuity [m].
+    pub x0: f64,
+}
+
+fn init_state(cfg: &FluidConfig, x: f64) -> Option<Prim1> {
+    cfg.init
+        .iter()
+        .rev()
+        .find(|e| e.region.contains(&[x]))
+        .map(|e| Prim1 {
+            rho: e.rho,
+            u: e.velocity.first().copied().unwrap_or(0.0),
+            p: e.p,
+        })
+}
+
+impl RiemannReference {
+    /// Reads the left and right states at the ends of a 1-D scene and locates the jump
+    /// between them by bisection.
+    pub fn from_config(cfg: &FluidConfig) -> Result<RiemannReference, String> {
+        if cfg.lower.len() != 1 || cfg.upper.len() != 1 {
+            return Err(format!(
+                "work-precision needs a 1-D scene, got {} axes",
+                cfg.lower.len()
+            ));
+        }
+        let (lo, hi) = (cfg.lower[0], cfg.upper[0]);
+        let left = init_state(cfg, lo).ok_or("no [[fluid.init]] entry covers the left end")?;
+        let right = init_state(cfg, hi).ok_or("no [[fluid.init]] entry covers the right end")?;
+        if left == right {
+            return Err("the scene is not a Riemann problem: equal states at both ends".into());
+        }
+        let (mut a, mut b) = (lo, hi);
+        for _ in 0..200 {
+            let m = 0.5 * (a + b);
+            if init_state(cfg, m) == Some(left) {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        let exact = ExactRiemann::new(left, right, cfg.gamma)?;
+        Ok(RiemannReference {
+            exact,
+            x0: 0.5 * (a + b),
+        })
+    }
+
+    /// L1 error of the density `Σ |ρ − ρ_exact| Δx` of `solver` at its current time against
+    /// the exact cell averages.
+    pub fn l1_density(&self, solver: &FluidSolver) -> f64 {
+        let grid = solver.grid();
+        let t = solver.time();
+        let mut acc = 0.0;
+        for i in 0..grid.cells[0] {
+            let xa = grid.lower[0] + i as f64 * grid.dx[0];
+            let avg = self.exact.cell_average(xa, xa + grid.dx[0], self.x0, t);
+            acc += (solver.state().u[i * 3] - avg[0]).abs();
+        }
+        acc * grid.dx[0]
+    }
+}
+
+/// A solver for the scene at `cells` cells with regular flux `flux`.
+pub fn solver_for(
+    cfg: &FluidConfig,
+    flux: FluxKind,
+    cells: u32,
+    threads: usize,
+) -> Result<FluidSolver, String> {
+    let mut cfg = cfg.clone();
+    cfg.cells = vec![cells; cfg.lower.len()];
+    if let FluxKind::Osmp(order) = flux {
+        cfg.flux.order = order;
+    }
+    let (grid, mut params, state) = crate::fv::from_scene(&cfg)?;
+    params.flux = flux;
+    FluidSolver::new(grid, params, state, threads)
+}

@@ -1,0 +1,266 @@
+//! Kernel unit tests: scalar OSMP orders, flux consistency, Roe decomposition, exact Riemann
+//! star states, sweep orders.
+
+use crate::fv::euler::*;
+use crate::fv::exact_riemann::{ExactRiemann, Prim1};
+use crate::fv::osmp::{WaveLine, os_unlimited, osmp_psi};
+
+/// Linear advection `u_t + a u_x = 0` of a sine over one period, periodic, CFL 0.5, with the
+/// scalar OSMP kernel; returns the L1 error.
+fn advect_sine(n: usize, a: f64, order: u32, limited: bool) -> f64 {
+    let dx = 1.0 / n as f64;
+    let t_end = 1.0 / a.abs();
+    let steps = (t_end / (0.5 * dx / a.abs())).ceil() as usize;
+    let dt = t_end / steps as f64;
+    let sigma = dt / dx;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let u0: Vec<f64> = (0..n)
+        .map(|i| {
+            let (xa, xb) = (i as f64 * dx, (i + 1) as f64 * dx);
+            ((two_pi * xa).cos() - (two_pi * xb).cos()) / (two_pi * dx)
+        })
+        .collect();
+    let mut u = u0.clone();
+    let ng = 4;
+    let mut wave = WaveLine::default();
+    wave.resize(n + 2 * ng - 1);
+    let mut flux = vec![0.0; n + 1];
+    for _ in 0..steps {
+        let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
+        for l in 0..n + 2 * ng - 1 {
+            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
+        }
+        wave.compute_curvatures();
+        for (fi, f) in flux.iter_mut().enumerate() {
+            let l = ng - 1 + fi;
+            let psi = if limited {
+                osmp_psi(order, &wave, l)
+            } else {
+                os_unlimited(order, &wave, l)
+            };
+            *f = 0.5 * a * (ext[l] + ext[l + 1]) - 0.5 * a.abs() * (wave.alpha[l] - psi);
+        }
+        for i in 0..n {
+            u[i] -= sigma * (flux[i + 1] - flux[i]);
+        }
+    }
+    u.iter().zip(&u0).map(|(x, y)| (x - y).abs()).sum::<f64>() * dx
+}
+
+#[test]
+fn scalar_os_orders() {
+    for order in [3u32, 5, 7] {
+        for limited in [false, true] {
+            for a in [1.0, -1.0] {
+                let e: Vec<f64> = [20, 40, 80]
+                    .iter()
+                    .map(|&n| advect_sine(n, a, order, limited))
+                    .collect();
+                let rate = (e[1] / e[2]).log2();
+                assert!(
+                    rate > order as f64 - 0.2,
+                    "order {order} limited {limited} a {a}: errors {e:?} rate {rate}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn limited_scheme_keeps_square_wave_bounded() {
+    // Square wave advected one period: the MP limiter allows no new extrema.
+    let n = 100;
+    let dx = 1.0 / n as f64;
+    let a = 1.0;
+    let sigma = 0.5;
+    let mut u: Vec<f64> = (0..n)
+        .map(|i| {
+            let x = (i as f64 + 0.5) * dx;
+            if (0.2..0.4).contains(&x) { 1.0 } else { 0.0 }
+        })
+        .collect();
+    let ng = 4;
+    let mut wave = WaveLine::default();
+    wave.resize(n + 2 * ng - 1);
+    for _ in 0..200 {
+        let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
+        for l in 0..n + 2 * ng - 1 {
+            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
+        }
+        wave.compute_curvatures();
+        let flux: Vec<f64> = (0..=n)
+            .map(|fi| {
+                let l = ng - 1 + fi;
+                a * ext[l] + 0.5 * a * osmp_psi(7, &wave, l)
+            })
+            .collect();
+        for i in 0..n {
+            u[i] -= sigma * (flux[i + 1] - flux[i]);
+        }
+    }
+    let max = u.iter().cloned().fold(f64::MIN, f64::max);
+    let min = u.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(max <= 1.0 + 1e-12 && min >= -1e-12, "min {min} max {max}");
+}
+
+#[test]
+fn roe_decomposition_reconstructs_jump() {
+    let gamma = 1.4;
+    let wl = Primitive {
+        rho: 1.3,
+        vel: [0.4, -0.7, 0.2],
+        p: 2.1,
+    };
+    let wr = Primitive {
+        rho: 0.6,
+        vel: [-0.3, 0.5, 1.1],
+        p: 0.4,
+    };
+    let (ul, ur) = (conserved(&wl, gamma), conserved(&wr, gamma));
+    let roe = roe_average(&ul, &wl, &ur, &wr, gamma);
+    assert!(roe.valid);
+    let du: State = std::array::from_fn(|q| ur[q] - ul[q]);
+    let alpha = roe_strengths(&roe, &du, gamma);
+    let lam = roe_eigenvalues(&roe);
+    let mut sum = [0.0; NQ];
+    let mut flux_jump = [0.0; NQ];
+    for k in 0..NQ {
+        let r = roe_eigenvector(&roe, k);
+        for q in 0..NQ {
+            sum[q] += alpha[k] * r[q];
+            flux_jump[q] += lam[k] * alpha[k] * r[q];
+        }
+    }
+    let (fl, fr) = (physical_flux(&ul, &wl), physical_flux(&ur, &wr));
+    for q in 0..NQ {
+        assert!((sum[q] - du[q]).abs() < 1e-13, "R alpha != dU at {q}");
+        // Roe property: A~ dU = dF.
+        assert!(
+            (flux_jump[q] - (fr[q] - fl[q])).abs() < 1e-13,
+            "Roe property at {q}"
+        );
+    }
+}
+
+#[test]
+fn fallback_fluxes_are_consistent() {
+    let gamma = 1.4;
+    let w = Primitive {
+        rho: 0.8,
+        vel: [0.3, -0.2, 0.1],
+        p: 1.7,
+    };
+    let u = conserved(&w, gamma);
+    let f = physical_flux(&u, &w);
+    for g in [
+        flux_hlle(&u, &u, gamma),
+        flux_hllc(&u, &u, gamma),
+        flux_lax_friedrichs(&u, &u, 0.3, gamma),
+    ] {
+        for q in 0..NQ {
+            assert!((g[q] - f[q]).abs() < 1e-14 * (1.0 + f[q].abs()));
+        }
+    }
+}
+
+#[test]
+fn exact_riemann_star_states() {
+    // numerics.md §4.2 (Toro's tables).
+    let cases = [
+        (
+            (1.0, 0.0, 1.0),
+            (0.125, 0.0, 0.1),
+            [0.30313, 0.92745, 0.42632, 0.26557],
+        ),
+        (
+            (0.445, 0.698, 3.528),
+            (0.5, 0.0, 0.571),
+            [2.4661, 1.52872, 0.34457, 1.30408],
+        ),
+        (
+            (1.0, -2.0, 0.4),
+            (1.0, 2.0, 0.4),
+            [0.00189, 0.0, 0.02185, 0.02185],
+        ),
+        (
+            (1.0, 0.0, 1000.0),
+            (1.0, 0.0, 0.01),
+            [460.894, 19.5975, 0.57506, 5.99924],
+        ),
+    ];
+    for (l, r, want) in cases {
+        let want: [f64; 4] = want;
+        let ex = ExactRiemann::new(
+            Prim1 {
+                rho: l.0,
+                u: l.1,
+                p: l.2,
+            },
+            Prim1 {
+                rho: r.0,
+                u: r.1,
+                p: r.2,
+            },
+            1.4,
+        )
+        .expect("physical data");
+        let got = [ex.p_star, ex.u_star, ex.rho_star_left, ex.rho_star_right];
+        for k in 0..4 {
+            let tol = f64::max(6e-5 * want[k].abs(), 5e-6);
+            assert!(
+                (got[k] - want[k]).abs() < tol,
+                "{l:?}|{r:?}: {got:?} vs {want:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn exact_cell_average_matches_fine_midpoint_rule() {
+    let ex = ExactRiemann::new(
+        Prim1 {
+            rho: 1.0,
+            u: 0.0,
+            p: 1.0,
+        },
+        Prim1 {
+            rho: 0.125,
+            u: 0.0,
+            p: 0.1,
+        },
+        1.4,
+    )
+    .expect("sod");
+    // A cell holding the rarefaction tail and the contact.
+    let (xa, xb) = (0.45, 0.72);
+    let avg = ex.cell_average(xa, xb, 0.5, 0.2);
+    let n = 200_000;
+    let mut mid = [0.0; 3];
+    for k in 0..n {
+        let x = xa + (k as f64 + 0.5) * (xb - xa) / n as f64;
+        let v = ex.conserved_at(x, 0.5, 0.2);
+        for q in 0..3 {
+            mid[q] += v[q] / n as f64;
+        }
+    }
+    for q in 0..3 {
+        assert!((avg[q] - mid[q]).abs() < 1e-6, "{avg:?} vs {mid:?}");
+    }
+}
+
+#[test]
+fn sweep_orders_cover_permutations_in_reverse_pairs() {
+    let mut seen = std::collections::BTreeSet::new();
+    for s in 0..6 {
+        let o = crate::fv::sweep_order(3, s);
+        seen.insert(o.clone());
+        if s % 2 == 1 {
+            let mut prev = crate::fv::sweep_order(3, s - 1);
+            prev.reverse();
+            assert_eq!(o, prev);
+        }
+    }
+    assert_eq!(seen.len(), 6);
+    assert_eq!(crate::fv::sweep_order(2, 0), vec![0, 1]);
+    assert_eq!(crate::fv::sweep_order(2, 1), vec![1, 0]);
+}
