@@ -7,12 +7,18 @@
 //! Forces and torques are the exact negative gradients, which reproduces (29)–(30) term by term.
 //!
 //! NOTE (reading of the machine-extracted formulas, 000 vs 003):
-//! - `Δu_IJ = X_I − X_J + Q_J (G − X⁰_J) − Q_I (G − X⁰_I)` (both papers agree).
+//! - Both papers print `Δu_IJ = X_I − X_J + Q_J (G − X⁰_J) − Q_I (G − X⁰_I)`, which is
+//!   `2 (X_I − X_J) ≠ 0` at rest. 000 describes it as "the difference of the displacement
+//!   vectors of interface point G_IJ driven by particles I and J", so we use
+//!   `Δu_IJ = (X_I + Q_I (G − X⁰_I)) − (X_J + Q_J (G − X⁰_J))`, zero at rest.
 //! - `n_IJ` in the volumetric terms is read as the current unit vector `(X_I − X_J)/D_IJ`: its
 //!   derivative is exactly the printed correction `(Δu − (Δu·n)n)/D_IJ`, so with this reading
 //!   (29)–(30) derive from the potential above and energy is conserved, as the papers claim.
-//! - The printed `F_IJ` is `+∂U/∂X_I`, while the printed torques are `−∂U/∂θ_I`; the force on
-//!   `I` is therefore `−F_IJ` (otherwise a stretched link would push its particles apart).
+//! - With that `Δu`, the printed `F_IJ` and `M^t_IJ` are `+∂U/∂X_I` and `+∂U/∂θ_I` (the action
+//!   of `I` on `J`): the force and torque on `I` are their opposites (otherwise a stretched link
+//!   would push its particles apart). The printed flexion torque `c_k Q_I a ∧ Q_J a` is already
+//!   the torque on `I` for the potential `c_k (1 − Q_I a · Q_J a)` (minimum when aligned). All
+//!   signs are fixed by the potential and checked against it by finite differences.
 //! - 000 prints `V_I + 3ν/(1−2ν) V_I` in ε^v_I; 003 prints `V^f_I` for the second term and
 //!   defines the free volume just after, so 003 is used.
 
@@ -50,7 +56,7 @@ fn geometry_3d(
     let arm_j = qj * link.r_j;
     let d = xi - xj;
     let dist = d.norm();
-    let du = d + arm_j - arm_i;
+    let du = d + arm_i - arm_j;
     (du, d / dist, dist, arm_i, arm_j)
 }
 
@@ -83,8 +89,8 @@ pub fn link_force_3d(
     // P = ∂U/∂Δu (elastic + volumetric through Δu·n).
     let p = du * link.k_shear + n * vol;
     let force_i = -(p + (du - n * gap) * (vol / dist));
-    let mut torque_i = arm_i.cross(&p);
-    let mut torque_j = -arm_j.cross(&p);
+    let mut torque_i = p.cross(&arm_i);
+    let mut torque_j = arm_j.cross(&p);
     let mut energy = 0.5 * link.k_shear * du.norm_squared();
     for k in 0..3 {
         let a_i = qi * link.axes_i[k];
@@ -127,7 +133,7 @@ fn geometry_2d(
     let arm_j = rotate_2d(tj, &link.r_j);
     let d = xi - xj;
     let dist = d.norm();
-    (d + arm_j - arm_i, d / dist, dist, arm_i, arm_j)
+    (d + arm_i - arm_j, d / dist, dist, arm_i, arm_j)
 }
 
 /// `Δu·n` of a 2-D link.
@@ -161,8 +167,8 @@ pub fn link_force_2d(
     let flex_torque = bend * rel.sin();
     LinkOut {
         force_i: Vector3::new(force.x, force.y, 0.0),
-        torque_i: Vector3::new(0.0, 0.0, cross_2d(&arm_i, &p) + flex_torque),
-        torque_j: Vector3::new(0.0, 0.0, -cross_2d(&arm_j, &p) - flex_torque),
+        torque_i: Vector3::new(0.0, 0.0, cross_2d(&p, &arm_i) + flex_torque),
+        torque_j: Vector3::new(0.0, 0.0, cross_2d(&arm_j, &p) - flex_torque),
         energy: 0.5 * link.k_shear * du.norm_squared() + bend * (1.0 - rel.cos()),
         gap,
         distance: dist,
