@@ -8,7 +8,14 @@ use solid_node::dem::{ParticleId, Solid};
 
 /// Big enough that links and particles span several rayon chunks (256 items).
 fn scene() -> protocol::scene::SolidConfig {
-    let mut cfg = box_config(vec![0.0; 3], vec![1.2, 0.6, 0.4], vec![12, 6, 4], 1e6, 0.25, 1000.0);
+    let mut cfg = box_config(
+        vec![0.0; 3],
+        vec![1.2, 0.6, 0.4],
+        vec![12, 6, 4],
+        1e6,
+        0.25,
+        1000.0,
+    );
     cfg.gravity = Some(vec![0.0, 0.0, -9.81]);
     with_fracture(&mut cfg, 0.002);
     cfg
@@ -36,7 +43,11 @@ fn bits(solid: &Solid) -> Vec<u64> {
         out.extend(solid.angular_velocity(id).iter().map(|v| v.to_bits()));
     }
     let e = solid.energies();
-    out.extend([e.elastic, e.dissipated, e.kinetic_rotation].iter().map(|v| v.to_bits()));
+    out.extend(
+        [e.elastic, e.dissipated, e.kinetic_rotation]
+            .iter()
+            .map(|v| v.to_bits()),
+    );
     out.extend(solid.wet_surface().vertices.iter().map(|v| v.to_bits()));
     out
 }
@@ -84,7 +95,14 @@ fn checkpoint_restore_continues_bit_identically() {
     assert_eq!(bits(&straight), bits(&restored));
     assert_eq!(straight.step_count(), restored.step_count());
 
-    let other = box_config(vec![0.0; 3], vec![0.2, 0.1, 0.1], vec![2, 1, 1], 1e6, 0.0, 1000.0);
+    let other = box_config(
+        vec![0.0; 3],
+        vec![0.2, 0.1, 0.1],
+        vec![2, 1, 1],
+        1e6,
+        0.0,
+        1000.0,
+    );
     let mut wrong = build(&other, 3, 1);
     let err = wrong.restore_checkpoint(&bytes).unwrap_err();
     assert!(err.contains("particles"), "{err}");

@@ -16,7 +16,10 @@ fn cantilever_scene_parses_and_builds() {
         .filter(|&p| solid.model().particles[p].motion == ParticleMotion::Fixed)
         .collect();
     assert_eq!(fixed, vec![0]);
-    assert!(solid.position(ParticleId(0))[0].abs() < 1e-12, "clamp particle centred at x = 0");
+    assert!(
+        solid.position(ParticleId(0))[0].abs() < 1e-12,
+        "clamp particle centred at x = 0"
+    );
     let h = 2.0 / 20.5;
     let last = solid.model().particles[20].x0.x;
     assert!((last + 0.5 * h - 2.0).abs() < 1e-12, "free end at x = 2 m");

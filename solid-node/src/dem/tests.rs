@@ -99,10 +99,13 @@ fn check_gradient(dim: usize, divisions: Vec<u32>) {
     }
     let e0 = solid.recompute_for_tests();
     assert!(e0 > 0.0);
+    // NOTE: the FD error is round-off, ε E / h ≈ 1e-16 · e0 / 1e-6.
     let h = 1e-6;
     let mut worst: f64 = 0.0;
     let mut scale: f64 = 0.0;
     for p in 0..n {
+        // Forces at the unperturbed configuration.
+        solid.recompute_for_tests();
         let f = solid.internal_force(ParticleId(p as u32));
         let t = solid.internal_torque(ParticleId(p as u32));
         for (a, f_a) in f.iter().enumerate().take(dim) {
@@ -163,4 +166,22 @@ fn dmv_increment_is_orthogonal_and_solves_the_map() {
     let lhs = om * d - d * om.transpose();
     let rhs = m.cross_matrix() * h;
     assert!((lhs - rhs).abs().max() < 1e-15);
+}
+
+#[test]
+fn forces_and_energy_vanish_at_rest() {
+    for dim in [2usize, 3] {
+        let divisions = if dim == 3 { vec![3, 2, 2] } else { vec![3, 2] };
+        let mut solid = Solid::from_scene(&box_config(dim, divisions, 0.3), dim, 1).unwrap();
+        let e = solid.recompute_for_tests();
+        assert!(e.abs() < 1e-20, "rest energy {e}");
+        for p in 0..solid.n_particles() {
+            let f = solid.internal_force(ParticleId(p as u32));
+            let t = solid.internal_torque(ParticleId(p as u32));
+            assert!(
+                f.iter().chain(t.iter()).all(|c| c.abs() < 1e-9),
+                "{f:?} {t:?}"
+            );
+        }
+    }
 }
