@@ -111,11 +111,7 @@ pub fn write_wet_surface_vtk(
         "# vtk DataFile Version 3.0\n{}\nASCII\nDATASET POLYDATA",
         one_line(title)
     )?;
-    let n_vertices = if dim == 0 {
-        0
-    } else {
-        wet.vertices.len() / dim
-    };
+    let n_vertices = wet.vertices.len().checked_div(dim).unwrap_or(0);
     writeln!(w, "POINTS {n_vertices} double")?;
     for v in wet.vertices.chunks(dim.max(1)) {
         let z = if dim == 3 { v[2] } else { 0.0 };
