@@ -22,7 +22,7 @@
 //! - 000 prints `V_I + 3ν/(1−2ν) V_I` in ε^v_I; 003 prints `V^f_I` for the second term and
 //!   defines the free volume just after, so 003 is used.
 
-use nalgebra::{UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::dem::model::Link;
 
@@ -48,9 +48,9 @@ pub struct LinkOut {
 fn geometry_3d(
     link: &Link,
     xi: &Vector3<f64>,
-    qi: &UnitQuaternion<f64>,
+    qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
-    qj: &UnitQuaternion<f64>,
+    qj: &Matrix3<f64>,
 ) -> (Vector3<f64>, Vector3<f64>, f64, Vector3<f64>, Vector3<f64>) {
     let arm_i = qi * link.r_i;
     let arm_j = qj * link.r_j;
@@ -65,22 +65,23 @@ fn geometry_3d(
 pub fn link_gap_3d(
     link: &Link,
     xi: &Vector3<f64>,
-    qi: &UnitQuaternion<f64>,
+    qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
-    qj: &UnitQuaternion<f64>,
+    qj: &Matrix3<f64>,
 ) -> f64 {
     let (du, n, _, _, _) = geometry_3d(link, xi, qi, xj, qj);
     du.dot(&n)
 }
 
-/// Force and torques of a 3-D link, `eps_link = ε^v_I + ε^v_J` (0 when ν = 0).
+/// Force and torques of a 3-D link, `eps_link = ε^v_I + ε^v_J` (0 when ν = 0); `qi`, `qj` are
+/// the body-to-space rotation matrices of the particles.
 #[inline]
 pub fn link_force_3d(
     link: &Link,
     xi: &Vector3<f64>,
-    qi: &UnitQuaternion<f64>,
+    qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
-    qj: &UnitQuaternion<f64>,
+    qj: &Matrix3<f64>,
     eps_link: f64,
 ) -> LinkOut {
     let (du, n, dist, arm_i, arm_j) = geometry_3d(link, xi, qi, xj, qj);

@@ -5,7 +5,7 @@
 //! about a fixed axis, where RATTLE is exactly Verlet). External loads are held fixed over the
 //! step (003 eq. (14)–(17)): they enter both half kicks.
 
-use nalgebra::{UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector2, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -112,9 +112,7 @@ pub struct Solid {
     pool: Option<rayon::ThreadPool>,
     state: State,
     // Scratch and caches (not in the checkpoint; recomputed from the state).
-    gaps: Vec<f64>,
-    eps: Vec<f64>,
-    link_out: Vec<LinkOut>,
+    scratch: ForceScratch,
     force_int: Vec<[f64; 3]>,
     torque_int: Vec<[f64; 3]>,
     elastic: f64,
@@ -163,6 +161,21 @@ fn quat_arr(q: &UnitQuaternion<f64>) -> [f64; 4] {
     [q.w, q.i, q.j, q.k]
 }
 
+/// Scratch buffers of the force evaluation (allocated once).
+#[derive(Clone, Debug, Default)]
+struct ForceScratch {
+    /// `Δu·n` per link.
+    gaps: Vec<f64>,
+    /// ε^v per particle.
+    eps: Vec<f64>,
+    /// Per-link results.
+    link_out: Vec<LinkOut>,
+    /// Body-to-space rotation matrix per particle (3-D).
+    rotation: Vec<Matrix3<f64>>,
+    /// Gathered (force, torque) per particle.
+    loads: Vec<[[f64; 3]; 2]>,
+}
+
 /// Internal forces of all unbroken links at a configuration; returns the elastic energy.
 #[allow(clippy::too_many_arguments)]
 fn internal_forces(
@@ -171,13 +184,24 @@ fn internal_forces(
     x: &[[f64; 3]],
     rot: &[[f64; 4]],
     broken: &[bool],
-    gaps: &mut [f64],
-    eps: &mut [f64],
-    link_out: &mut [LinkOut],
+    scratch: &mut ForceScratch,
     force: &mut [[f64; 3]],
     torque: &mut [[f64; 3]],
 ) -> f64 {
     let dim = model.dim;
+    let ForceScratch {
+        gaps,
+        eps,
+        link_out,
+        rotation,
+        loads,
+    } = scratch;
+    if dim == 3 {
+        par_fill(pool, rotation, |p| {
+            quat(&rot[p]).to_rotation_matrix().into_inner()
+        });
+    }
+    let rotation: &[Matrix3<f64>] = rotation;
     let with_volume = model.material.poisson != 0.0;
     if with_volume {
         par_fill(pool, gaps, |l| {
@@ -190,9 +214,9 @@ fn internal_forces(
                 link_gap_3d(
                     link,
                     &Vector3::from(x[i]),
-                    &quat(&rot[i]),
+                    &rotation[i],
                     &Vector3::from(x[j]),
-                    &quat(&rot[j]),
+                    &rotation[j],
                 )
             } else {
                 link_gap_2d(
@@ -230,9 +254,9 @@ fn internal_forces(
             link_force_3d(
                 link,
                 &Vector3::from(x[i]),
-                &quat(&rot[i]),
+                &rotation[i],
                 &Vector3::from(x[j]),
-                &quat(&rot[j]),
+                &rotation[j],
                 e,
             )
         } else {
@@ -261,10 +285,13 @@ fn internal_forces(
                 t += o.torque_j;
             }
         }
-        (f, t)
+        [f.into(), t.into()]
     };
-    par_fill(pool, force, |p| gather(p).0.into());
-    par_fill(pool, torque, |p| gather(p).1.into());
+    par_fill(pool, loads, gather);
+    for (p, [f, t]) in loads.iter().enumerate() {
+        force[p] = *f;
+        torque[p] = *t;
+    }
     // Serial reductions in index order (bit-reproducible).
     let mut energy = 0.0;
     for o in out_ro {
@@ -382,9 +409,13 @@ impl Solid {
             elongation_at_break,
             pool,
             state,
-            gaps: vec![0.0; n_links],
-            eps: vec![0.0; n],
-            link_out: vec![LinkOut::default(); n_links],
+            scratch: ForceScratch {
+                gaps: vec![0.0; n_links],
+                eps: vec![0.0; n],
+                link_out: vec![LinkOut::default(); n_links],
+                rotation: vec![Matrix3::identity(); n],
+                loads: vec![[[0.0; 3]; 2]; n],
+            },
             force_int: vec![[0.0; 3]; n],
             torque_int: vec![[0.0; 3]; n],
             elastic: 0.0,
@@ -538,6 +569,12 @@ impl Solid {
     /// Test hook: recomputes forces and energy; returns the elastic energy.
     #[cfg(test)]
     pub(crate) fn recompute_for_tests(&mut self) -> f64 {
+        self.recompute_internal_forces()
+    }
+
+    /// Evaluates every unbroken link at the committed configuration again (the step does this
+    /// itself; exposed for benchmarks and diagnostics). Returns the elastic energy [J].
+    pub fn recompute_internal_forces(&mut self) -> f64 {
         self.update_forces();
         self.elastic
     }
@@ -549,9 +586,7 @@ impl Solid {
             &self.state.x,
             &self.state.rot,
             &self.state.broken,
-            &mut self.gaps,
-            &mut self.eps,
-            &mut self.link_out,
+            &mut self.scratch,
             &mut self.force_int,
             &mut self.torque_int,
         );
@@ -745,7 +780,7 @@ impl Solid {
                     continue;
                 }
                 // 000 §3.1: A_IJ = (|X_I − X_J| − |X⁰_I − X⁰_J|)/|X⁰_I − X⁰_J| (as a fraction).
-                let elongation = (self.link_out[l].distance - link.d0) / link.d0;
+                let elongation = (self.scratch.link_out[l].distance - link.d0) / link.d0;
                 if elongation > limit {
                     broken_links.push(BrokenLink {
                         link: LinkId(l as u32),
@@ -814,11 +849,11 @@ impl Solid {
             }
         }
         for (l, link) in self.model.links.iter().enumerate() {
-            if !self.state.broken[l] && self.link_out[l].distance < 0.5 * link.d0 {
+            if !self.state.broken[l] && self.scratch.link_out[l].distance < 0.5 * link.d0 {
                 diagnostics.push(Diagnostic::Interpenetration {
                     link: LinkId(l as u32),
                     particles: [ParticleId(link.i), ParticleId(link.j)],
-                    distance: self.link_out[l].distance,
+                    distance: self.scratch.link_out[l].distance,
                     rest_distance: link.d0,
                 });
             }
@@ -930,7 +965,7 @@ impl Solid {
                 let other = if is_i { link.j } else { link.i } as usize;
                 let dir = (Vector3::from(self.state.x[other]) - Vector3::from(self.state.x[p]))
                     .normalize();
-                let f = self.link_out[l as usize].force_i * if is_i { 1.0 } else { -1.0 };
+                let f = self.scratch.link_out[l as usize].force_i * if is_i { 1.0 } else { -1.0 };
                 sum += f.dot(&dir) / link.area;
                 count += 1;
             }
