@@ -108,3 +108,22 @@ fn checkpoint_restore_continues_bit_identically() {
     assert!(err.contains("particles"), "{err}");
     assert!(wrong.restore_checkpoint(&[1, 2, 3]).is_err());
 }
+
+#[test]
+fn trials_do_not_commit_anything() {
+    let mut a = kicked(1);
+    let mut b = kicked(1);
+    let n = a.n_particles();
+    let dt = 0.5 * a.max_dt(f64::INFINITY);
+    let force: Vec<f64> = (0..3 * n).map(|k| (k % 3) as f64).collect();
+    let torque = vec![0.01; 3 * n];
+    a.begin_step(dt);
+    a.trial(&vec![5.0; 3 * n], &vec![-1.0; 3 * n]);
+    a.trial(&vec![f64::NAN; 3 * n], &vec![f64::NAN; 3 * n]);
+    a.trial(&force, &torque);
+    a.commit();
+    b.begin_step(dt);
+    b.trial(&force, &torque);
+    b.commit();
+    assert_eq!(bits(&a), bits(&b));
+}

@@ -106,6 +106,16 @@ fn bar_pulled_apart_breaks_at_the_set_elongation() {
             b.link, b.elongation, report.time, report.energies.dissipated
         );
         assert!(b.elongation > limit && b.elongation < limit + 10.0 * step_growth + 1e-4 * limit);
+        // Normal stress (000 Fig. 16 quantity): E times the link strain, positive in tension.
+        let sigma_max = solid.normal_stress().into_iter().fold(f64::MIN, f64::max);
+        println!(
+            "{dim}-D: max normal stress {sigma_max:.4e} Pa vs E x limit = {:.4e} Pa",
+            1e7 * limit
+        );
+        assert!(
+            (sigma_max / (1e7 * limit) - 1.0).abs() < 0.2,
+            "sigma_n {sigma_max}"
+        );
         assert!(solid.is_broken(b.link));
         assert!(report.energies.dissipated > 0.0);
         assert_eq!(solid.wet_surface().revision, rev0 + 1);

@@ -112,3 +112,19 @@ fn max_dt_respects_the_displacement_cap_and_rotation_limit() {
     let dt = solid.max_dt(f64::INFINITY);
     assert!(dt <= std::f64::consts::PI / 8.0 / 1000.0 + 1e-15);
 }
+
+#[test]
+fn non_finite_loads_are_reported_as_data_naming_the_particle() {
+    let mut solid = pair();
+    solid.begin_step(1e-5);
+    solid.trial(&[0.0, 0.0, f64::NAN, 0.0], &[0.0, 0.0]);
+    let report = solid.commit();
+    assert!(
+        report.diagnostics.iter().any(|d| matches!(
+            d,
+            Diagnostic::NonFinite { particle, .. } if *particle == ParticleId(1)
+        )),
+        "{:?}",
+        report.diagnostics
+    );
+}
