@@ -4,6 +4,7 @@
 //!
 //! - [`dem`]: the pure DEM core (no IO, no clock).
 //! - [`node`]: the node loop over any transport; [`double`]: the prescribed double.
+//! - [`output`]: particle CSV and VTK writers.
 
 #![warn(missing_docs)]
 
@@ -12,3 +13,4 @@ pub mod cli;
 pub mod dem;
 pub mod double;
 pub mod node;
+pub mod output;

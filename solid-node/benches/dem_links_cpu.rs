@@ -1,0 +1,91 @@
+//! Link evaluations per CPU-second, 1 and 2 threads, measured with the process CPU time from
+//! `/proc/self/stat` (utime + stime) as well as wall time. On a loaded shared machine wall time
+//! says little; CPU time per link still gives the cost per core, and the ratio of CPU times
+//! gives the parallel overhead.
+//!
+//! Run: `cargo bench -p solid-node --no-default-features --bench dem_links_cpu`.
+
+use std::time::Instant;
+
+use protocol::scene::{BodyConfig, Motion, Shape, SolidConfig};
+use solid_node::dem::{ParticleId, Solid};
+
+fn lattice(threads: usize) -> Solid {
+    let cfg = SolidConfig {
+        node: "real".into(),
+        density: Some(1000.0),
+        young: Some(1e8),
+        poisson: Some(0.3),
+        fracture: None,
+        gravity: None,
+        bodies: vec![BodyConfig {
+            shape: Shape::Box {
+                center: vec![0.0, 0.0, 0.0],
+                size: vec![4.0, 2.0, 1.0],
+            },
+            divisions: vec![40, 20, 10],
+            motion: Motion::Free,
+        }],
+        constraints: vec![],
+        prescribed: None,
+    };
+    let mut solid = Solid::from_scene(&cfg, 3, threads).expect("bench scene builds");
+    let mut seed = 0x1234_5678_9abc_def0u64;
+    for p in 0..solid.n_particles() {
+        let mut v = [0.0; 3];
+        for c in &mut v {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            *c = 0.1 * ((seed >> 11) as f64 / (1u64 << 52) as f64 - 1.0);
+        }
+        solid.set_velocity(ParticleId(p as u32), &v);
+    }
+    let dt = 0.5 * solid.max_dt(f64::INFINITY);
+    for _ in 0..3 {
+        solid.step_free(dt);
+    }
+    solid
+}
+
+/// Process CPU time [s] (all threads), from `/proc/self/stat` fields 14 and 15 (clock ticks).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks = |k: usize| {
+        fields
+            .get(k)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    // Fields after the command name start at field 3 (state): utime is 14, stime 15.
+    (ticks(14 - 3) + ticks(15 - 3)) / 100.0
+}
+
+fn main() {
+    let mut cpu_1 = 0.0;
+    for threads in [1usize, 2] {
+        let mut solid = lattice(threads);
+        let n_links = solid.model().links.len() as f64;
+        let (wall0, cpu0) = (Instant::now(), cpu_seconds());
+        let mut evaluations = 0u64;
+        while wall0.elapsed().as_secs_f64() < 5.0 {
+            std::hint::black_box(solid.recompute_internal_forces());
+            evaluations += 1;
+        }
+        let wall = wall0.elapsed().as_secs_f64();
+        let cpu = cpu_seconds() - cpu0;
+        let links = evaluations as f64 * n_links;
+        if threads == 1 {
+            cpu_1 = cpu / links;
+        }
+        println!(
+            "{threads} thread(s): {n_links} links, {evaluations} evaluations; wall {:.3e} links/s; CPU {:.3e} links per CPU-second; CPU per link {:.1} ns; CPU(1)/CPU({threads}) = {:.3}",
+            links / wall,
+            links / cpu,
+            1e9 * cpu / links,
+            cpu_1 / (cpu / links)
+        );
+    }
+}

@@ -1,0 +1,319 @@
+//! Particle lattices built from the scene shapes: boxes cut into cuboids, a 2-D ring and a 3-D
+//! tube one particle thick, and explicit particle lists.
+//!
+//! A lattice is pure geometry: shared vertices (deduplicated per body, so two bodies never
+//! share a vertex and are never linked), and per particle its faces as outward vertex loops
+//! (3-D) or its polygon's edges in counter-clockwise order (2-D).
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector3;
+use protocol::scene::{BodyConfig, Motion, Shape};
+
+use crate::dem::geometry::convex_hull_faces;
+
+/// The particles of all bodies before any mechanics.
+#[derive(Clone, Debug, Default)]
+pub struct Lattice {
+    /// Spatial dimension, 2 or 3.
+    pub dim: usize,
+    /// Vertex positions [m] (2-D: z = 0).
+    pub vertices: Vec<Vector3<f64>>,
+    /// The particles.
+    pub particles: Vec<ParticleShape>,
+}
+
+/// One particle's shape.
+#[derive(Clone, Debug)]
+pub struct ParticleShape {
+    /// Index of its body in the scene.
+    pub body: u32,
+    /// 3-D: outward faces as vertex loops; 2-D: edges `[a, b]` running counter-clockwise.
+    pub faces: Vec<Vec<u32>>,
+    /// Motion of its body.
+    pub motion: Motion,
+}
+
+/// Deduplicates vertices of one body by their exact quantised coordinates.
+struct VertexPool<'a> {
+    lattice: &'a mut Lattice,
+    index: BTreeMap<[i64; 3], u32>,
+    quantum: f64,
+}
+
+impl VertexPool<'_> {
+    fn id(&mut self, p: Vector3<f64>) -> u32 {
+        let key = [
+            (p.x / self.quantum).round() as i64,
+            (p.y / self.quantum).round() as i64,
+            (p.z / self.quantum).round() as i64,
+        ];
+        let next = self.lattice.vertices.len() as u32;
+        *self.index.entry(key).or_insert_with(|| {
+            self.lattice.vertices.push(p);
+            next
+        })
+    }
+}
+
+/// Outward loops of a hexahedron from its corners `c[i + 2j + 4k]` in a right-handed (i, j, k)
+/// order (same as an axis-aligned cube with corner `(x_i, y_j, z_k)`).
+fn hexahedron_faces(c: [u32; 8]) -> Vec<Vec<u32>> {
+    let p = |i: usize, j: usize, k: usize| c[i + 2 * j + 4 * k];
+    vec![
+        vec![p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0)],
+        vec![p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1)],
+        vec![p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1)],
+        vec![p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0)],
+        vec![p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0)],
+        vec![p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1)],
+    ]
+}
+
+fn polygon_edges(ids: &[u32]) -> Vec<Vec<u32>> {
+    (0..ids.len())
+        .map(|k| vec![ids[k], ids[(k + 1) % ids.len()]])
+        .collect()
+}
+
+fn divisions(body: &BodyConfig, n: usize, what: &str) -> Result<Vec<usize>, String> {
+    if body.divisions.is_empty() {
+        return Ok(vec![1; n]);
+    }
+    if body.divisions.len() != n || body.divisions.contains(&0) {
+        return Err(format!(
+            "{what}: expected {n} positive divisions, found {:?}",
+            body.divisions
+        ));
+    }
+    Ok(body.divisions.iter().map(|&d| d as usize).collect())
+}
+
+/// Builds the lattice of all bodies of a `dim`-dimensional scene.
+pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, String> {
+    if dim != 2 && dim != 3 {
+        return Err(format!("the solid needs a 2-D or 3-D scene, found {dim}-D"));
+    }
+    let mut lattice = Lattice {
+        dim,
+        ..Lattice::default()
+    };
+    for (body_idx, body) in bodies.iter().enumerate() {
+        let scale = body_scale(&body.shape);
+        let mut shapes = Vec::new();
+        {
+            let mut pool = VertexPool {
+                lattice: &mut lattice,
+                index: BTreeMap::new(),
+                quantum: 1e-9 * scale.max(1e-300),
+            };
+            add_body(&mut pool, body, dim, &mut shapes)
+                .map_err(|e| format!("solid.bodies[{body_idx}]: {e}"))?;
+        }
+        for faces in shapes {
+            lattice.particles.push(ParticleShape {
+                body: body_idx as u32,
+                faces,
+                motion: body.motion.clone(),
+            });
+        }
+    }
+    if lattice.particles.is_empty() {
+        return Err("the solid has no particles".to_string());
+    }
+    Ok(lattice)
+}
+
+fn body_scale(shape: &Shape) -> f64 {
+    match shape {
+        Shape::Box { size, .. } => size.iter().fold(0.0, |a: f64, b| a.max(b.abs())),
+        Shape::Ring { outer_radius, .. } => *outer_radius,
+        Shape::Tube {
+            outer_radius,
+            length,
+            ..
+        } => outer_radius.max(*length),
+        Shape::Particles(list) => list
+            .iter()
+            .flat_map(|p| p.vertices.iter())
+            .flat_map(|v| v.iter())
+            .fold(0.0, |a: f64, b| a.max(b.abs()))
+            .max(1.0),
+    }
+}
+
+fn point(coords: &[f64]) -> Vector3<f64> {
+    Vector3::new(
+        coords[0],
+        coords[1],
+        if coords.len() > 2 { coords[2] } else { 0.0 },
+    )
+}
+
+fn add_body(
+    pool: &mut VertexPool<'_>,
+    body: &BodyConfig,
+    dim: usize,
+    out: &mut Vec<Vec<Vec<u32>>>,
+) -> Result<(), String> {
+    match &body.shape {
+        Shape::Box { center, size } => {
+            if center.len() != dim || size.len() != dim || size.iter().any(|s| *s <= 0.0) {
+                return Err(format!(
+                    "box: expected {dim} coordinates and positive sizes"
+                ));
+            }
+            let n = divisions(body, dim, "box")?;
+            let lower: Vec<f64> = (0..dim).map(|a| center[a] - 0.5 * size[a]).collect();
+            let at = |a: usize, i: usize| lower[a] + size[a] * i as f64 / n[a] as f64;
+            if dim == 2 {
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let ids = [
+                            pool.id(Vector3::new(at(0, i), at(1, j), 0.0)),
+                            pool.id(Vector3::new(at(0, i + 1), at(1, j), 0.0)),
+                            pool.id(Vector3::new(at(0, i + 1), at(1, j + 1), 0.0)),
+                            pool.id(Vector3::new(at(0, i), at(1, j + 1), 0.0)),
+                        ];
+                        out.push(polygon_edges(&ids));
+                    }
+                }
+            } else {
+                for k in 0..n[2] {
+                    for j in 0..n[1] {
+                        for i in 0..n[0] {
+                            let mut c = [0u32; 8];
+                            for (corner, slot) in c.iter_mut().enumerate() {
+                                let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, corner >> 2);
+                                *slot = pool.id(Vector3::new(
+                                    at(0, i + di),
+                                    at(1, j + dj),
+                                    at(2, k + dk),
+                                ));
+                            }
+                            out.push(hexahedron_faces(c));
+                        }
+                    }
+                }
+            }
+        }
+        Shape::Ring {
+            center,
+            inner_radius,
+            outer_radius,
+        } => {
+            if dim != 2
+                || center.len() != 2
+                || !(0.0 < *inner_radius && inner_radius < outer_radius)
+            {
+                return Err("ring: a 2-D centre and 0 < inner_radius < outer_radius".into());
+            }
+            let n = divisions(body, 1, "ring")?[0];
+            if n < 3 {
+                return Err(format!("ring: at least 3 particles around, found {n}"));
+            }
+            let c = point(center);
+            let on = |r: f64, k: usize| {
+                let phi = 2.0 * std::f64::consts::PI * (k % n) as f64 / n as f64;
+                c + Vector3::new(r * phi.cos(), r * phi.sin(), 0.0)
+            };
+            for k in 0..n {
+                // Counter-clockwise: inner k, outer k, outer k+1, inner k+1.
+                let ids = [
+                    pool.id(on(*inner_radius, k)),
+                    pool.id(on(*outer_radius, k)),
+                    pool.id(on(*outer_radius, k + 1)),
+                    pool.id(on(*inner_radius, k + 1)),
+                ];
+                out.push(polygon_edges(&ids));
+            }
+        }
+        Shape::Tube {
+            center,
+            axis,
+            inner_radius,
+            outer_radius,
+            length,
+        } => {
+            if dim != 3
+                || center.len() != 3
+                || *axis > 2
+                || *inner_radius <= 0.0
+                || inner_radius >= outer_radius
+                || *length <= 0.0
+            {
+                return Err("tube: a 3-D centre, axis 0..=2, 0 < inner < outer, length > 0".into());
+            }
+            let nd = divisions(body, 2, "tube")?;
+            let (n_around, n_along) = (nd[0], nd[1]);
+            if n_around < 3 {
+                return Err(format!(
+                    "tube: at least 3 particles around, found {n_around}"
+                ));
+            }
+            let a = *axis as usize;
+            // (u, w, e) right-handed: e = u × w.
+            let e = Vector3::from_fn(|r, _| if r == a { 1.0 } else { 0.0 });
+            let u = Vector3::from_fn(|r, _| if r == (a + 1) % 3 { 1.0 } else { 0.0 });
+            let w = e.cross(&u);
+            let c = point(center);
+            let at = |r: f64, k: usize, l: usize| {
+                let phi = 2.0 * std::f64::consts::PI * (k % n_around) as f64 / n_around as f64;
+                let z = -0.5 * length + length * l as f64 / n_along as f64;
+                c + u * (r * phi.cos()) + w * (r * phi.sin()) + e * z
+            };
+            for l in 0..n_along {
+                for k in 0..n_around {
+                    let mut corners = [0u32; 8];
+                    for (corner, slot) in corners.iter_mut().enumerate() {
+                        let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, corner >> 2);
+                        let r = if di == 0 {
+                            *inner_radius
+                        } else {
+                            *outer_radius
+                        };
+                        *slot = pool.id(at(r, k + dj, l + dk));
+                    }
+                    out.push(hexahedron_faces(corners));
+                }
+            }
+        }
+        Shape::Particles(list) => {
+            for (p_idx, spec) in list.iter().enumerate() {
+                if spec.vertices.iter().any(|v| v.len() != dim) {
+                    return Err(format!("particle {p_idx}: vertices need {dim} coordinates"));
+                }
+                let pts: Vec<Vector3<f64>> = spec.vertices.iter().map(|v| point(v)).collect();
+                if dim == 2 {
+                    if pts.len() < 3 {
+                        return Err(format!("particle {p_idx}: a polygon needs 3 vertices"));
+                    }
+                    let mut signed = 0.0;
+                    for k in 0..pts.len() {
+                        let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
+                        signed += a.x * b.y - a.y * b.x;
+                    }
+                    if signed <= 0.0 {
+                        return Err(format!(
+                            "particle {p_idx}: vertices must run counter-clockwise (signed area {})",
+                            0.5 * signed
+                        ));
+                    }
+                    let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
+                    out.push(polygon_edges(&ids));
+                } else {
+                    let faces =
+                        convex_hull_faces(&pts).map_err(|e| format!("particle {p_idx}: {e}"))?;
+                    let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
+                    out.push(
+                        faces
+                            .into_iter()
+                            .map(|f| f.into_iter().map(|v| ids[v as usize]).collect())
+                            .collect(),
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}

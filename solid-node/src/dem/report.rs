@@ -1,0 +1,125 @@
+//! What a step returns: diagnostics as data (never a panic), broken links, energies, momentum.
+
+use serde::{Deserialize, Serialize};
+
+use crate::dem::model::{LinkId, ParticleId};
+
+/// Numerical trouble found at the end of a step (the step is still committed; the caller decides).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Diagnostic {
+    /// A position, velocity, orientation or momentum is NaN or infinite.
+    NonFinite {
+        /// The particle.
+        particle: ParticleId,
+        /// Which quantity (`"position"`, `"velocity"`, `"orientation"`, `"angular momentum"`).
+        quantity: String,
+    },
+    /// The particle moved more than its size h_s in one step (003 §2.2).
+    DisplacementTooLarge {
+        /// The particle.
+        particle: ParticleId,
+        /// Displacement over the step [m].
+        displacement: f64,
+        /// Its size h_s [m].
+        size: f64,
+    },
+    /// The particle turned more than π/8 in one step (003 §2.2).
+    RotationTooLarge {
+        /// The particle.
+        particle: ParticleId,
+        /// Rotation angle over the step [rad].
+        angle: f64,
+    },
+    /// Two linked particles came closer than half their rest distance (deep interpenetration).
+    Interpenetration {
+        /// The link.
+        link: LinkId,
+        /// Its particles.
+        particles: [ParticleId; 2],
+        /// Current centre distance [m].
+        distance: f64,
+        /// Rest distance [m].
+        rest_distance: f64,
+    },
+    /// The step exceeds the elastic stability bound of the explicit scheme.
+    DtAboveElasticLimit {
+        /// Step used [s].
+        dt: f64,
+        /// Bound [s] (see [`crate::dem::Solid::elastic_dt_limit`]).
+        limit: f64,
+        /// The particle whose stiffness sets the bound.
+        particle: ParticleId,
+    },
+    /// The RATTLE fixed point did not converge.
+    RattleNotConverged {
+        /// The particle.
+        particle: ParticleId,
+        /// Last correction of the fixed point.
+        residual: f64,
+    },
+}
+
+/// A link broken during a step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BrokenLink {
+    /// The link.
+    pub link: LinkId,
+    /// Its particles.
+    pub particles: [ParticleId; 2],
+    /// Relative elongation `(|X_I − X_J| − D⁰)/D⁰` when it broke [-].
+    pub elongation: f64,
+}
+
+/// Energies of the solid [J] (2-D: per unit depth).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Energies {
+    /// `Σ ½ m |V|²`.
+    pub kinetic_translation: f64,
+    /// `Σ ½ ω·I ω`.
+    pub kinetic_rotation: f64,
+    /// Elastic energy of the unbroken links (potential of eq. (29)–(30)).
+    pub elastic: f64,
+    /// Elastic energy released by broken links, counted as dissipated.
+    pub dissipated: f64,
+    /// Potential of gravity `−Σ m g·X` (free particles).
+    pub gravity: f64,
+    /// Work of the external loads so far, `Σ F·ΔX + τ·Δθ` with the loads held over each step.
+    pub external_work: f64,
+}
+
+impl Energies {
+    /// Kinetic + elastic + dissipated + gravity potential (conserved without external loads).
+    pub fn total(&self) -> f64 {
+        self.kinetic_translation
+            + self.kinetic_rotation
+            + self.elastic
+            + self.dissipated
+            + self.gravity
+    }
+}
+
+/// Linear and angular momentum of the solid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Momentum {
+    /// `Σ m V` [kg m/s] (2-D: z = 0).
+    pub linear: [f64; 3],
+    /// `Σ X × m V + Q I ω` about the origin [kg m²/s] (2-D: only z).
+    pub angular: [f64; 3],
+}
+
+/// Result of [`crate::dem::Solid::commit`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepReport {
+    /// Steps committed so far (this one included).
+    pub step: u64,
+    /// Simulated time after the step [s].
+    pub time: f64,
+    /// Links broken in this step.
+    pub broken_links: Vec<BrokenLink>,
+    /// Trouble found, empty when all is well.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Energies after the step.
+    pub energies: Energies,
+    /// Wet-surface revision after the step.
+    pub wet_revision: u64,
+}

@@ -1,0 +1,187 @@
+//! Unit tests of the DEM kernels: geometry, link-force gradients, RATTLE, wet surface.
+
+use nalgebra::Vector3;
+
+use crate::dem::geometry::{face_moments, polyhedron_mass};
+
+#[test]
+fn unit_cube_mass_properties() {
+    let v: Vec<Vector3<f64>> = (0..8)
+        .map(|c| Vector3::new((c & 1) as f64, ((c >> 1) & 1) as f64, (c >> 2) as f64))
+        .collect();
+    let faces = vec![
+        vec![0, 4, 6, 2],
+        vec![1, 3, 7, 5],
+        vec![0, 1, 5, 4],
+        vec![2, 6, 7, 3],
+        vec![0, 2, 3, 1],
+        vec![4, 5, 7, 6],
+    ];
+    let m = polyhedron_mass(&v, &faces);
+    assert!((m.volume - 1.0).abs() < 1e-14);
+    assert!((m.centroid - Vector3::new(0.5, 0.5, 0.5)).norm() < 1e-14);
+    assert!((m.second_moment[(0, 0)] - 1.0 / 12.0).abs() < 1e-14);
+    assert!(m.second_moment[(0, 1)].abs() < 1e-14);
+    let f = face_moments(&faces[1].iter().map(|&i| v[i as usize]).collect::<Vec<_>>());
+    assert!((f.area - 1.0).abs() < 1e-14);
+    assert!((f.normal - Vector3::x()).norm() < 1e-14);
+    assert!((f.i_s - 1.0 / 12.0).abs() < 1e-14 && (f.i_t - 1.0 / 12.0).abs() < 1e-14);
+}
+
+use protocol::scene::{BodyConfig, Motion, Shape, SolidConfig};
+
+use crate::dem::rattle::dmv_drift;
+use crate::dem::{ParticleId, Solid};
+
+fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
+    let (center, size) = if dim == 3 {
+        (vec![0.0, 0.0, 0.0], vec![0.3, 0.2, 0.1])
+    } else {
+        (vec![0.0, 0.0], vec![0.3, 0.2])
+    };
+    SolidConfig {
+        node: "real".into(),
+        density: Some(1000.0),
+        young: Some(1e6),
+        poisson: Some(poisson),
+        fracture: None,
+        gravity: None,
+        bodies: vec![BodyConfig {
+            shape: Shape::Box { center, size },
+            divisions,
+            motion: Motion::Free,
+        }],
+        constraints: vec![],
+        prescribed: None,
+    }
+}
+
+/// Deterministic pseudo-random numbers in [-1, 1) (xorshift, seeded).
+fn rng(seed: &mut u64) -> f64 {
+    *seed ^= *seed << 13;
+    *seed ^= *seed >> 7;
+    *seed ^= *seed << 17;
+    (*seed >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+fn rotate_particle(solid: &mut Solid, dim: usize, p: usize, axis: usize, angle: f64) {
+    let (_, rot) = solid.pose_mut_for_tests();
+    if dim == 2 {
+        rot[p][0] += angle;
+    } else {
+        let r = rot[p];
+        let q = nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+            r[0], r[1], r[2], r[3],
+        ));
+        let mut ax = Vector3::zeros();
+        ax[axis] = 1.0;
+        let dq = nalgebra::UnitQuaternion::from_scaled_axis(ax * angle);
+        let qn = dq * q;
+        rot[p] = [qn.w, qn.i, qn.j, qn.k];
+    }
+}
+
+/// Forces and torques are the exact negative gradient of the elastic energy (eq. (29)–(30)
+/// read as in `link_force.rs`), ν ≠ 0 included, away from the rest state.
+fn check_gradient(dim: usize, divisions: Vec<u32>) {
+    let mut solid = Solid::from_scene(&box_config(dim, divisions, 0.3), dim, 1).unwrap();
+    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+    let n = solid.n_particles();
+    for p in 0..n {
+        for a in 0..dim {
+            let d = 0.004 * rng(&mut seed);
+            solid.pose_mut_for_tests().0[p][a] += d;
+        }
+        for a in 0..(if dim == 3 { 3 } else { 1 }) {
+            let ang = 0.05 * rng(&mut seed);
+            rotate_particle(&mut solid, dim, p, if dim == 3 { a } else { 2 }, ang);
+        }
+    }
+    let e0 = solid.recompute_for_tests();
+    assert!(e0 > 0.0);
+    // NOTE: the FD error is round-off, ε E / h ≈ 1e-16 · e0 / 1e-6.
+    let h = 1e-6;
+    let mut worst: f64 = 0.0;
+    let mut scale: f64 = 0.0;
+    for p in 0..n {
+        // Forces at the unperturbed configuration.
+        solid.recompute_for_tests();
+        let f = solid.internal_force(ParticleId(p as u32));
+        let t = solid.internal_torque(ParticleId(p as u32));
+        for (a, f_a) in f.iter().enumerate().take(dim) {
+            solid.pose_mut_for_tests().0[p][a] += h;
+            let ep = solid.recompute_for_tests();
+            solid.pose_mut_for_tests().0[p][a] -= 2.0 * h;
+            let em = solid.recompute_for_tests();
+            solid.pose_mut_for_tests().0[p][a] += h;
+            let fd = -(ep - em) / (2.0 * h);
+            worst = worst.max((fd - f_a).abs());
+            scale = scale.max(f_a.abs());
+        }
+        let axes: Vec<usize> = if dim == 3 { vec![0, 1, 2] } else { vec![2] };
+        for a in axes {
+            rotate_particle(&mut solid, dim, p, a, h);
+            let ep = solid.recompute_for_tests();
+            rotate_particle(&mut solid, dim, p, a, -2.0 * h);
+            let em = solid.recompute_for_tests();
+            rotate_particle(&mut solid, dim, p, a, h);
+            let fd = -(ep - em) / (2.0 * h);
+            worst = worst.max((fd - t[a]).abs() / 0.1);
+            scale = scale.max(t[a].abs() / 0.1);
+        }
+    }
+    solid.recompute_for_tests();
+    assert!(
+        worst < 1e-6 * scale,
+        "gradient mismatch {worst:e} vs scale {scale:e}"
+    );
+}
+
+#[test]
+fn link_forces_are_the_energy_gradient_3d() {
+    check_gradient(3, vec![3, 2, 2]);
+}
+
+#[test]
+fn link_forces_are_the_energy_gradient_2d() {
+    check_gradient(2, vec![3, 2]);
+}
+
+#[test]
+fn dmv_increment_is_orthogonal_and_solves_the_map() {
+    let inertia = [0.345, 0.653, 1.0];
+    let m = Vector3::new(1.1f64.cos(), 0.2, 1.1f64.sin());
+    let h = 0.1;
+    let drift = dmv_drift(&m, &inertia, h);
+    let om = drift.increment.to_rotation_matrix().into_inner();
+    let orth = (om.transpose() * om - nalgebra::Matrix3::identity())
+        .abs()
+        .max();
+    assert!(orth < 1e-15, "orthogonality {orth:e}");
+    let d = nalgebra::Matrix3::from_diagonal(&Vector3::new(
+        0.5 * (inertia[1] + inertia[2] - inertia[0]),
+        0.5 * (inertia[2] + inertia[0] - inertia[1]),
+        0.5 * (inertia[0] + inertia[1] - inertia[2]),
+    ));
+    let lhs = om * d - d * om.transpose();
+    let rhs = m.cross_matrix() * h;
+    assert!((lhs - rhs).abs().max() < 1e-15);
+}
+
+#[test]
+fn forces_and_energy_vanish_at_rest() {
+    for dim in [2usize, 3] {
+        let divisions = if dim == 3 { vec![3, 2, 2] } else { vec![3, 2] };
+        let mut solid = Solid::from_scene(&box_config(dim, divisions, 0.3), dim, 1).unwrap();
+        let e = solid.recompute_for_tests();
+        assert!(e.abs() < 1e-20, "rest energy {e}");
+        for p in 0..solid.n_particles() {
+            let f = solid.internal_force(ParticleId(p as u32));
+            let t = solid.internal_torque(ParticleId(p as u32));
+            assert!(
+                f.iter().chain(t.iter()).all(|c| c.abs() < 1e-9),
+                "{f:?} {t:?}"
+            );
+        }
+    }
+}
