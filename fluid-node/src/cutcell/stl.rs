@@ -1,0 +1,1 @@
+//! STL and loop-CSV readers (placeholder).
