@@ -40,7 +40,8 @@ pub struct CutDiagnostics {
     /// Elements skipped: an index out of range or a non-finite coordinate.
     pub n_skipped_elements: usize,
     /// Largest distance of a face fraction entering an uncut cell from 0 or 1 beyond
-    /// [`SNAP_TOLERANCE`] (0 for a closed surface; of order 1 for an open or self-overlapping one).
+    /// [`SNAP_TOLERANCE`], or largest |λ| left beyond the last piece of a row (both 0 up to
+    /// round-off for a closed surface; of order 1 for an open one).
     pub max_uncut_defect: f64,
 }
 
@@ -261,7 +262,7 @@ pub(crate) fn other_axes(axis: usize) -> (usize, usize) {
     }
 }
 
-/// Builds the sweep records of axis `axis` from `pieces` (rows in the domain, positions `-1..n`).
+/// Builds the sweep records of axis `axis` from `pieces` (rows in the domain, positions `-1..=n`).
 pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records: &mut Vec<Record>) {
     records.clear();
     let (b, c) = other_axes(axis);
@@ -269,7 +270,7 @@ pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records:
     let n = grid.cells[axis] as i32;
     for (order, piece) in pieces.iter().enumerate() {
         let cell = piece.cell;
-        if cell[axis] >= n
+        if cell[axis] > n
             || cell[b] < 0
             || cell[b] >= grid.cells[b] as i32
             || cell[c] < 0

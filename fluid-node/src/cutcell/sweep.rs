@@ -20,7 +20,7 @@
 pub(crate) struct Record {
     /// Row id (linear index over the two other axes, in-domain).
     pub(crate) row: u64,
-    /// Extended position along the axis (`-1..n`).
+    /// Extended position along the axis (`-1..=n`; slab `n` only closes the row).
     pub(crate) pos: i32,
     /// Piece number (tie-break that makes the sort total, hence the sums deterministic).
     pub(crate) order: u32,
@@ -49,8 +49,8 @@ pub(crate) struct SweepSinks<F, C> {
 ///
 /// `snap_tol`: when given, the running fraction entering an uncut cell is rounded to the nearest
 /// integer if within the tolerance (it is 0 or 1 in exact arithmetic for a closed surface); the
-/// largest distance to an integer met there is returned (an open or overlapping surface shows up
-/// as a defect of order one).
+/// largest distance to an integer met there, and the largest |λ| left at the end of a row (0 for a
+/// closed surface), are returned: an open surface shows up as a defect of order one.
 ///
 /// NOTE: snapping stops the round-off of the running sum from drifting along long rows; it moves
 /// λ by at most `snap_tol`, far below any physical scale, and keeps uncovered/covered cells exact.
@@ -104,7 +104,7 @@ where
                     max_defect = max_defect.max(defect);
                 }
             }
-            if pos >= 0 {
+            if pos >= 0 && pos < n {
                 (sinks.cell)(row, pos, moment, lambda);
             }
             next = pos + 1;
@@ -113,6 +113,12 @@ where
         fill(row, next, n, lambda, sinks);
         if lambda != 0.0 && next <= n {
             (sinks.face)(row, n, lambda);
+        }
+        // Beyond the last piece (slab `n` included) a closed surface leaves nothing.
+        if let Some(tol) = snap_tol
+            && lambda.abs() > tol
+        {
+            max_defect = max_defect.max(lambda.abs());
         }
     }
     max_defect
