@@ -9,5 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod cutcell;
+#[cfg(feature = "node")]
+pub mod cutcell_cmd;
 pub mod fv;
 pub mod grid;
