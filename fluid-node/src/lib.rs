@@ -14,6 +14,8 @@
 #[cfg(feature = "node")]
 pub mod cli;
 pub mod cutcell;
+#[cfg(feature = "node")]
+pub mod cutcell_cmd;
 pub mod double;
 pub mod fv;
 pub mod grid;

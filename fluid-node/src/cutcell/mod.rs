@@ -1,1 +1,57 @@
-//! Pure cut-cell geometry (no IO, no clock).
+//! Pure cut-cell geometry of the embedded boundary (no IO, no clock).
+//!
+//! Given a Cartesian [`Grid`](crate::grid::Grid) (2 or 3 active axes) and the wet surface of the
+//! solid (oriented triangles in 3-D, oriented segments of closed loops in 2-D, normals out of the
+//! solid), this module computes, exactly up to round-off:
+//!
+//! 1. [`compute`]: the solid volume fraction Λ of every cell, the solid area fraction λ of every
+//!    face, and the sub-faces (element ∩ cell) with area, unit normal and centroid;
+//! 2. by construction, the geometric conservation identities (19)–(21) of Puscas et al. 2015
+//!    (paper 003): in every cell and along every axis `a`,
+//!    `A_a (λ_{a,+} − λ_{a,−}) = − Σ_{sub-faces in the cell} area · n_a`;
+//! 3. [`swept_volumes`]: the signed volume swept by every element between two positions, split
+//!    among the cells (paper 000 eq. 12), with `Σ swept = (Λ^{n+1} − Λ^n) V` in every cell;
+//! 4. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
+//!
+//! # Method
+//!
+//! Every element is clipped into the cells of an *extended* grid (one unbounded slab beyond each
+//! side of the domain) by successive axis-aligned splits ([`clip`]), with a fixed tie rule (a point
+//! on a grid plane belongs to the cell above it) and canonical edge intersections. From the
+//! pieces, row sweeps ([`sweep`]) integrate the divergence theorem: λ along each axis from the
+//! projected areas, Λ along the last axis from the column moments. Only cells holding pieces and
+//! covered cells (Λ = 1, filled by the sweep of their column) are visited, so the cost grows with
+//! the number of cut cells, not with the grid. The surface must be closed (possibly crossing the
+//! domain boundary; several bodies; internal faces carried on both sides cancel); an open surface
+//! is reported by [`CutDiagnostics::max_uncut_defect`].
+//!
+//! # Example
+//!
+//! ```
+//! use fluid_node::cutcell::{CutGeometry, Surface, compute};
+//! use fluid_node::grid::Grid;
+//!
+//! // The unit square [0.25, 0.75]² (counter-clockwise) on a 4 × 4 grid of [0, 1]².
+//! let grid = Grid::new(&[0.0, 0.0], &[1.0, 1.0], &[4, 4]).unwrap();
+//! let vertices = [0.25, 0.25, 0.75, 0.25, 0.75, 0.75, 0.25, 0.75];
+//! let elements = [0, 1, 1, 2, 2, 3, 3, 0];
+//! let surface = Surface { dim: 2, vertices: &vertices, elements: &elements, element_particle: &[] };
+//! let mut geometry = CutGeometry::new();
+//! compute(&grid, &surface, &mut geometry);
+//! assert!((geometry.solid_volume(&grid) - 0.25).abs() < 1e-15);
+//! assert_eq!(geometry.solid_fraction[grid.index(1, 1, 0)], 1.0);
+//! ```
+
+pub(crate) mod clip;
+mod geometry;
+mod measure;
+pub mod stl;
+mod surface;
+pub(crate) mod sweep;
+mod swept;
+
+pub use geometry::{
+    CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
+};
+pub use surface::Surface;
+pub use swept::{SweptEntry, SweptVolumes, swept_volumes};

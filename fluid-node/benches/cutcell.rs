@@ -1,0 +1,150 @@
+//! Cut-cell geometry of a polyhedral sphere as the grid is refined: the cost must follow the
+//! number of cut cells (∝ N^(2/3) for N cells), not the grid.
+//!
+//! `cargo bench -p fluid-node --no-default-features --bench cutcell` runs the criterion groups
+//! (`compute` and `swept`, throughput in pieces = (triangle, cell) pairs) and then prints a
+//! summary table with the fitted exponent of time against N and the (triangle, cell) pairs per
+//! second. `CUTCELL_BENCH_MAX=128` caps the finest grid (default 256).
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use criterion::{BenchmarkId, Criterion, Throughput};
+use fluid_node::cutcell::{CutGeometry, Surface, SweptVolumes, compute, swept_volumes};
+use fluid_node::grid::Grid;
+
+/// UV sphere (outward) of radius `r` about `c`: `n_lat` bands, `n_lon` sectors.
+fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> (Vec<f64>, Vec<u32>) {
+    let mut vertices = vec![c[0], c[1], c[2] + r];
+    for i in 1..n_lat {
+        let theta = std::f64::consts::PI * i as f64 / n_lat as f64;
+        for j in 0..n_lon {
+            let phi = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
+            vertices.extend_from_slice(&[
+                c[0] + r * theta.sin() * phi.cos(),
+                c[1] + r * theta.sin() * phi.sin(),
+                c[2] + r * theta.cos(),
+            ]);
+        }
+    }
+    vertices.extend_from_slice(&[c[0], c[1], c[2] - r]);
+    let south = (vertices.len() / 3 - 1) as u32;
+    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
+    let mut elements = Vec::new();
+    for j in 0..n_lon {
+        elements.extend_from_slice(&[0, ring(1, j), ring(1, j + 1)]);
+        for i in 1..n_lat - 1 {
+            let (a, b, cc, d) = (
+                ring(i, j),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+                ring(i, j + 1),
+            );
+            elements.extend_from_slice(&[a, b, cc, a, cc, d]);
+        }
+        elements.extend_from_slice(&[ring(n_lat - 1, j), south, ring(n_lat - 1, j + 1)]);
+    }
+    (vertices, elements)
+}
+
+fn resolutions() -> Vec<usize> {
+    let max: usize = std::env::var("CUTCELL_BENCH_MAX")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(256);
+    [32, 64, 128, 256]
+        .into_iter()
+        .filter(|&n| n <= max)
+        .collect()
+}
+
+/// Best wall time of `reps` calls [s].
+fn best_time(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..reps {
+        let t = Instant::now();
+        f();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    best
+}
+
+fn main() {
+    // NOTE: the mesh is fixed (≈ 7.2k triangles, edge ≈ 0.02) so that refining the grid only
+    // changes the number of cut cells; the sphere's centre is off the grid planes.
+    let (vertices, elements) = sphere([0.5013, 0.4987, 0.5021], 0.3, 60, 60);
+    let moved: Vec<f64> = vertices
+        .iter()
+        .enumerate()
+        .map(|(i, x)| x + [0.0011, -0.0007, 0.0009][i % 3])
+        .collect();
+    let surface = Surface {
+        dim: 3,
+        vertices: &vertices,
+        elements: &elements,
+        element_particle: &[],
+    };
+    let after = Surface {
+        vertices: &moved,
+        ..surface
+    };
+    let n_triangles = surface.n_elements();
+
+    let mut criterion = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(std::time::Duration::from_millis(300))
+        .measurement_time(std::time::Duration::from_secs(2))
+        .configure_from_args();
+    let mut rows = Vec::new();
+    for n in resolutions() {
+        let grid = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
+        let mut geometry = CutGeometry::new();
+        compute(&grid, &surface, &mut geometry);
+        let pieces = geometry.diagnostics.n_pieces as u64;
+        let mut group = criterion.benchmark_group("cutcell_sphere");
+        group.throughput(Throughput::Elements(pieces));
+        group.bench_function(BenchmarkId::new("compute", n), |b| {
+            b.iter(|| compute(&grid, black_box(&surface), &mut geometry))
+        });
+        let mut swept = SweptVolumes::new();
+        group.bench_function(BenchmarkId::new("swept", n), |b| {
+            b.iter(|| swept_volumes(&grid, black_box(&surface), &after, &mut swept))
+        });
+        group.finish();
+        let t_compute = best_time(5, || compute(&grid, &surface, &mut geometry));
+        let t_swept = best_time(3, || swept_volumes(&grid, &surface, &after, &mut swept));
+        rows.push((n, geometry.cut_cells.len(), pieces, t_compute, t_swept));
+    }
+    criterion.final_summary();
+
+    println!("\ncut-cell sphere, {n_triangles} triangles (best of repeated calls, buffers reused)");
+    println!(
+        "    n        N  cut cells    pieces  compute [ms]  swept [ms]  pieces/s  triangles/s"
+    );
+    for &(n, cut, pieces, t, ts) in &rows {
+        println!(
+            "{n:5} {:8} {cut:10} {pieces:9} {:13.3} {:11.3} {:9.3e} {:11.3e}",
+            n * n * n,
+            t * 1e3,
+            ts * 1e3,
+            pieces as f64 / t,
+            n_triangles as f64 / t,
+        );
+    }
+    if rows.len() >= 2 {
+        // Least-squares slope of log t against log N.
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|&(n, _, _, t, _)| (((n * n * n) as f64).ln(), t.ln()))
+            .collect();
+        let m = pts.len() as f64;
+        let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+        let (mx, my) = (sx / m, sy / m);
+        let num: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let den: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+        println!(
+            "fitted exponent of compute time vs N: {:.3} (cut cells: 2/3 = 0.667)",
+            num / den
+        );
+    }
+}

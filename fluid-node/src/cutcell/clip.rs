@@ -1,0 +1,249 @@
+//! Clipping of surface elements (convex polygons in 3-D, segments in 2-D) into the cells of an
+//! *extended* Cartesian grid.
+//!
+//! The extended grid adds one unbounded slab on each side of every active axis: along axis `a`,
+//! slab `-1` is `x < plane(0)`, slab `s` in `0..n` is `plane(s) <= x < plane(s + 1)` and slab `n`
+//! is `x >= plane(n)`. Pieces outside the domain are kept so that the column sweeps
+//! ([`crate::cutcell::sweep`]) can start from minus infinity, which makes bodies that cross the
+//! domain boundary exact.
+//!
+//! NOTE: tie-breaking. A point exactly on a grid plane belongs to the slab *above* it (half-open
+//! cells, as [`crate::grid::Grid::locate`]). A polygon is split only when it has vertices strictly
+//! on both sides of a plane; a polygon lying in a grid plane therefore belongs to the cell above
+//! that plane. Every comparison is made against the same plane value [`plane`], so a point is
+//! classified the same way by every element that contains it.
+//!
+//! NOTE: canonical intersections. The intersection of an edge with a plane is always interpolated
+//! from the endpoint with the smaller coordinate along the split axis, so the two elements sharing
+//! an edge (and an element and its reversed twin) compute bitwise identical cut points.
+
+use crate::grid::Grid;
+
+/// Most vertices a clipped polygon may hold. A triangle clipped by a box has at most 9; the margin
+/// absorbs near-degenerate round-off (a vertex beyond it is dropped and counted).
+pub(crate) const MAX_VERTICES: usize = 24;
+
+/// A convex polygon with a fixed capacity (no allocation).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Polygon {
+    /// Vertices [m]; only the first `n` are meaningful.
+    pub(crate) v: [[f64; 3]; MAX_VERTICES],
+    /// Number of vertices.
+    pub(crate) n: usize,
+}
+
+impl Polygon {
+    /// The empty polygon.
+    pub(crate) const EMPTY: Polygon = Polygon {
+        v: [[0.0; 3]; MAX_VERTICES],
+        n: 0,
+    };
+
+    /// A polygon from its vertices (at most [`MAX_VERTICES`]).
+    pub(crate) fn from_slice(vertices: &[[f64; 3]]) -> Polygon {
+        let mut poly = Polygon::EMPTY;
+        for v in vertices {
+            poly.push(*v);
+        }
+        poly
+    }
+
+    /// The vertices in use.
+    pub(crate) fn vertices(&self) -> &[[f64; 3]] {
+        &self.v[..self.n]
+    }
+
+    #[inline]
+    fn push(&mut self, x: [f64; 3]) {
+        if self.n < MAX_VERTICES {
+            self.v[self.n] = x;
+            self.n += 1;
+        }
+    }
+}
+
+/// Coordinate of grid plane `i` (0..=n) along `axis` [m]; the one formula used everywhere.
+#[inline]
+pub(crate) fn plane(grid: &Grid, axis: usize, i: i32) -> f64 {
+    grid.lower[axis] + f64::from(i) * grid.dx[axis]
+}
+
+/// Extended slab (`-1..=n`) holding coordinate `x` along `axis`, with the tie rule of the module.
+#[inline]
+pub(crate) fn slab(grid: &Grid, axis: usize, x: f64) -> i32 {
+    let n = grid.cells[axis] as i32;
+    let s = ((x - grid.lower[axis]) / grid.dx[axis]).floor();
+    let mut s = if s.is_nan() {
+        -1
+    } else {
+        s.clamp(-1.0, f64::from(n)) as i32
+    };
+    // NOTE: the division above may be off by one ulp near a plane; the comparisons below against
+    // the exact plane values decide.
+    while s >= 0 && x < plane(grid, axis, s) {
+        s -= 1;
+    }
+    while s < n && x >= plane(grid, axis, s + 1) {
+        s += 1;
+    }
+    s
+}
+
+/// Point on segment `p q` where coordinate `axis` equals `value`, interpolated from the endpoint
+/// with the smaller coordinate (canonical). Requires `p[axis]` and `q[axis]` strictly on both sides.
+#[inline]
+fn cut_point(p: &[f64; 3], q: &[f64; 3], axis: usize, value: f64) -> [f64; 3] {
+    let (lo, hi) = if p[axis] < q[axis] { (p, q) } else { (q, p) };
+    let t = (value - lo[axis]) / (hi[axis] - lo[axis]);
+    let mut x = [0.0; 3];
+    for d in 0..3 {
+        x[d] = lo[d] + t * (hi[d] - lo[d]);
+    }
+    x[axis] = value;
+    x
+}
+
+/// Splits `poly` by the plane `x[axis] = value` into the parts below and above (either may be empty).
+pub(crate) fn split_polygon(
+    poly: &Polygon,
+    axis: usize,
+    value: f64,
+    below: &mut Polygon,
+    above: &mut Polygon,
+) {
+    below.n = 0;
+    above.n = 0;
+    let verts = poly.vertices();
+    let any_below = verts.iter().any(|x| x[axis] < value);
+    let any_above = verts.iter().any(|x| x[axis] > value);
+    if !any_below {
+        *above = *poly;
+        return;
+    }
+    if !any_above {
+        *below = *poly;
+        return;
+    }
+    for i in 0..verts.len() {
+        let p = &verts[i];
+        let q = &verts[(i + 1) % verts.len()];
+        if p[axis] <= value {
+            below.push(*p);
+        }
+        if p[axis] >= value {
+            above.push(*p);
+        }
+        if (p[axis] < value && q[axis] > value) || (p[axis] > value && q[axis] < value) {
+            let x = cut_point(p, q, axis, value);
+            below.push(x);
+            above.push(x);
+        }
+    }
+}
+
+/// Clips a convex polygon into the extended cells of the first `grid.dim` axes, calling
+/// `emit(cell, piece)` for every piece with at least 3 vertices. `cell` holds extended slab
+/// indices (`-1..=n`); inactive axes are 0.
+pub(crate) fn clip_polygon(grid: &Grid, poly: &Polygon, emit: &mut impl FnMut([i32; 3], &Polygon)) {
+    peel(grid, 0, poly, [0; 3], emit);
+}
+
+fn peel(
+    grid: &Grid,
+    axis: usize,
+    poly: &Polygon,
+    mut cell: [i32; 3],
+    emit: &mut impl FnMut([i32; 3], &Polygon),
+) {
+    if poly.n < 3 {
+        return;
+    }
+    if axis == grid.dim {
+        emit(cell, poly);
+        return;
+    }
+    let (lo, hi) = slab_range(grid, axis, poly.vertices());
+    let mut rest = *poly;
+    let mut below = Polygon::EMPTY;
+    let mut above = Polygon::EMPTY;
+    for s in lo..hi {
+        split_polygon(
+            &rest,
+            axis,
+            plane(grid, axis, s + 1),
+            &mut below,
+            &mut above,
+        );
+        cell[axis] = s;
+        peel(grid, axis + 1, &below, cell, emit);
+        rest = above;
+    }
+    cell[axis] = hi;
+    peel(grid, axis + 1, &rest, cell, emit);
+}
+
+fn slab_range(grid: &Grid, axis: usize, verts: &[[f64; 3]]) -> (i32, i32) {
+    let mut x_min = f64::INFINITY;
+    let mut x_max = f64::NEG_INFINITY;
+    for x in verts {
+        x_min = x_min.min(x[axis]);
+        x_max = x_max.max(x[axis]);
+    }
+    (slab(grid, axis, x_min), slab(grid, axis, x_max))
+}
+
+/// Clips the segment `a -> b` (2-D, third coordinate 0) into extended cells, calling
+/// `emit(cell, a', b')` for each non-degenerate piece, orientation preserved.
+pub(crate) fn clip_segment(
+    grid: &Grid,
+    a: [f64; 3],
+    b: [f64; 3],
+    emit: &mut impl FnMut([i32; 3], [f64; 3], [f64; 3]),
+) {
+    peel_segment(grid, 0, a, b, [0; 3], emit);
+}
+
+fn peel_segment(
+    grid: &Grid,
+    axis: usize,
+    a: [f64; 3],
+    b: [f64; 3],
+    mut cell: [i32; 3],
+    emit: &mut impl FnMut([i32; 3], [f64; 3], [f64; 3]),
+) {
+    if a == b {
+        return;
+    }
+    if axis == grid.dim {
+        emit(cell, a, b);
+        return;
+    }
+    let (lo, hi) = slab_range(grid, axis, &[a, b]);
+    // Walk from the low end to the high end, then restore the orientation of each piece.
+    let forward = a[axis] <= b[axis];
+    let (mut start, end) = if forward { (a, b) } else { (b, a) };
+    cell[axis] = lo;
+    for s in lo..hi {
+        let value = plane(grid, axis, s + 1);
+        cell[axis] = s;
+        if end[axis] <= value {
+            // The rest ends on (or below) this plane: it lies in slab `s`.
+            break;
+        }
+        if start[axis] < value {
+            let x = cut_point(&start, &end, axis, value);
+            if forward {
+                peel_segment(grid, axis + 1, start, x, cell, emit);
+            } else {
+                peel_segment(grid, axis + 1, x, start, cell, emit);
+            }
+            start = x;
+        }
+        cell[axis] = s + 1;
+    }
+    if forward {
+        peel_segment(grid, axis + 1, start, end, cell, emit);
+    } else {
+        peel_segment(grid, axis + 1, end, start, cell, emit);
+    }
+}
