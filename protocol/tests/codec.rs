@@ -30,7 +30,6 @@ fn every_message() -> Vec<Message> {
             scene_hash: 0xDEAD_BEEF_0123_4567,
             implementation: "real".into(),
             capabilities: vec!["checkpoint".into(), "fracture".into()],
-            pid: 4242,
         }),
         Message::Welcome(Welcome {
             accepted: false,
@@ -46,6 +45,7 @@ fn every_message() -> Vec<Message> {
             t: 0.125,
             dt: 1e-4,
             scheme: Scheme::SemiImplicit,
+            output: Some(3),
         }),
         Message::InterfaceLoads(InterfaceLoads {
             stamp,
@@ -60,6 +60,7 @@ fn every_message() -> Vec<Message> {
             orientation: vec![0.3],
             velocity: vec![-1.0, 2.0],
             angular_velocity: vec![0.7],
+            diameter: vec![0.05],
             surface: surface(),
         }),
         Message::FixedPointDecision(FixedPointDecision {
@@ -80,7 +81,6 @@ fn every_message() -> Vec<Message> {
             boundary_mass_out: 0.0,
             boundary_energy_out: 1e-9,
             links_broken: 12,
-            busy_s: 0.003,
         }),
         Message::CheckpointRequest(CheckpointRequest { stamp }),
         Message::Checkpoint(Checkpoint {
