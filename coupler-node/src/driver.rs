@@ -119,6 +119,9 @@ pub struct Summary {
     pub links_broken: u64,
     /// Which implementation ran each side (`real`, `pressure`, `prescribed`, `replay:...`).
     pub nodes: std::collections::BTreeMap<String, String>,
+    /// Output index and time of each output written (`outputs.csv`).
+    #[serde(skip)]
+    pub outputs: Vec<(u32, f64)>,
 }
 
 /// Why the loop stopped early.
@@ -185,6 +188,7 @@ pub fn drive(
     let started = Instant::now();
     let mut busy = Busy::default();
     let mut progress = Progress::new(cfg);
+    let mut outputs = Vec::new();
     let result = drive_inner(
         transport,
         coupler,
@@ -193,6 +197,7 @@ pub fn drive(
         abort,
         &mut busy,
         &mut progress,
+        &mut outputs,
     );
     progress.finish();
     let (mean, max) = coupler.iteration_stats();
@@ -242,6 +247,7 @@ pub fn drive(
             .map_or(0.0, |l| l.energy_err_vs_exchange),
         links_broken: ledger.last.as_ref().map_or(0, |l| l.links_broken),
         nodes: Default::default(),
+        outputs,
     };
     (summary, error)
 }
@@ -262,6 +268,7 @@ struct Diagnostics<'a> {
     busy_s: &'a Busy,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn drive_inner(
     transport: &mut dyn Transport,
     coupler: &mut Coupler,
@@ -270,6 +277,7 @@ fn drive_inner(
     abort: &Abort,
     busy: &mut Busy,
     progress: &mut Progress,
+    outputs: &mut Vec<(u32, f64)>,
 ) -> Result<Finish, DriverError> {
     // NOTE: waits are sliced so the supervisor's abort (a node process died) is seen within
     // 100 ms even when the transport cannot tell.
@@ -350,6 +358,9 @@ fn drive_inner(
                         .map_err(DriverError::Record)?;
                     sink.end_step().map_err(DriverError::Record)?;
                     progress.update(&report);
+                    if let Some(k) = report.output {
+                        outputs.push((k, report.t));
+                    }
                 }
                 Action::Finished(finish) => {
                     sink.end_step().map_err(DriverError::Record)?;

@@ -183,6 +183,12 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             .nodes
             .insert(node.name().to_string(), implementation.clone());
     }
+    let mut table = String::from("k,t\n");
+    for (k, t) in &summary.outputs {
+        table.push_str(&format!("{k},{t:e}\n"));
+    }
+    std::fs::write(opts.out.join("outputs.csv"), table)
+        .with_context(|| format!("writing {}", opts.out.join("outputs.csv").display()))?;
     let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
     std::fs::write(opts.out.join("summary.json"), json + "\n")
         .with_context(|| format!("writing {}", opts.out.join("summary.json").display()))?;

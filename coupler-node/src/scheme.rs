@@ -401,14 +401,11 @@ impl Coupler {
             msg => self.queue.push_back((from, msg)),
         }
         // Handle queued messages in arrival order, as long as the current phase takes them.
-        loop {
-            let Some(pos) = self
-                .queue
-                .iter()
-                .position(|(from, msg)| self.accepts(*from, msg))
-            else {
-                break;
-            };
+        while let Some(pos) = self
+            .queue
+            .iter()
+            .position(|(from, msg)| self.accepts(*from, msg))
+        {
             let (from, msg) = self.queue.remove(pos).expect("position is in range");
             self.handle(from, msg, &mut actions)?;
         }
@@ -560,7 +557,7 @@ impl Coupler {
                 self.accepted = Some(state);
             }
             Message::DtProposal(p) => {
-                if !(p.dt_max > 0.0) {
+                if p.dt_max.is_nan() || p.dt_max <= 0.0 {
                     return Err(CouplerError::Invalid {
                         from,
                         what: format!("time step proposal {} ({})", p.dt_max, p.limiter),
@@ -647,7 +644,7 @@ impl Coupler {
                     })?;
                     self.plan = Some((agreed.dt, agreed.output, agreed.limiter));
                     let every = self.cfg.checkpoint_every;
-                    if every > 0 && self.step > 0 && self.step % every == 0 {
+                    if every > 0 && self.step > 0 && self.step.is_multiple_of(every) {
                         for node in self.cfg.nodes() {
                             actions.push(Action::Send(
                                 node,
@@ -899,7 +896,7 @@ fn check_state(s: &SolidState) -> Result<(), String> {
         && s.angular_velocity.len() == n * rot
         && s.diameter.len() == n
         && s.surface.dim == dim
-        && s.surface.vertices.len() % dim as usize == 0
+        && s.surface.vertices.len().is_multiple_of(dim as usize)
         && s.surface.elements.len() == s.surface.n_elements() * dim as usize
         && s.surface.wet.len() == s.surface.n_elements();
     if !ok {

@@ -47,7 +47,9 @@ impl Grid {
             dx: [1.0; 3],
         };
         for axis in 0..dim {
-            if !(upper[axis] > lower[axis]) || cells[axis] == 0 {
+            if upper[axis].partial_cmp(&lower[axis]) != Some(std::cmp::Ordering::Greater)
+                || cells[axis] == 0
+            {
                 return Err(GridError(format!(
                     "axis {axis}: need upper > lower and cells > 0, got {} .. {} with {} cells",
                     lower[axis], upper[axis], cells[axis]

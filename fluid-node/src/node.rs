@@ -240,7 +240,7 @@ pub fn model_from_scene(
                 .clone()
                 .ok_or("the pressure double needs a [fluid.pressure] table in the scene")?,
         ))),
-        "real" => Err("the real fluid solver is not wired to the node yet".into()),
+        "real" => Ok(Box::new(crate::exchange::RealFluid::from_scene(scene)?)),
         other => Err(format!(
             "unknown fluid implementation {other:?} (expected real, pressure or replay:FILE.mcap)"
         )),

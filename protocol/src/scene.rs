@@ -520,7 +520,7 @@ pub enum PrescribedMotion {
 }
 
 /// `[output]`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputConfig {
     /// Output times [s]; the end time is always written.
@@ -539,6 +539,17 @@ pub struct OutputConfig {
 
 fn default_formats() -> Vec<OutputFormat> {
     vec![OutputFormat::Csv]
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        OutputConfig {
+            times: Vec::new(),
+            every: None,
+            formats: default_formats(),
+            probes: Vec::new(),
+        }
+    }
 }
 
 /// An output file format.

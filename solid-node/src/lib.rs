@@ -12,5 +12,6 @@
 pub mod cli;
 pub mod dem;
 pub mod double;
+pub mod exchange;
 pub mod node;
 pub mod output;

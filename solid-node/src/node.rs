@@ -231,7 +231,7 @@ pub fn model_from_scene(
                 .as_ref()
                 .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
         ))),
-        "real" => Err("the real solid solver is not wired to the node yet".into()),
+        "real" => Ok(Box::new(crate::exchange::RealSolid::from_scene(scene)?)),
         other => Err(format!(
             "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
         )),

@@ -161,18 +161,18 @@ impl World {
                                     Message::SolidState(state(l.stamp, x)),
                                 ));
                             }
-                            (NodeKind::Solid, Message::FixedPointDecision(d)) => {
-                                if d.decision == Decision::Accept {
-                                    let step = d.stamp.step;
-                                    inbox.push_back((
-                                        NodeKind::Solid,
-                                        totals(NodeKind::Solid, step, 0.0),
-                                    ));
-                                    inbox.push_back((
-                                        NodeKind::Solid,
-                                        proposal(step + 1, self.solid_dt),
-                                    ));
-                                }
+                            (NodeKind::Solid, Message::FixedPointDecision(d))
+                                if d.decision == Decision::Accept =>
+                            {
+                                let step = d.stamp.step;
+                                inbox.push_back((
+                                    NodeKind::Solid,
+                                    totals(NodeKind::Solid, step, 0.0),
+                                ));
+                                inbox.push_back((
+                                    NodeKind::Solid,
+                                    proposal(step + 1, self.solid_dt),
+                                ));
                             }
                             _ => {}
                         }

@@ -1,0 +1,298 @@
+//! The DEM solid as a [`SolidModel`]: conversions between the solver and the wire, outputs and
+//! probes.
+
+use std::io::Write;
+use std::path::Path;
+
+use protocol::scene::{OutputFormat, Scene};
+use protocol::wire::{
+    ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
+};
+
+use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
+use crate::node::SolidModel;
+
+/// The real solid.
+pub struct RealSolid {
+    solid: Solid,
+    /// Largest displacement per step allowed by the fluid (one cell) [m].
+    displacement_cap: f64,
+    formats: Vec<OutputFormat>,
+    name: String,
+    probes: Vec<Probe>,
+    links_broken: u64,
+    zero_force: Vec<f64>,
+    zero_torque: Vec<f64>,
+}
+
+struct Probe {
+    name: String,
+    particle: ParticleId,
+    rows: Vec<String>,
+}
+
+impl RealSolid {
+    /// Builds the DEM of a scene.
+    pub fn from_scene(scene: &Scene) -> Result<RealSolid, String> {
+        let cfg = scene
+            .solid
+            .as_ref()
+            .ok_or("the scene has no [solid] section")?;
+        let dim = scene.dim();
+        let solid = Solid::from_scene(cfg, dim, scene.run.threads as usize)?;
+        let displacement_cap = scene.fluid.as_ref().map_or(f64::INFINITY, |f| {
+            (0..dim)
+                .map(|a| (f.upper[a] - f.lower[a]) / f64::from(f.cells[a]))
+                .fold(f64::INFINITY, f64::min)
+        });
+        let n = solid.n_particles();
+        let mut probes = Vec::new();
+        for probe in &scene.output.probes {
+            let particle = if let Some(id) = probe.particle {
+                if id as usize >= n {
+                    return Err(format!("probe {:?}: particle {id} of {n}", probe.name));
+                }
+                ParticleId(id)
+            } else if let Some(at) = &probe.particle_at {
+                let nearest = (0..n)
+                    .min_by(|&a, &b| {
+                        let d = |p: usize| {
+                            let x = solid.position(ParticleId(p as u32));
+                            (0..dim).map(|k| (x[k] - at[k]).powi(2)).sum::<f64>()
+                        };
+                        d(a).total_cmp(&d(b))
+                    })
+                    .ok_or("no particles to probe")?;
+                ParticleId(nearest as u32)
+            } else {
+                continue;
+            };
+            probes.push(Probe {
+                name: probe.name.clone(),
+                particle,
+                rows: Vec::new(),
+            });
+        }
+        let n_rot = protocol::wire::n_rot(dim as u32);
+        Ok(RealSolid {
+            solid,
+            displacement_cap,
+            formats: scene.output.formats.clone(),
+            name: scene.name.clone(),
+            probes,
+            links_broken: 0,
+            zero_force: vec![0.0; n * dim],
+            zero_torque: vec![0.0; n * n_rot],
+        })
+    }
+
+    fn surface(wet: &WetSurfaceData) -> WetSurface {
+        WetSurface {
+            revision: wet.revision,
+            dim: wet.dim as u32,
+            vertices: wet.vertices.clone(),
+            elements: wet.elements.clone(),
+            element_particle: wet.element_particle.clone(),
+            wet: wet.wet.clone(),
+        }
+    }
+
+    fn diameters(&self) -> Vec<f64> {
+        self.solid
+            .model()
+            .particles
+            .iter()
+            .map(|p| p.size)
+            .collect()
+    }
+}
+
+fn describe(diagnostics: &[Diagnostic], step: u64) -> String {
+    let list: Vec<String> = diagnostics.iter().map(|d| format!("{d:?}")).collect();
+    format!("step {step}: {}", list.join("; "))
+}
+
+impl SolidModel for RealSolid {
+    fn implementation(&self) -> &'static str {
+        "real"
+    }
+
+    fn dt_max(&self) -> (f64, String) {
+        (self.solid.max_dt(self.displacement_cap), "dem".into())
+    }
+
+    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), String> {
+        self.solid.begin_step(plan.dt);
+        Ok(())
+    }
+
+    fn trial(
+        &mut self,
+        plan: &StepPlan,
+        loads: Option<&InterfaceLoads>,
+    ) -> Result<SolidState, String> {
+        let (force, torque) = match loads {
+            Some(l) => {
+                if l.force.len() != self.zero_force.len()
+                    || l.torque.len() != self.zero_torque.len()
+                {
+                    return Err(format!(
+                        "step {}: loads for {} force and {} torque values, the solid has {} and {}",
+                        plan.stamp.step,
+                        l.force.len(),
+                        l.torque.len(),
+                        self.zero_force.len(),
+                        self.zero_torque.len()
+                    ));
+                }
+                (l.force.as_slice(), l.torque.as_slice())
+            }
+            None => (self.zero_force.as_slice(), self.zero_torque.as_slice()),
+        };
+        let diameter = self.diameters();
+        let trial = self.solid.trial(force, torque);
+        Ok(SolidState {
+            stamp: plan.stamp,
+            dim: trial.dim as u32,
+            position: trial.position.clone(),
+            orientation: trial.orientation.clone(),
+            velocity: trial.velocity_half.clone(),
+            angular_velocity: trial.omega_half.clone(),
+            diameter,
+            surface: Self::surface(&trial.wet),
+        })
+    }
+
+    fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
+        let report = self.solid.commit();
+        self.links_broken += report.broken_links.len() as u64;
+        if report.diagnostics.is_empty() {
+            Ok(())
+        } else {
+            Err(describe(&report.diagnostics, plan.stamp.step))
+        }
+    }
+
+    fn state(&self) -> SolidState {
+        let dim = self.solid.dim();
+        let n = self.solid.n_particles();
+        let mut s = SolidState {
+            stamp: Stamp::default(),
+            dim: dim as u32,
+            position: Vec::with_capacity(n * dim),
+            orientation: Vec::new(),
+            velocity: Vec::with_capacity(n * dim),
+            angular_velocity: Vec::new(),
+            diameter: self.diameters(),
+            surface: Self::surface(self.solid.wet_surface()),
+        };
+        for p in 0..n {
+            let id = ParticleId(p as u32);
+            s.position
+                .extend_from_slice(&self.solid.position(id)[..dim]);
+            s.velocity
+                .extend_from_slice(&self.solid.velocity(id)[..dim]);
+            let q = self.solid.orientation(id);
+            let w = self.solid.angular_velocity(id);
+            if dim == 3 {
+                s.orientation.extend_from_slice(&q);
+                s.angular_velocity.extend_from_slice(&w);
+            } else {
+                s.orientation.push(q[0]);
+                s.angular_velocity.push(w[2]);
+            }
+        }
+        s
+    }
+
+    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
+        let e = self.solid.energies();
+        let m = self.solid.momentum();
+        let dim = self.solid.dim();
+        let mass: f64 = self.solid.model().particles.iter().map(|p| p.mass).sum();
+        ConservedTotals {
+            stamp,
+            node: NodeKind::Solid,
+            t,
+            mass,
+            momentum: m.linear[..dim].to_vec(),
+            energy: e.kinetic_translation + e.kinetic_rotation + e.elastic + e.gravity,
+            dissipated: e.dissipated,
+            interface_work: e.external_work,
+            interface_impulse: vec![0.0; dim],
+            boundary_mass_out: 0.0,
+            boundary_energy_out: 0.0,
+            links_broken: self.links_broken,
+        }
+    }
+
+    fn checkpoint(&self) -> Vec<u8> {
+        protocol::codec::encode_blob(&(self.links_broken, self.solid.to_checkpoint()))
+    }
+
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let (links_broken, inner): (u64, Vec<u8>) = protocol::codec::decode_blob(bytes)?;
+        self.solid.restore_checkpoint(&inner)?;
+        self.links_broken = links_broken;
+        Ok(())
+    }
+
+    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
+        if self.formats.contains(&OutputFormat::Csv) {
+            let mut w =
+                std::io::BufWriter::new(std::fs::File::create(out.join(format!("solid_{k}.csv")))?);
+            crate::output::write_particles_csv(&mut w, &self.solid)?;
+            w.flush()?;
+        }
+        if self.formats.contains(&OutputFormat::Vtk) {
+            let title = format!("{} solid output {k} t = {t:e}", self.name);
+            let mut w =
+                std::io::BufWriter::new(std::fs::File::create(out.join(format!("solid_{k}.vtk")))?);
+            crate::output::write_particles_vtk(&mut w, &self.solid, &title)?;
+            w.flush()?;
+            let mut w =
+                std::io::BufWriter::new(std::fs::File::create(out.join(format!("wet_{k}.vtk")))?);
+            crate::output::write_wet_surface_vtk(&mut w, self.solid.wet_surface(), &title)?;
+            w.flush()?;
+        }
+        Ok(())
+    }
+
+    fn record_probes(&mut self, t: f64) {
+        let dim = self.solid.dim();
+        let sigma = if self.probes.is_empty() {
+            Vec::new()
+        } else {
+            self.solid.normal_stress()
+        };
+        for probe in &mut self.probes {
+            let x = self.solid.position(probe.particle);
+            let v = self.solid.velocity(probe.particle);
+            let cols: Vec<String> = x[..dim]
+                .iter()
+                .chain(&v[..dim])
+                .map(|c| format!("{c:e}"))
+                .collect();
+            probe.rows.push(format!(
+                "{t:e},{},{:e}",
+                cols.join(","),
+                sigma[probe.particle.0 as usize]
+            ));
+        }
+    }
+
+    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
+        let dim = self.solid.dim();
+        let axes = ["x", "y", "z"][..dim].join(",");
+        let vels = ["vx", "vy", "vz"][..dim].join(",");
+        for probe in &self.probes {
+            let mut text = format!("t,{axes},{vels},sigma_n\n");
+            for row in &probe.rows {
+                text.push_str(row);
+                text.push('\n');
+            }
+            std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
+        }
+        Ok(())
+    }
+}
