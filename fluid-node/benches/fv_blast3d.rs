@@ -3,7 +3,8 @@
 //! energy. Not a criterion bench: a driver for the measurement the issue asks for.
 //!
 //! `cargo bench -p fluid-node --no-default-features --bench fv_blast3d` (env: `THREADS`,
-//! default 1; `CELLS`, per axis, default the scene's).
+//! default 1; `CELLS`, per axis, default the scene's; `ORDER`, default the scene's; `STEPS`,
+//! stop after that many steps, for throughput measurements).
 
 use std::time::Instant;
 
@@ -20,6 +21,16 @@ fn main() {
     {
         fluid.cells = vec![n; 3];
     }
+    if let Some(order) = std::env::var("ORDER")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+    {
+        fluid.flux.order = order;
+    }
+    let max_steps: u64 = std::env::var("STEPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(u64::MAX);
     let threads = std::env::var("THREADS")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -31,7 +42,7 @@ fn main() {
     let (mut min_rho, mut min_p) = (f64::INFINITY, f64::INFINITY);
     let mut steps = 0u64;
     let t_end = scene.run.t_end;
-    while solver.time() < t_end * (1.0 - 1e-14) {
+    while solver.time() < t_end * (1.0 - 1e-14) && steps < max_steps {
         let dt = solver.max_dt().min(t_end - solver.time());
         let rep = solver.advance(dt);
         steps += 1;
@@ -50,8 +61,9 @@ fn main() {
     let wall = start.elapsed().as_secs_f64();
     let t1 = solver.totals();
     println!(
-        "blast-3d {}^3 threads {threads}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
+        "blast-3d {}^3 osmp{} threads {threads}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
         fluid.cells[0],
+        fluid.flux.order,
         solver.time(),
         (steps as f64) * n_cells as f64 / wall
     );

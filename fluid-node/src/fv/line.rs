@@ -31,8 +31,9 @@ pub const MAX_FIXES: usize = 3;
 pub enum FluxKind {
     /// OSMP of Daru & Tenaud of the given order (3, 5 or 7).
     Osmp(u32),
-    /// Second-order TVD reference: MUSCL–Hancock on primitive variables with the van Leer
-    /// limiter and the HLLC solver (Toro 2009, §14.4), used for work–precision comparisons.
+    /// Second-order TVD reference: MUSCL–Hancock on primitive variables with the
+    /// monotonized-central limiter and the HLLC solver (Toro 2009, §14.4), used for
+    /// work–precision comparisons.
     MusclHancock,
 }
 
@@ -326,13 +327,17 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
     }
 }
 
-/// van Leer's limiter `2ab/(a+b)` for `ab > 0`, else 0.
+/// Monotonized-central limited slope `minmod(2a, 2b, (a+b)/2)` (van Leer 1977), TVD.
+///
+/// NOTE: MC rather than minmod or van Leer's harmonic limiter: it is the sharpest of the three
+/// and brings the reference scheme's Sod error at N = 400 near the 9.6e-4 quoted in the issue.
 #[inline]
-fn van_leer(a: f64, b: f64) -> f64 {
-    if a * b > 0.0 {
-        2.0 * a * b / (a + b)
-    } else {
+fn slope_mc(a: f64, b: f64) -> f64 {
+    if a * b <= 0.0 {
         0.0
+    } else {
+        let m = (2.0 * a.abs()).min(2.0 * b.abs()).min(0.5 * (a + b).abs());
+        m.copysign(a)
     }
 }
 
@@ -354,7 +359,7 @@ fn muscl_faces(s: &mut LineScratch, setup: &LineSetup, _stats: &mut LineStats) {
         let mut lo_f = [0.0; NQ];
         let mut hi_f = [0.0; NQ];
         for q in 0..NQ {
-            let slope = van_leer(a0[q] - am[q], ap[q] - a0[q]);
+            let slope = slope_mc(a0[q] - am[q], ap[q] - a0[q]);
             lo_f[q] = a0[q] - 0.5 * slope;
             hi_f[q] = a0[q] + 0.5 * slope;
         }

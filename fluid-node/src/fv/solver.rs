@@ -92,6 +92,8 @@ pub struct StepReport {
     pub outflow: [f64; NQ],
     /// Non-physical cells after a sweep (at most [`MAX_TROUBLES`]); empty when all is well.
     pub troubles: Vec<Trouble>,
+    /// Conserved totals after the step, with the cumulative outflow (see [`Totals`]).
+    pub totals: Totals,
 }
 
 impl StepReport {
@@ -367,6 +369,7 @@ impl FluidSolver {
         self.step += 1;
         self.time += dt;
         report.time = self.time;
+        report.totals = self.totals();
         report
     }
 
