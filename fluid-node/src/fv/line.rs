@@ -21,7 +21,7 @@ use crate::fv::euler::{
     primitive, roe_average, roe_eigenvalues, roe_eigenvector, roe_star_states_positive,
     roe_strengths,
 };
-use crate::fv::osmp::{WaveLine, osmp_psi, stencil_radius};
+use crate::fv::osmp::{WaveLine, WaveSpeed, osmp_psi, stencil_radius};
 
 /// Rounds of the a-posteriori positivity fix.
 pub const MAX_FIXES: usize = 3;
@@ -279,8 +279,12 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
             }
             let lam = roe_eigenvalues(&roe);
             let alpha = roe_strengths(&roe, &du, gamma);
-            for k in 0..nw {
+            for k in 0..2 {
                 s.waves[k].set(l, lam[k], alpha[k], sigma, inv_sigma);
+            }
+            let u_speed = WaveSpeed::new(lam[2], sigma, inv_sigma);
+            for k in 2..nw {
+                s.waves[k].set_with(l, &u_speed, alpha[k]);
             }
         } else {
             s.roe[l].valid = false;
