@@ -214,23 +214,26 @@ pub fn osmp_psi(order: u32, wave: &WaveLine, f: usize) -> f64 {
 /// the order tests of the linear scheme.
 #[inline]
 pub fn os_unlimited(order: u32, wave: &WaveLine, f: usize) -> f64 {
+    // Fetch the oriented stencil once (D_m = d[f + s m]); m = −3 only for order 7.
     let up_pos = wave.lam[f] > 0.0;
-    let at = |m: isize| -> usize {
-        if up_pos {
-            (f as isize + m) as usize
+    let at = |m: isize| -> [f64; 6] {
+        let l = if up_pos {
+            f as isize + m
         } else {
-            (f as isize - m) as usize
-        }
+            f as isize - m
+        };
+        wave.d[l as usize]
     };
-    let d = |m: isize, q: usize| wave.d[at(m)][q];
-    let mut p = d(0, 0) - (d(0, 1) - d(-1, 1));
+    let (dm2, dm1, d0, d1) = (at(-2), at(-1), at(0), at(1));
+    let mut p = d0[0] - (d0[1] - dm1[1]);
     if order >= 5 {
-        p += d(0, 2) - 2.0 * d(-1, 2) + d(-2, 2);
-        p -= d(1, 3) - 3.0 * d(0, 3) + 3.0 * d(-1, 3) - d(-2, 3);
+        p += d0[2] - 2.0 * dm1[2] + dm2[2];
+        p -= d1[3] - 3.0 * d0[3] + 3.0 * dm1[3] - dm2[3];
     }
     if order >= 7 {
-        p += d(2, 4) - 4.0 * d(1, 4) + 6.0 * d(0, 4) - 4.0 * d(-1, 4) + d(-2, 4);
-        p -= d(2, 5) - 5.0 * d(1, 5) + 10.0 * d(0, 5) - 10.0 * d(-1, 5) + 5.0 * d(-2, 5) - d(-3, 5);
+        let (dm3, d2) = (at(-3), at(2));
+        p += d2[4] - 4.0 * d1[4] + 6.0 * d0[4] - 4.0 * dm1[4] + dm2[4];
+        p -= d2[5] - 5.0 * d1[5] + 10.0 * d0[5] - 10.0 * dm1[5] + 5.0 * dm2[5] - dm3[5];
     }
     p
 }

@@ -47,7 +47,8 @@ pub enum TroubleKind {
     /// p ≤ 0 outside a vacuum cell, or p < 0.
     Pressure,
     /// The step was refused: `dt` not finite and positive, or above the CFL limit of the
-    /// scheme (Courant number > 1); `cell` and values are zero.
+    /// scheme (Courant number > 1); `cell` is zero, `rho` holds the refused `dt` [s] and `p`
+    /// the largest accepted one [s].
     TimeStep,
 }
 
