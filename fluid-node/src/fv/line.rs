@@ -64,7 +64,7 @@ pub struct LineSetup {
     pub n_shear: usize,
     /// Vacuum density threshold [kg/m³].
     pub vacuum_rho: f64,
-    /// Vacuum pressure threshold [Pa].
+    /// Vacuum pressure threshold \[Pa\].
     pub vacuum_p: f64,
     /// Whether the low / high end of the line is a wall face.
     pub wall: [bool; 2],
