@@ -3,7 +3,9 @@
 //! energy. Not a criterion bench: a driver for the measurement the issue asks for.
 //!
 //! `cargo bench -p fluid-node --no-default-features --bench fv_blast3d` (env: `THREADS`,
-//! default 1; `CELLS`, per axis, default the scene's).
+//! default 1; `CELLS`, per axis, default the scene's; `ORDER`, default the scene's; `STEPS`,
+//! stop after that many steps, for throughput measurements; `DIM` = 1 or 2, the same blast in
+//! fewer dimensions).
 
 use std::time::Instant;
 
@@ -20,6 +22,37 @@ fn main() {
     {
         fluid.cells = vec![n; 3];
     }
+    // DIM = 1 or 2: the same blast cut to the first axes (ball → disc → interval).
+    if let Some(dim) = std::env::var("DIM")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        && (1..3).contains(&dim)
+    {
+        fluid.lower.truncate(dim);
+        fluid.upper.truncate(dim);
+        fluid.cells.truncate(dim);
+        if dim < 3 {
+            fluid.boundary.z = None;
+        }
+        if dim < 2 {
+            fluid.boundary.y = None;
+        }
+        for entry in &mut fluid.init {
+            if let protocol::scene::Region::Ball { center, .. } = &mut entry.region {
+                center.truncate(dim);
+            }
+        }
+    }
+    if let Some(order) = std::env::var("ORDER")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+    {
+        fluid.flux.order = order;
+    }
+    let max_steps: u64 = std::env::var("STEPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(u64::MAX);
     let threads = std::env::var("THREADS")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -31,7 +64,7 @@ fn main() {
     let (mut min_rho, mut min_p) = (f64::INFINITY, f64::INFINITY);
     let mut steps = 0u64;
     let t_end = scene.run.t_end;
-    while solver.time() < t_end * (1.0 - 1e-14) {
+    while solver.time() < t_end * (1.0 - 1e-14) && steps < max_steps {
         let dt = solver.max_dt().min(t_end - solver.time());
         let rep = solver.advance(dt);
         steps += 1;
@@ -50,8 +83,9 @@ fn main() {
     let wall = start.elapsed().as_secs_f64();
     let t1 = solver.totals();
     println!(
-        "blast-3d {}^3 threads {threads}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
-        fluid.cells[0],
+        "blast-3d {:?} osmp{} threads {threads}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
+        fluid.cells,
+        fluid.flux.order,
         solver.time(),
         (steps as f64) * n_cells as f64 / wall
     );

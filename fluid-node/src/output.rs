@@ -7,7 +7,7 @@ use crate::fv::FluidState;
 use crate::grid::Grid;
 
 /// Writes one CSV row per cell (x fastest) with the columns `x[,y[,z]],rho,u[,v[,w]],p,alpha`
-/// (only the active axes; positions of cell centres [m], ρ [kg/m³], velocity [m/s], p [Pa],
+/// (only the active axes; positions of cell centres \[m\], ρ [kg/m³], velocity [m/s], p \[Pa\],
 /// `alpha` the fluid volume fraction [-], 1 when `alpha` is `None`).
 pub fn write_fluid_csv(
     w: &mut impl Write,

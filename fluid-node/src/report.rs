@@ -23,7 +23,7 @@ pub struct Row {
     pub cells: u32,
     /// Time steps taken.
     pub steps: u64,
-    /// Wall time of the run [s] (setup and error evaluation excluded).
+    /// Wall time of the run \[s\] (setup and error evaluation excluded).
     pub wall_s: f64,
     /// L1 error of the density at `run.t_end` [kg/m²].
     pub l1_rho: f64,

@@ -268,6 +268,54 @@ fn exact_riemann_vacuum_generation() {
 }
 
 #[test]
+fn scenes_run_to_the_end_without_trouble() {
+    // Every fluid scene runs to its t_end with ρ > 0 and p > 0 everywhere (blast-3d and the
+    // vortex at reduced resolution in debug; the full blast-3d run is benches/fv_blast3d.rs).
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    for name in [
+        "sod",
+        "lax",
+        "toro-123",
+        "toro-3",
+        "density-wave",
+        "isentropic-vortex",
+        "blast-3d",
+    ] {
+        let text = std::fs::read_to_string(dir.join(format!("{name}.toml"))).expect("scene");
+        let scene = protocol::scene::Scene::from_toml_str(&text, name).expect("valid");
+        let mut fluid = scene.fluid.clone().expect("fluid");
+        if name == "blast-3d" {
+            fluid.cells = vec![16; 3];
+        }
+        if name == "isentropic-vortex" {
+            fluid.cells = vec![32; 2];
+        }
+        let mut s = FluidSolver::from_scene(&fluid, 2).expect("solver");
+        let t0 = s.totals();
+        let (steps, last) = s.run_until(scene.run.t_end, 1_000_000);
+        assert!(last.ok(), "{name}: {:?}", last.troubles);
+        assert!((s.time() - scene.run.t_end).abs() < 1e-12, "{name}");
+        assert!(s.check_state().is_none(), "{name}");
+        for idx in 0..s.grid().n_cells() {
+            let (rho, _, p) = s.primitive(idx);
+            assert!(rho > 0.0 && p > 0.0, "{name}: cell {idx} rho {rho} p {p}");
+        }
+        // The last report carries the totals; closed and periodic boxes conserve them.
+        assert_eq!(last.totals, s.totals());
+        let t1 = s.totals();
+        assert!(
+            close(t1.mass + t1.outflow_mass, t0.mass, t0.mass, 1e-13),
+            "{name}: mass"
+        );
+        assert!(
+            close(t1.energy + t1.outflow_energy, t0.energy, t0.energy, 1e-13),
+            "{name}: energy"
+        );
+        println!("{name}: {steps} steps");
+    }
+}
+
+#[test]
 fn every_scene_parses_and_builds() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let mut n = 0;

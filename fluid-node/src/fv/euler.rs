@@ -4,7 +4,7 @@
 //!
 //! A state is `[f64; 5]` in the *sweep frame*: `(ρ, ρ u_n, ρ u_t1, ρ u_t2, E)` where `n` is the
 //! sweep axis and `t1`, `t2` the other axes (inactive axes last, so their components stay 0).
-//! Units are SI: ρ [kg/m³], velocities [m/s], E and p [Pa].
+//! Units are SI: ρ [kg/m³], velocities [m/s], E and p \[Pa\].
 
 /// Number of components of a sweep-frame state.
 pub const NQ: usize = 5;
@@ -19,7 +19,7 @@ pub struct Primitive {
     pub rho: f64,
     /// Velocity `(u_n, u_t1, u_t2)` [m/s].
     pub vel: [f64; 3],
-    /// Pressure p [Pa].
+    /// Pressure p \[Pa\].
     pub p: f64,
 }
 

@@ -12,7 +12,7 @@ pub struct Prim1 {
     pub rho: f64,
     /// Velocity [m/s].
     pub u: f64,
-    /// Pressure [Pa].
+    /// Pressure \[Pa\].
     pub p: f64,
 }
 
@@ -25,7 +25,7 @@ pub struct ExactRiemann {
     pub right: Prim1,
     /// Ratio of specific heats γ [-].
     pub gamma: f64,
-    /// Star pressure p* [Pa] (0 if vacuum is generated).
+    /// Star pressure p* \[Pa\] (0 if vacuum is generated).
     pub p_star: f64,
     /// Star velocity u* [m/s].
     pub u_star: f64,
@@ -244,7 +244,7 @@ impl ExactRiemann {
         v
     }
 
-    /// Conserved state `(ρ, ρu, E)` at `x` [m] and time `t` [s] for a discontinuity at `x0`.
+    /// Conserved state `(ρ, ρu, E)` at `x` \[m\] and time `t` \[s\] for a discontinuity at `x0`.
     pub fn conserved_at(&self, x: f64, x0: f64, t: f64) -> [f64; 3] {
         let s = if t > 0.0 {
             (x - x0) / t

@@ -10,7 +10,7 @@ use crate::fv::state::FluidState;
 use crate::grid::Grid;
 
 /// Sets `state` to the cell averages of the planar Riemann problem `ex` along the unit
-/// `normal`, discontinuity on the plane `normal · x = xi0` [m], at time `t` [s].
+/// `normal`, discontinuity on the plane `normal · x = xi0` \[m\], at time `t` \[s\].
 ///
 /// Axis-aligned normals use the exact 1-D average; the 2-D diagonal `(1, 1)/√2` with square
 /// cells uses the exact triangular weight of `ξ = n·x` over the cell; other normals use an
@@ -113,7 +113,7 @@ fn gauss_average(grid: &Grid, xc: &[f64; 3], f: impl Fn(&[f64; 3]) -> [f64; 3]) 
 }
 
 /// Smooth periodic density wave `ρ = 1 + A sin(2π Σ_a k_a (x_a − lower_a)/L_a)` carried by
-/// the uniform velocity `vel` [m/s] at uniform pressure `p` [Pa], at time `t` [s]; exact cell
+/// the uniform velocity `vel` [m/s] at uniform pressure `p` \[Pa\], at time `t` \[s\]; exact cell
 /// averages. `wave` holds the integer wave numbers `k_a` per axis.
 #[allow(clippy::too_many_arguments)]
 pub fn density_wave(
@@ -161,8 +161,8 @@ pub fn density_wave(
     }
 }
 
-/// Isentropic vortex of strength `beta` (Shu 1998; ρ∞ = p∞ = 1) centred at `center` [m] at
-/// t = 0, carried by `vel` [m/s], at time `t` [s] on a periodic 2-D grid (nearest periodic
+/// Isentropic vortex of strength `beta` (Shu 1998; ρ∞ = p∞ = 1) centred at `center` \[m\] at
+/// t = 0, carried by `vel` [m/s], at time `t` \[s\] on a periodic 2-D grid (nearest periodic
 /// image); 8×8-point Gauss cell averages.
 pub fn isentropic_vortex(
     state: &mut FluidState,
@@ -219,7 +219,7 @@ fn gauss_average_n(grid: &Grid, xc: &[f64; 3], f: impl Fn(&[f64; 3]) -> [f64; 4]
     acc
 }
 
-/// L1 norm of the density difference `Σ |ρ − ρ_ref| V` over the grid [kg] (per unit length
+/// L1 norm of the density difference `Σ |ρ − ρ_ref| V` over the grid \[kg\] (per unit length
 /// or area below 3-D).
 pub fn l1_density(grid: &Grid, a: &FluidState, b: &FluidState) -> f64 {
     let nvar = a.nvar;

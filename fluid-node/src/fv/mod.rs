@@ -16,8 +16,26 @@
 //! solver.directional_pressures(axis) -> &[f64]   (p̄_x, p̄_y, p̄_z of paper 003 §3.4)
 //! solver.to_checkpoint() -> Vec<u8>      solver.restore_checkpoint(&[u8]) -> Result<(), String>
 //! ```
-//! Also: [`exact_riemann`] (Toro's exact solver with exact cell averages) and [`init`]
-//! (analytic initial conditions for verification).
+//! Also: [`exact_riemann`] (Toro's exact solver with exact cell averages), [`init`]
+//! (analytic initial conditions for verification) and [`study`] (pure parts of the
+//! work–precision study; timing and files in `crate::report`).
+//!
+//! Pipeline of one step (`solver.rs`): check `dt` against the CFL limit; for each sweep axis
+//! in the order of [`sweep_order`] (2-D: xy, yx, ...; 3-D: xyz, zyx, yzx, xzy, zxy, yxz):
+//! record `p̄_axis`, then for every pencil along the axis (rayon, fixed partition, `sweep.rs`)
+//! gather the line with `ng` ghost cells from the boundary conditions, compute the face fluxes
+//! and update (`line.rs`), and write back; then sum the outflow, counters and troubles in
+//! pencil order and the totals with compensated sums.
+//!
+//! Storage: interior cells only, `dim + 2` conserved values per cell, x fastest (`state.rs`);
+//! ghost layers (`ng` = 3 for OSMP3/5, 4 for OSMP7) live in the per-thread pencil scratch.
+//!
+//! Readings chosen where the sources are incomplete (details in `osmp.rs`, `solver.rs`):
+//! division-free OSMP with `|λ_0|` curvature normalisation and upwind LC bound (numerics.md
+//! §1.5); per-interface Roe eigensystems (Tenaud's `osmp7.f90`); sweep orders paired with their
+//! reverse so the splitting is second order over every two steps; HLLE fallback where the Roe
+//! linearisation is not physical and an a-posteriori positivity fix (numerics.md §1.8); wall
+//! faces carry only the pressure flux.
 //!
 //! Example:
 //! ```

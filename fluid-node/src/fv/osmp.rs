@@ -56,6 +56,43 @@ pub fn curvature_m4(d_l: f64, d_r: f64) -> f64 {
     minmod(minmod(4.0 * d_l - d_r, 4.0 * d_r - d_l), minmod(d_l, d_r))
 }
 
+/// What depends only on a wave's speed at one interface.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WaveSpeed {
+    /// Eigenvalue λ [m/s].
+    pub lam: f64,
+    /// Courant number ν = σ|λ| [-].
+    pub nu: f64,
+    /// `1 / max(|λ|, EPS)` [s/m].
+    pub inv_lam: f64,
+    /// `1 / max(ν, EPS)` [-].
+    pub inv_nu: f64,
+    /// `c_1 .. c_5` at ν.
+    pub c: [f64; 5],
+}
+
+impl WaveSpeed {
+    /// Speed data of `lam` for `sigma = Δt/Δx` [s/m] (`inv_sigma = 1/sigma`).
+    #[inline]
+    pub fn new(lam: f64, sigma: f64, inv_sigma: f64) -> WaveSpeed {
+        let nu = sigma * lam.abs();
+        // One division: 1/ν = (1/|λ|)/σ; the EPS floors keep both finite where a wave is
+        // absent.
+        let inv_lam = 1.0 / lam.abs().max(EPS);
+        WaveSpeed {
+            lam,
+            nu,
+            inv_lam,
+            inv_nu: if nu > EPS {
+                inv_lam * inv_sigma
+            } else {
+                1.0 / EPS
+            },
+            c: accuracy_coefficients(nu),
+        }
+    }
+}
+
 /// Per-wave data of a line, one entry per interface (`l` = interface between cells `l`, `l+1`).
 #[derive(Clone, Debug, Default)]
 pub struct WaveLine {
@@ -92,21 +129,21 @@ impl WaveLine {
     /// `inv_sigma = 1/sigma`).
     #[inline]
     pub fn set(&mut self, l: usize, lam: f64, alpha: f64, sigma: f64, inv_sigma: f64) {
-        let nu = sigma * lam.abs();
-        let c = accuracy_coefficients(nu);
-        let d0 = (1.0 - nu) * alpha;
-        self.lam[l] = lam;
+        let speed = WaveSpeed::new(lam, sigma, inv_sigma);
+        self.set_with(l, &speed, alpha);
+    }
+
+    /// Fills interface `l` from a precomputed [`WaveSpeed`] (shared by the entropy and shear
+    /// waves, which travel at the same speed) and the strength `alpha`.
+    #[inline]
+    pub fn set_with(&mut self, l: usize, speed: &WaveSpeed, alpha: f64) {
+        let d0 = (1.0 - speed.nu) * alpha;
+        let c = &speed.c;
+        self.lam[l] = speed.lam;
         self.alpha[l] = alpha;
-        self.nu[l] = nu;
-        // One division: 1/ν = (1/|λ|)/σ; the EPS floors keep both finite (for σ ≈ 1 s/m the
-        // floors coincide; elsewhere they only matter where the wave is absent).
-        let inv_lam = 1.0 / lam.abs().max(EPS);
-        self.inv_lam[l] = inv_lam;
-        self.inv_nu[l] = if nu > EPS {
-            inv_lam * inv_sigma
-        } else {
-            1.0 / EPS
-        };
+        self.nu[l] = speed.nu;
+        self.inv_lam[l] = speed.inv_lam;
+        self.inv_nu[l] = speed.inv_nu;
         self.d[l] = [d0, c[0] * d0, c[1] * d0, c[2] * d0, c[3] * d0, c[4] * d0];
     }
 
@@ -118,11 +155,15 @@ impl WaveLine {
             return;
         }
         // d_c = λα(c) − λα(c−1): curvature of cell c, between interfaces c−1 and c.
-        let la = |l: usize| self.lam[l] * self.alpha[l];
+        let mut la_prev = self.lam[0] * self.alpha[0];
+        let mut la_here = self.lam[1] * self.alpha[1];
+        let mut d_left = la_here - la_prev;
         for l in 1..n - 1 {
-            let d_left = la(l) - la(l - 1);
-            let d_right = la(l + 1) - la(l);
+            la_prev = la_here;
+            la_here = self.lam[l + 1] * self.alpha[l + 1];
+            let d_right = la_here - la_prev;
             self.dm4[l] = curvature_m4(d_left, d_right);
+            d_left = d_right;
         }
     }
 }
@@ -171,24 +212,28 @@ pub fn osmp_psi(order: u32, wave: &WaveLine, f: usize) -> f64 {
 
 /// Unlimited accuracy function `P` (same as [`osmp_psi`] without the TVD/MP bounds); used by
 /// the order tests of the linear scheme.
+#[inline]
 pub fn os_unlimited(order: u32, wave: &WaveLine, f: usize) -> f64 {
+    // Fetch the oriented stencil once (D_m = d[f + s m]); m = −3 only for order 7.
     let up_pos = wave.lam[f] > 0.0;
-    let at = |m: isize| -> usize {
-        if up_pos {
-            (f as isize + m) as usize
+    let at = |m: isize| -> [f64; 6] {
+        let l = if up_pos {
+            f as isize + m
         } else {
-            (f as isize - m) as usize
-        }
+            f as isize - m
+        };
+        wave.d[l as usize]
     };
-    let d = |m: isize, q: usize| wave.d[at(m)][q];
-    let mut p = d(0, 0) - (d(0, 1) - d(-1, 1));
+    let (dm2, dm1, d0, d1) = (at(-2), at(-1), at(0), at(1));
+    let mut p = d0[0] - (d0[1] - dm1[1]);
     if order >= 5 {
-        p += d(0, 2) - 2.0 * d(-1, 2) + d(-2, 2);
-        p -= d(1, 3) - 3.0 * d(0, 3) + 3.0 * d(-1, 3) - d(-2, 3);
+        p += d0[2] - 2.0 * dm1[2] + dm2[2];
+        p -= d1[3] - 3.0 * d0[3] + 3.0 * dm1[3] - dm2[3];
     }
     if order >= 7 {
-        p += d(2, 4) - 4.0 * d(1, 4) + 6.0 * d(0, 4) - 4.0 * d(-1, 4) + d(-2, 4);
-        p -= d(2, 5) - 5.0 * d(1, 5) + 10.0 * d(0, 5) - 10.0 * d(-1, 5) + 5.0 * d(-2, 5) - d(-3, 5);
+        let (dm3, d2) = (at(-3), at(2));
+        p += d2[4] - 4.0 * d1[4] + 6.0 * d0[4] - 4.0 * dm1[4] + dm2[4];
+        p -= d2[5] - 5.0 * d1[5] + 10.0 * d0[5] - 10.0 * dm1[5] + 5.0 * dm2[5] - dm3[5];
     }
     p
 }

@@ -22,18 +22,18 @@ pub const MAX_TROUBLES: usize = 16;
 /// Conserved totals over the grid and what left through the domain faces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Totals {
-    /// Mass `Σ ρ V` [kg] (per unit length in 2-D, per unit area in 1-D).
+    /// Mass `Σ ρ V` \[kg\] (per unit length in 2-D, per unit area in 1-D).
     pub mass: f64,
     /// Momentum `Σ ρu V` per axis [kg m/s] (inactive axes 0).
     pub momentum: [f64; 3],
-    /// Total energy `Σ E V` [J].
+    /// Total energy `Σ E V` \[J\].
     pub energy: f64,
-    /// Mass that left through the open (outflow) faces since the start [kg].
+    /// Mass that left through the open (outflow) faces since the start \[kg\].
     pub outflow_mass: f64,
     /// Momentum that left through open and wall faces since the start (at walls: the wall
     /// pressure impulse) [kg m/s].
     pub outflow_momentum: [f64; 3],
-    /// Energy that left through the open faces since the start [J].
+    /// Energy that left through the open faces since the start \[J\].
     pub outflow_energy: f64,
 }
 
@@ -47,7 +47,8 @@ pub enum TroubleKind {
     /// p ≤ 0 outside a vacuum cell, or p < 0.
     Pressure,
     /// The step was refused: `dt` not finite and positive, or above the CFL limit of the
-    /// scheme (Courant number > 1); `cell` and values are zero.
+    /// scheme (Courant number > 1); `cell` is zero, `rho` holds the refused `dt` \[s\] and `p`
+    /// the largest accepted one \[s\].
     TimeStep,
 }
 
@@ -60,13 +61,13 @@ pub struct Trouble {
     pub axis: usize,
     /// Cell `(i, j, k)`.
     pub cell: [usize; 3],
-    /// Cell centre [m].
+    /// Cell centre \[m\].
     pub position: [f64; 3],
     /// Density [kg/m³].
     pub rho: f64,
     /// Velocity [m/s].
     pub velocity: [f64; 3],
-    /// Pressure [Pa].
+    /// Pressure \[Pa\].
     pub p: f64,
 }
 
@@ -75,9 +76,9 @@ pub struct Trouble {
 pub struct StepReport {
     /// Step number (0 for the first step).
     pub step: u64,
-    /// Time step [s].
+    /// Time step \[s\].
     pub dt: f64,
-    /// Time after the step [s].
+    /// Time after the step \[s\].
     pub time: f64,
     /// Sweep axes in the order applied.
     pub sweeps: Vec<usize>,
@@ -92,6 +93,8 @@ pub struct StepReport {
     pub outflow: [f64; NQ],
     /// Non-physical cells after a sweep (at most [`MAX_TROUBLES`]); empty when all is well.
     pub troubles: Vec<Trouble>,
+    /// Conserved totals after the step, with the cumulative outflow (see [`Totals`]).
+    pub totals: Totals,
 }
 
 impl StepReport {
@@ -239,7 +242,7 @@ impl FluidSolver {
         &mut self.state
     }
 
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -249,19 +252,19 @@ impl FluidSolver {
         self.step
     }
 
-    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure [Pa] of cell `idx`.
+    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure \[Pa\] of cell `idx`.
     pub fn primitive(&self, idx: usize) -> (f64, [f64; 3], f64) {
         self.state.primitive(idx, self.params.gamma)
     }
 
-    /// Directional pressures `p̄_axis` [Pa] of the last step, one per cell: the pressure of the
+    /// Directional pressures `p̄_axis` \[Pa\] of the last step, one per cell: the pressure of the
     /// state each sweep along `axis` started from (paper 003 §3.4 step 1). Zero before the
     /// first step. Panics if `axis >= dim` (a bug in the caller).
     pub fn directional_pressures(&self, axis: usize) -> &[f64] {
         &self.pbar[axis]
     }
 
-    /// Largest stable time step [s]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
+    /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
     /// every directional sweep runs at Courant number ≤ `cfl`. Infinite for a fluid at rest
     /// with zero sound speed everywhere; NaN if a cell is non-finite.
     pub fn max_dt(&self) -> f64 {
@@ -302,7 +305,7 @@ impl FluidSolver {
         self.params.cfl / rate
     }
 
-    /// Advances by one split step of length `dt` [s]: one full-`dt` sweep per active axis, in
+    /// Advances by one split step of length `dt` \[s\]: one full-`dt` sweep per active axis, in
     /// the order [`sweep_order`] gives for the current step number. Never panics on numerical
     /// trouble: it is listed in the report and the caller stops the run.
     pub fn advance(&mut self, dt: f64) -> StepReport {
@@ -367,10 +370,11 @@ impl FluidSolver {
         self.step += 1;
         self.time += dt;
         report.time = self.time;
+        report.totals = self.totals();
         report
     }
 
-    /// Advances with CFL-limited steps until `t_end` [s] (the last step is shortened to land on
+    /// Advances with CFL-limited steps until `t_end` \[s\] (the last step is shortened to land on
     /// it) or `max_steps` steps or the first trouble; returns the last report and the steps
     /// taken.
     pub fn run_until(&mut self, t_end: f64, max_steps: u64) -> (u64, StepReport) {

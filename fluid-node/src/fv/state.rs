@@ -26,7 +26,7 @@ pub struct FluidParams {
     pub boundary: [[BoundaryKind; 2]; 3],
     /// Vacuum density threshold [kg/m³] (default 1e-10).
     pub vacuum_rho: f64,
-    /// Vacuum pressure threshold [Pa] (default 1e-10).
+    /// Vacuum pressure threshold \[Pa\] (default 1e-10).
     pub vacuum_p: f64,
 }
 
@@ -82,7 +82,7 @@ impl FluidState {
     }
 
     /// Sets cell `idx` from density [kg/m³], velocity [m/s] (first `dim` entries used) and
-    /// pressure [Pa].
+    /// pressure \[Pa\].
     pub fn set_primitive(&mut self, idx: usize, rho: f64, vel: [f64; 3], p: f64, gamma: f64) {
         let dim = self.nvar - 2;
         let w = Primitive { rho, vel, p };
@@ -95,7 +95,7 @@ impl FluidState {
         cell[dim + 1] = p / (gamma - 1.0) + ke;
     }
 
-    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure [Pa] of cell `idx`.
+    /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure \[Pa\] of cell `idx`.
     pub fn primitive(&self, idx: usize, gamma: f64) -> (f64, [f64; 3], f64) {
         let dim = self.nvar - 2;
         let cell = self.cell(idx);

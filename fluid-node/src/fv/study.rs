@@ -12,7 +12,7 @@ use crate::fv::{FluidSolver, FluxKind};
 pub struct RiemannReference {
     /// The solved problem.
     pub exact: ExactRiemann,
-    /// Position of the initial discontinuity [m].
+    /// Position of the initial discontinuity \[m\].
     pub x0: f64,
 }
 

@@ -141,7 +141,7 @@ fn gather(
     }
 }
 
-/// Sweeps `u_in` along `axis` with time step `dt` [s]; writes the new states pencil-major into
+/// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states pencil-major into
 /// `out` and one [`PencilOut`] per pencil.
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_axis(
