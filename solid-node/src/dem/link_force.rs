@@ -2,7 +2,7 @@
 //!
 //! The link potential is
 //! `U_IJ = ½ k |Δu|² + Σ_k c_k (1 − (Q_I a_k)·(Q_J a_k))`, `k = S/D⁰ · E/(1+ν)`,
-//! `c_k = S/D⁰ · α_k`, `a_k ∈ {n⁰, s, t}`, plus per particle `U_I = λ V'_I (ε^v_I)²` with
+//! `c_k = S/D⁰ · α_k`, `a_k ∈ {n⁰, s, t}`, plus per particle `U_I = ½ λ V'_I (ε^v_I)²` with
 //! `V'_I = V_I + 3ν/(1−2ν) V^f_I` and `ε^v_I = Σ_J S_IJ/(2 V'_I) Δu_IJ·n_IJ`.
 //! Forces and torques are the exact negative gradients, which reproduces (29)–(30) term by term.
 //!
@@ -19,6 +19,13 @@
 //!   would push its particles apart). The printed flexion torque `c_k Q_I a ∧ Q_J a` is already
 //!   the torque on `I` for the potential `c_k (1 − Q_I a · Q_J a)` (minimum when aligned). All
 //!   signs are fixed by the potential and checked against it by finite differences.
+//! - The volumetric force is printed `S λ ε_IJ (…)` with `ε_IJ = ε^v_I + ε^v_J` (the sum). With
+//!   ε^v_I as printed (= div u in the interior) that is the gradient of `Σ λ V' (ε^v)²`, twice
+//!   the elastic energy `½ λ (tr ε)²`: in a cubic lattice it gives σ = 2με + 2λ tr(ε) 1
+//!   (ν = 0.3: E_eff = 1.06 E, ν_eff = 0.375) and a one-particle-thick bar gets 1.23 E. We use
+//!   `U_I = ½ λ V'_I (ε^v_I)²`, i.e. the force `S λ (ε^v_I + ε^v_J)/2` (the mean); then the
+//!   interior gives λ tr(ε) exactly and a one-particle-thick bar gets exactly E, which is what
+//!   the free-volume weight `V + 3ν/(1−2ν) V^f` is built for (checked by `dem_wave.rs` at ν = 0.3).
 //! - 000 prints `V_I + 3ν/(1−2ν) V_I` in ε^v_I; 003 prints `V^f_I` for the second term and
 //!   defines the free volume just after, so 003 is used.
 

@@ -76,7 +76,7 @@ pub struct Particle {
     pub motion: ParticleMotion,
     /// `1 / (2 (V + 3ν/(1−2ν) V^f))`, the weight of a link in ε^v_I [1/m³].
     pub vol_weight: f64,
-    /// `λ (V + 3ν/(1−2ν) V^f)`: volumetric energy is `vol_energy_coef · (ε^v_I)²` [J].
+    /// `λ (V + 3ν/(1−2ν) V^f) / 2`: volumetric energy is `vol_energy_coef · (ε^v_I)²` [J].
     pub vol_energy_coef: f64,
 }
 
@@ -103,7 +103,7 @@ pub struct Link {
     pub i_st: [f64; 2],
     /// `S/D⁰ · E/(1+ν)` [N/m].
     pub k_shear: f64,
-    /// `S · Eν/((1+ν)(1−2ν))` [N].
+    /// `S λ / 2 = S · Eν/(2(1+ν)(1−2ν))` [N] (multiplies `ε^v_I + ε^v_J`).
     pub k_vol: f64,
     /// `S/D⁰ · (α_n, α_s, α_t)` [N m].
     pub flex: [f64; 3],
@@ -349,7 +349,8 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                 t0: geo.t,
                 i_st: [i_s, i_t],
                 k_shear: s / d0 * e / (1.0 + nu),
-                k_vol: s * lambda,
+                // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
+                k_vol: 0.5 * s * lambda,
                 flex: [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
                 r_i: bi(geo.centroid - pi.x0),
                 r_j: bj(geo.centroid - pj.x0),
@@ -377,7 +378,7 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         p.free_volume = free;
         let v_eff = p.volume + 3.0 * nu / (1.0 - 2.0 * nu) * free;
         p.vol_weight = 0.5 / v_eff;
-        p.vol_energy_coef = lambda * v_eff;
+        p.vol_energy_coef = 0.5 * lambda * v_eff;
     }
     // Incidence (CSR), links sorted by id per particle.
     let n = particles.len();

@@ -125,6 +125,8 @@ pub struct Solid {
     topo: WetTopology,
     wet: WetSurfaceData,
     sums: Vec<(Vector3<f64>, u32)>,
+    /// Reused per-particle buffers for the wet-surface geometry (x, v, ω, orientation).
+    kin: (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 4]>),
     limit: (f64, u32),
 }
 
@@ -289,6 +291,7 @@ impl Solid {
             topo,
             wet: WetSurfaceData::default(),
             sums: Vec::new(),
+            kin: (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
             limit,
             model,
         };
@@ -461,9 +464,9 @@ impl Solid {
 
     fn update_wet(&mut self) {
         let n = self.n_particles();
-        let omega: Vec<[f64; 3]> = (0..n)
-            .map(|p| self.angular_velocity(ParticleId(p as u32)))
-            .collect();
+        let mut omega = std::mem::take(&mut self.kin.2);
+        omega.clear();
+        omega.extend((0..n).map(|p| self.angular_velocity(ParticleId(p as u32))));
         let dim = self.model.dim;
         let rot = &self.state.rot;
         let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rot[p], v);
@@ -477,6 +480,7 @@ impl Solid {
             &mut self.sums,
             &mut self.wet,
         );
+        self.kin.2 = omega;
     }
 
     /// The largest step allowed now [s]: `ELASTIC_SAFETY ×` the elastic bound, the step that
