@@ -126,9 +126,12 @@ pub struct Solid {
     wet: WetSurfaceData,
     sums: Vec<(Vector3<f64>, u32)>,
     /// Reused per-particle buffers for the wet-surface geometry (x, v, ω, orientation).
-    kin: (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 4]>),
+    kin: KinematicsScratch,
     limit: (f64, u32),
 }
+
+/// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.
+type KinematicsScratch = (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 4]>);
 
 /// Fills `out[k] = f(k)` over a fixed partition.
 fn par_fill<T: Send>(
