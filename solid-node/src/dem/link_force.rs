@@ -36,17 +36,17 @@ use crate::dem::model::Link;
 /// What one link contributes, written once per link then gathered per particle.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LinkOut {
-    /// Force on `i` [N] (the force on `j` is its opposite). 2-D: z = 0.
+    /// Force on `i` \[N\] (the force on `j` is its opposite). 2-D: z = 0.
     pub force_i: Vector3<f64>,
-    /// Torque on `i` about its centre [N m]. 2-D: only z.
+    /// Torque on `i` about its centre \[N m\]. 2-D: only z.
     pub torque_i: Vector3<f64>,
-    /// Torque on `j` about its centre [N m].
+    /// Torque on `j` about its centre \[N m\].
     pub torque_j: Vector3<f64>,
-    /// Link energy `½ k |Δu|² + flexion` [J] (volumetric energy is per particle).
+    /// Link energy `½ k |Δu|² + flexion` \[J\] (volumetric energy is per particle).
     pub energy: f64,
-    /// `Δu·n` [m], input of ε^v.
+    /// `Δu·n` \[m\], input of ε^v.
     pub gap: f64,
-    /// Current centre distance D_IJ [m].
+    /// Current centre distance D_IJ \[m\].
     pub distance: f64,
 }
 

@@ -26,8 +26,8 @@ impl Solid {
         self.trial_valid = false;
     }
 
-    /// Trial positions and velocities for external loads `force` (`dim` per particle, [N]) and
-    /// `torque` (1 per particle in 2-D, 3 in 3-D, space frame, about the centre [N m]), held
+    /// Trial positions and velocities for external loads `force` (`dim` per particle, \[N\]) and
+    /// `torque` (1 per particle in 2-D, 3 in 3-D, space frame, about the centre \[N m\]), held
     /// fixed over the step. May be called repeatedly; nothing is committed.
     pub fn trial(&mut self, force: &[f64], torque: &[f64]) -> &Trial {
         assert!(self.dt > 0.0, "begin_step must precede trial");
