@@ -27,6 +27,20 @@
 //! t = 0 (3-D). [`WetSurfaceData`] has the flat layout of `protocol::wire::WetSurface` plus
 //! per-element area, normal, centroid and velocity. 2-D quantities are per unit depth.
 //!
+//! # Readings of the papers (details and reasons in [`link_force`])
+//!
+//! - `Δu_IJ = (X_I + Q_I (G − X⁰_I)) − (X_J + Q_J (G − X⁰_J))` (the printed form is not zero at
+//!   rest); `n_IJ` in the volumetric terms is `(X_I − X_J)/D_IJ`; forces and torques are the
+//!   exact negative gradient of one potential (energy conservation, checked by finite
+//!   differences in the unit tests).
+//! - Volumetric force `S λ (ε^v_I + ε^v_J)/2`: the printed sum doubles λ; the mean gives E
+//!   exactly for a one-particle-thick bar with ν ≠ 0 (free-volume design, `tests/dem_wave.rs`).
+//! - ε^v_I uses the free volume `V_I + 3ν/(1−2ν) V^f_I` (003; 000 prints `V_I` twice).
+//! - Fracture: the relative elongation `(|X_I − X_J| − D⁰)/D⁰` is compared with
+//!   `elongation_at_break` as a fraction (000 writes it in percent).
+//! - A link of rest length h stands for the material between two particle centres: a clamp is
+//!   modelled by a fixed particle centred on it (`scenes/cantilever.toml`).
+//!
 //! # Invariants
 //!
 //! - Numerical trouble is returned as [`Diagnostic`]s in the [`StepReport`], never a panic.
