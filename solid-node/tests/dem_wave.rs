@@ -65,7 +65,7 @@ fn wave_speed(poisson: f64) {
     let c = 4.0 * l * f;
     let err = (c - c_exact).abs() / c_exact;
     println!(
-        "bar of {n} particles: c = {c:.3} m/s, sqrt(E/rho) = {c_exact:.3} m/s, error {:.3}%",
+        "bar of {n} particles, nu = {poisson}: c = {c:.3} m/s, sqrt(E/rho) = {c_exact:.3} m/s, error {:.3}%",
         100.0 * err
     );
     assert!(err < 0.02, "wave speed {c} vs {c_exact}");
