@@ -36,8 +36,8 @@ pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
         if broken[l] {
             continue;
         }
-        let k =
-            link.k_shear + lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]);
+        let k = link.k_shear
+            + 0.5 * lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]);
         let flex = if model.dim == 3 {
             link.flex.iter().map(|c| c.abs()).sum::<f64>()
         } else {
