@@ -41,6 +41,22 @@
 //! - A link of rest length h stands for the material between two particle centres: a clamp is
 //!   modelled by a fixed particle centred on it (`scenes/cantilever.toml`).
 //!
+//! # Wet surface layout
+//!
+//! Vertices are one per (lattice vertex, particle) slot, then (3-D) one per particle face
+//! centroid; their number and the number of elements never change during a run. Elements
+//! reference the representative slot of each mean vertex, so the wet elements are closed by
+//! index; fracture changes the connectivity and the wet flags and bumps `revision`. The trial's
+//! element velocities are `V^{n+1/2} + Ω^{n+1/2} × (x − X^{n+1})`; the committed surface's are
+//! the instantaneous rigid velocities.
+//!
+//! # Limitations
+//!
+//! - No contact between particles that are not linked (as in 000: fragments fly freely).
+//! - Explicit particles are linked only through faces with the same vertex set.
+//! - 2-D positions are stored with a zero z so that both dimensions share the state layout; the
+//!   2-D kernels work on 2 translations and 1 angle.
+//!
 //! # Invariants
 //!
 //! - Numerical trouble is returned as [`Diagnostic`]s in the [`StepReport`], never a panic.
