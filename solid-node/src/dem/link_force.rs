@@ -31,7 +31,7 @@
 
 use nalgebra::{Matrix3, Vector2, Vector3};
 
-use crate::dem::model::Link;
+use crate::dem::model::LinkKernel;
 
 /// What one link contributes, written once per link then gathered per particle.
 #[derive(Clone, Copy, Debug, Default)]
@@ -53,7 +53,7 @@ pub struct LinkOut {
 /// Displacement jump `Δu`, unit vector `n = (X_I − X_J)/D`, `D`, lever arms `Q_I r_I`, `Q_J r_J`.
 #[inline]
 fn geometry_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -70,7 +70,7 @@ fn geometry_3d(
 /// `Δu·n` of a 3-D link (first pass, needed for ε^v when ν ≠ 0).
 #[inline]
 pub fn link_gap_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -84,7 +84,7 @@ pub fn link_gap_3d(
 /// the body-to-space rotation matrices of the particles.
 #[inline]
 pub fn link_force_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -131,7 +131,7 @@ fn cross_2d(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
 
 #[inline]
 fn geometry_2d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector2<f64>,
     ti: f64,
     xj: &Vector2<f64>,
@@ -146,7 +146,13 @@ fn geometry_2d(
 
 /// `Δu·n` of a 2-D link.
 #[inline]
-pub fn link_gap_2d(link: &Link, xi: &Vector2<f64>, ti: f64, xj: &Vector2<f64>, tj: f64) -> f64 {
+pub fn link_gap_2d(
+    link: &LinkKernel,
+    xi: &Vector2<f64>,
+    ti: f64,
+    xj: &Vector2<f64>,
+    tj: f64,
+) -> f64 {
     let (du, n, _, _, _) = geometry_2d(link, xi, ti, xj, tj);
     du.dot(&n)
 }
@@ -158,7 +164,7 @@ pub fn link_gap_2d(link: &Link, xi: &Vector2<f64>, ti: f64, xj: &Vector2<f64>, t
 /// reduces to `(c_n + c_s) sin(θ_J − θ_I)` on `I`.
 #[inline]
 pub fn link_force_2d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector2<f64>,
     ti: f64,
     xj: &Vector2<f64>,
