@@ -57,11 +57,10 @@ fn polygon_area_centroid(points: &[Vector3<f64>]) -> (Vector3<f64>, f64, Vector3
 
 /// Moments of a planar face given by its vertex loop.
 pub fn face_moments(points: &[Vector3<f64>]) -> FaceMoments {
-    let (_, _, vector_area) = polygon_area_centroid(points);
+    // NOTE: triangles fanned from the vertex mean; exact for planar faces star-shaped with
+    // respect to that point (the papers assume star-shaped faces).
+    let (centroid, area, vector_area) = polygon_area_centroid(points);
     let normal = vector_area.normalize();
-    // NOTE: the centroid is recomputed with triangles fanned from the vertex mean, projected on the
-    // normal so that sign errors of non-convex loops cannot arise (faces are star-shaped).
-    let (centroid, area, _) = polygon_area_centroid(points);
     let mut second = Matrix3::zeros();
     for k in 0..points.len() {
         let p1 = points[k] - centroid;
