@@ -7,7 +7,7 @@ use std::io::{self, Write};
 use crate::dem::{ParticleId, Solid, WetSurfaceData};
 
 /// Writes one row per particle:
-/// `id,x,y[,z],vx,vy[,vz],theta|qw,qx,qy,qz,omega|wx,wy,wz,sigma_n` (SI units; orientation
+/// `id,x,y\[,z\],vx,vy\[,vz\],theta|qw,qx,qy,qz,omega|wx,wy,wz,sigma_n` (SI units; orientation
 /// relative to t = 0; `sigma_n` as [`Solid::normal_stress`], positive in tension).
 pub fn write_particles_csv(w: &mut impl Write, solid: &Solid) -> io::Result<()> {
     let dim = solid.dim();

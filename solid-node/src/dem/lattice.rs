@@ -17,7 +17,7 @@ use crate::dem::geometry::convex_hull_faces;
 pub struct Lattice {
     /// Spatial dimension, 2 or 3.
     pub dim: usize,
-    /// Vertex positions [m] (2-D: z = 0).
+    /// Vertex positions \[m\] (2-D: z = 0).
     pub vertices: Vec<Vector3<f64>>,
     /// The particles.
     pub particles: Vec<ParticleShape>,
@@ -28,7 +28,7 @@ pub struct Lattice {
 pub struct ParticleShape {
     /// Index of its body in the scene.
     pub body: u32,
-    /// 3-D: outward faces as vertex loops; 2-D: edges `[a, b]` running counter-clockwise.
+    /// 3-D: outward faces as vertex loops; 2-D: edges `\[a, b\]` running counter-clockwise.
     pub faces: Vec<Vec<u32>>,
     /// Motion of its body.
     pub motion: Motion,
@@ -56,7 +56,7 @@ impl VertexPool<'_> {
     }
 }
 
-/// Outward loops of a hexahedron from its corners `c[i + 2j + 4k]` in a right-handed (i, j, k)
+/// Outward loops of a hexahedron from its corners `c\[i + 2j + 4k\]` in a right-handed (i, j, k)
 /// order (same as an axis-aligned cube with corner `(x_i, y_j, z_k)`).
 fn hexahedron_faces(c: [u32; 8]) -> Vec<Vec<u32>> {
     let p = |i: usize, j: usize, k: usize| c[i + 2 * j + 4 * k];

@@ -2,7 +2,7 @@
 //!
 //! The link potential is
 //! `U_IJ = ½ k |Δu|² + Σ_k c_k (1 − (Q_I a_k)·(Q_J a_k))`, `k = S/D⁰ · E/(1+ν)`,
-//! `c_k = S/D⁰ · α_k`, `a_k ∈ {n⁰, s, t}`, plus per particle `U_I = λ V'_I (ε^v_I)²` with
+//! `c_k = S/D⁰ · α_k`, `a_k ∈ {n⁰, s, t}`, plus per particle `U_I = ½ λ V'_I (ε^v_I)²` with
 //! `V'_I = V_I + 3ν/(1−2ν) V^f_I` and `ε^v_I = Σ_J S_IJ/(2 V'_I) Δu_IJ·n_IJ`.
 //! Forces and torques are the exact negative gradients, which reproduces (29)–(30) term by term.
 //!
@@ -19,34 +19,41 @@
 //!   would push its particles apart). The printed flexion torque `c_k Q_I a ∧ Q_J a` is already
 //!   the torque on `I` for the potential `c_k (1 − Q_I a · Q_J a)` (minimum when aligned). All
 //!   signs are fixed by the potential and checked against it by finite differences.
+//! - The volumetric force is printed `S λ ε_IJ (…)` with `ε_IJ = ε^v_I + ε^v_J` (the sum). With
+//!   ε^v_I as printed (= div u in the interior) that is the gradient of `Σ λ V' (ε^v)²`, twice
+//!   the elastic energy `½ λ (tr ε)²`: in a cubic lattice it gives σ = 2με + 2λ tr(ε) 1
+//!   (ν = 0.3: E_eff = 1.06 E, ν_eff = 0.375) and a one-particle-thick bar gets 1.23 E. We use
+//!   `U_I = ½ λ V'_I (ε^v_I)²`, i.e. the force `S λ (ε^v_I + ε^v_J)/2` (the mean); then the
+//!   interior gives λ tr(ε) exactly and a one-particle-thick bar gets exactly E, which is what
+//!   the free-volume weight `V + 3ν/(1−2ν) V^f` is built for (checked by `dem_wave.rs` at ν = 0.3).
 //! - 000 prints `V_I + 3ν/(1−2ν) V_I` in ε^v_I; 003 prints `V^f_I` for the second term and
 //!   defines the free volume just after, so 003 is used.
 
 use nalgebra::{Matrix3, Vector2, Vector3};
 
-use crate::dem::model::Link;
+use crate::dem::model::LinkKernel;
 
 /// What one link contributes, written once per link then gathered per particle.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LinkOut {
-    /// Force on `i` [N] (the force on `j` is its opposite). 2-D: z = 0.
+    /// Force on `i` \[N\] (the force on `j` is its opposite). 2-D: z = 0.
     pub force_i: Vector3<f64>,
-    /// Torque on `i` about its centre [N m]. 2-D: only z.
+    /// Torque on `i` about its centre \[N m\]. 2-D: only z.
     pub torque_i: Vector3<f64>,
-    /// Torque on `j` about its centre [N m].
+    /// Torque on `j` about its centre \[N m\].
     pub torque_j: Vector3<f64>,
-    /// Link energy `½ k |Δu|² + flexion` [J] (volumetric energy is per particle).
+    /// Link energy `½ k |Δu|² + flexion` \[J\] (volumetric energy is per particle).
     pub energy: f64,
-    /// `Δu·n` [m], input of ε^v.
+    /// `Δu·n` \[m\], input of ε^v.
     pub gap: f64,
-    /// Current centre distance D_IJ [m].
+    /// Current centre distance D_IJ \[m\].
     pub distance: f64,
 }
 
 /// Displacement jump `Δu`, unit vector `n = (X_I − X_J)/D`, `D`, lever arms `Q_I r_I`, `Q_J r_J`.
 #[inline]
 fn geometry_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -63,7 +70,7 @@ fn geometry_3d(
 /// `Δu·n` of a 3-D link (first pass, needed for ε^v when ν ≠ 0).
 #[inline]
 pub fn link_gap_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -77,7 +84,7 @@ pub fn link_gap_3d(
 /// the body-to-space rotation matrices of the particles.
 #[inline]
 pub fn link_force_3d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector3<f64>,
     qi: &Matrix3<f64>,
     xj: &Vector3<f64>,
@@ -124,7 +131,7 @@ fn cross_2d(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
 
 #[inline]
 fn geometry_2d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector2<f64>,
     ti: f64,
     xj: &Vector2<f64>,
@@ -139,7 +146,13 @@ fn geometry_2d(
 
 /// `Δu·n` of a 2-D link.
 #[inline]
-pub fn link_gap_2d(link: &Link, xi: &Vector2<f64>, ti: f64, xj: &Vector2<f64>, tj: f64) -> f64 {
+pub fn link_gap_2d(
+    link: &LinkKernel,
+    xi: &Vector2<f64>,
+    ti: f64,
+    xj: &Vector2<f64>,
+    tj: f64,
+) -> f64 {
     let (du, n, _, _, _) = geometry_2d(link, xi, ti, xj, tj);
     du.dot(&n)
 }
@@ -151,7 +164,7 @@ pub fn link_gap_2d(link: &Link, xi: &Vector2<f64>, ti: f64, xj: &Vector2<f64>, t
 /// reduces to `(c_n + c_s) sin(θ_J − θ_I)` on `I`.
 #[inline]
 pub fn link_force_2d(
-    link: &Link,
+    link: &LinkKernel,
     xi: &Vector2<f64>,
     ti: f64,
     xj: &Vector2<f64>,

@@ -27,6 +27,36 @@
 //! t = 0 (3-D). [`WetSurfaceData`] has the flat layout of `protocol::wire::WetSurface` plus
 //! per-element area, normal, centroid and velocity. 2-D quantities are per unit depth.
 //!
+//! # Readings of the papers (details and reasons in [`link_force`])
+//!
+//! - `Δu_IJ = (X_I + Q_I (G − X⁰_I)) − (X_J + Q_J (G − X⁰_J))` (the printed form is not zero at
+//!   rest); `n_IJ` in the volumetric terms is `(X_I − X_J)/D_IJ`; forces and torques are the
+//!   exact negative gradient of one potential (energy conservation, checked by finite
+//!   differences in the unit tests).
+//! - Volumetric force `S λ (ε^v_I + ε^v_J)/2`: the printed sum doubles λ; the mean gives E
+//!   exactly for a one-particle-thick bar with ν ≠ 0 (free-volume design, `tests/dem_wave.rs`).
+//! - ε^v_I uses the free volume `V_I + 3ν/(1−2ν) V^f_I` (003; 000 prints `V_I` twice).
+//! - Fracture: the relative elongation `(|X_I − X_J| − D⁰)/D⁰` is compared with
+//!   `elongation_at_break` as a fraction (000 writes it in percent).
+//! - A link of rest length h stands for the material between two particle centres: a clamp is
+//!   modelled by a fixed particle centred on it (`scenes/cantilever.toml`).
+//!
+//! # Wet surface layout
+//!
+//! Vertices are one per (lattice vertex, particle) slot, then (3-D) one per particle face
+//! centroid; their number and the number of elements never change during a run. Elements
+//! reference the representative slot of each mean vertex, so the wet elements are closed by
+//! index; fracture changes the connectivity and the wet flags and bumps `revision`. The trial's
+//! element velocities are `V^{n+1/2} + Ω^{n+1/2} × (x − X^{n+1})`; the committed surface's are
+//! the instantaneous rigid velocities.
+//!
+//! # Limitations
+//!
+//! - No contact between particles that are not linked (as in 000: fragments fly freely).
+//! - Explicit particles are linked only through faces with the same vertex set.
+//! - 2-D positions are stored with a zero z so that both dimensions share the state layout; the
+//!   2-D kernels work on 2 translations and 1 angle.
+//!
 //! # Invariants
 //!
 //! - Numerical trouble is returned as [`Diagnostic`]s in the [`StepReport`], never a panic.

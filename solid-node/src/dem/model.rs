@@ -27,16 +27,16 @@ pub struct LinkId(pub u32);
 /// Elastic material of the solid.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
-    /// Density ρ [kg/m³].
+    /// Density ρ \[kg/m³\].
     pub density: f64,
-    /// Young's modulus E [Pa].
+    /// Young's modulus E \[Pa\].
     pub young: f64,
-    /// Poisson's ratio ν [-], in [0, 0.5).
+    /// Poisson's ratio ν \[-\], in [0, 0.5).
     pub poisson: f64,
 }
 
 impl Material {
-    /// Lamé's first coefficient λ = Eν/((1+ν)(1−2ν)) [Pa].
+    /// Lamé's first coefficient λ = Eν/((1+ν)(1−2ν)) \[Pa\].
     pub fn lambda(&self) -> f64 {
         self.young * self.poisson / ((1.0 + self.poisson) * (1.0 - 2.0 * self.poisson))
     }
@@ -49,7 +49,7 @@ pub enum ParticleMotion {
     Free,
     /// Not at all.
     Fixed,
-    /// Constant velocity [m/s] (no rotation).
+    /// Constant velocity \[m/s\] (no rotation).
     Velocity([f64; 3]),
 }
 
@@ -58,25 +58,25 @@ pub enum ParticleMotion {
 pub struct Particle {
     /// Body index in the scene.
     pub body: u32,
-    /// Mass [kg] (2-D: per unit depth).
+    /// Mass \[kg\] (2-D: per unit depth).
     pub mass: f64,
-    /// Principal moments of inertia [kg m²] (2-D: `[I_z, 0, 0]`).
+    /// Principal moments of inertia \[kg m²\] (2-D: `\[I_z, 0, 0\]`).
     pub inertia: [f64; 3],
     /// Body-to-space rotation at t = 0 (principal axes; identity in 2-D).
     pub axes0: UnitQuaternion<f64>,
-    /// Volume [m³] (2-D: area).
+    /// Volume \[m³\] (2-D: area).
     pub volume: f64,
     /// Free volume (pyramids on the free faces with the centre as summit, 003 App. A).
     pub free_volume: f64,
-    /// Diameter h_s (largest vertex distance) [m].
+    /// Diameter h_s (largest vertex distance) \[m\].
     pub size: f64,
-    /// Centre of mass at t = 0 [m].
+    /// Centre of mass at t = 0 \[m\].
     pub x0: Vector3<f64>,
     /// Prescribed motion.
     pub motion: ParticleMotion,
-    /// `1 / (2 (V + 3ν/(1−2ν) V^f))`, the weight of a link in ε^v_I [1/m³].
+    /// `1 / (2 (V + 3ν/(1−2ν) V^f))`, the weight of a link in ε^v_I \[1/m³\].
     pub vol_weight: f64,
-    /// `λ (V + 3ν/(1−2ν) V^f)`: volumetric energy is `vol_energy_coef · (ε^v_I)²` [J].
+    /// `λ (V + 3ν/(1−2ν) V^f) / 2`: volumetric energy is `vol_energy_coef · (ε^v_I)²` \[J\].
     pub vol_energy_coef: f64,
 }
 
@@ -87,25 +87,25 @@ pub struct Link {
     pub i: u32,
     /// Second particle.
     pub j: u32,
-    /// Contact surface S_IJ [m²] (2-D: edge length × unit depth).
+    /// Contact surface S_IJ \[m²\] (2-D: edge length × unit depth).
     pub area: f64,
-    /// Rest distance D⁰_IJ [m].
+    /// Rest distance D⁰_IJ \[m\].
     pub d0: f64,
-    /// Contact centroid G⁰_IJ at t = 0 [m].
+    /// Contact centroid G⁰_IJ at t = 0 \[m\].
     pub centroid0: Vector3<f64>,
-    /// Face normal n⁰_IJ at t = 0, out of `i` [-].
+    /// Face normal n⁰_IJ at t = 0, out of `i` \[-\].
     pub normal0: Vector3<f64>,
     /// In-plane principal axes s, t at t = 0.
     pub s0: Vector3<f64>,
     /// See `s0`.
     pub t0: Vector3<f64>,
-    /// Principal moments of the contact surface I^s, I^t [m⁴].
+    /// Principal moments of the contact surface I^s, I^t \[m⁴\].
     pub i_st: [f64; 2],
-    /// `S/D⁰ · E/(1+ν)` [N/m].
+    /// `S/D⁰ · E/(1+ν)` \[N/m\].
     pub k_shear: f64,
-    /// `S · Eν/((1+ν)(1−2ν))` [N].
+    /// `S λ / 2 = S · Eν/(2(1+ν)(1−2ν))` \[N\] (multiplies `ε^v_I + ε^v_J`).
     pub k_vol: f64,
-    /// `S/D⁰ · (α_n, α_s, α_t)` [N m].
+    /// `S/D⁰ · (α_n, α_s, α_t)` \[N m\].
     pub flex: [f64; 3],
     /// `G⁰ − X⁰_i` in the body frame of `i`.
     pub r_i: Vector3<f64>,
@@ -119,6 +119,50 @@ pub struct Link {
     pub faces: [u32; 2],
 }
 
+/// What the force kernels read of a link (hot data, copied from [`Link`] at build time so
+/// that the evaluation streams 248 bytes per link instead of the whole record).
+#[derive(Clone, Debug)]
+pub struct LinkKernel {
+    /// First particle.
+    pub i: u32,
+    /// Second particle.
+    pub j: u32,
+    /// Contact surface S_IJ \[m²\].
+    pub area: f64,
+    /// See [`Link::k_shear`].
+    pub k_shear: f64,
+    /// See [`Link::k_vol`].
+    pub k_vol: f64,
+    /// See [`Link::flex`].
+    pub flex: [f64; 3],
+    /// See [`Link::r_i`].
+    pub r_i: Vector3<f64>,
+    /// See [`Link::r_j`].
+    pub r_j: Vector3<f64>,
+    /// See [`Link::axes_i`].
+    pub axes_i: [Vector3<f64>; 3],
+    /// See [`Link::axes_j`].
+    pub axes_j: [Vector3<f64>; 3],
+}
+
+impl LinkKernel {
+    /// The hot part of `link`.
+    pub fn from_link(link: &Link) -> Self {
+        LinkKernel {
+            i: link.i,
+            j: link.j,
+            area: link.area,
+            k_shear: link.k_shear,
+            k_vol: link.k_vol,
+            flex: link.flex,
+            r_i: link.r_i,
+            r_j: link.r_j,
+            axes_i: link.axes_i,
+            axes_j: link.axes_j,
+        }
+    }
+}
+
 /// A particle face.
 #[derive(Clone, Debug)]
 pub struct Face {
@@ -126,7 +170,7 @@ pub struct Face {
     pub particle: u32,
     /// Vertex slots of the loop (3-D) or segment (2-D), outward / counter-clockwise.
     pub slots: Vec<u32>,
-    /// Face centroid relative to the centre, body frame [m].
+    /// Face centroid relative to the centre, body frame \[m\].
     pub centroid_body: Vector3<f64>,
     /// The link through this face, if any.
     pub link: Option<u32>,
@@ -139,7 +183,7 @@ pub struct Slot {
     pub vertex: u32,
     /// Owner.
     pub particle: u32,
-    /// `a⁰ − X⁰` in the body frame [m].
+    /// `a⁰ − X⁰` in the body frame \[m\].
     pub body: Vector3<f64>,
 }
 
@@ -154,6 +198,8 @@ pub struct Model {
     pub particles: Vec<Particle>,
     /// Links, `i < j`.
     pub links: Vec<Link>,
+    /// Hot copies of `links` for the force kernels (same order).
+    pub kernels: Vec<LinkKernel>,
     /// Faces of all particles.
     pub faces: Vec<Face>,
     /// Vertex slots of all particles.
@@ -349,7 +395,8 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                 t0: geo.t,
                 i_st: [i_s, i_t],
                 k_shear: s / d0 * e / (1.0 + nu),
-                k_vol: s * lambda,
+                // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
+                k_vol: 0.5 * s * lambda,
                 flex: [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
                 r_i: bi(geo.centroid - pi.x0),
                 r_j: bj(geo.centroid - pj.x0),
@@ -377,7 +424,7 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         p.free_volume = free;
         let v_eff = p.volume + 3.0 * nu / (1.0 - 2.0 * nu) * free;
         p.vol_weight = 0.5 / v_eff;
-        p.vol_energy_coef = lambda * v_eff;
+        p.vol_energy_coef = 0.5 * lambda * v_eff;
     }
     // Incidence (CSR), links sorted by id per particle.
     let n = particles.len();
@@ -416,6 +463,7 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         dim,
         material,
         particles,
+        kernels: links.iter().map(LinkKernel::from_link).collect(),
         links,
         faces,
         slots,
@@ -445,7 +493,7 @@ fn segment_moments(a: Vector3<f64>, b: Vector3<f64>) -> crate::dem::geometry::Fa
     }
 }
 
-/// A 1-, 2- or 3-component vector as `[f64; 3]` (missing components 0).
+/// A 1-, 2- or 3-component vector as `\[f64; 3\]` (missing components 0).
 pub fn to3(v: &[f64]) -> [f64; 3] {
     let mut out = [0.0; 3];
     for (o, x) in out.iter_mut().zip(v) {

@@ -15,7 +15,7 @@ pub struct RotationDrift {
     pub increment: UnitQuaternion<f64>,
     /// `m⁻ = Ωᵀ m½` (body frame).
     pub momentum: Vector3<f64>,
-    /// Mean angular velocity over the step in the body frame [rad/s]:
+    /// Mean angular velocity over the step in the body frame \[rad/s\]:
     /// the rotation vector of `Ω` divided by `h`.
     pub mean_omega_body: Vector3<f64>,
     /// Fixed-point iterations used.

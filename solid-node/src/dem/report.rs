@@ -18,16 +18,16 @@ pub enum Diagnostic {
     DisplacementTooLarge {
         /// The particle.
         particle: ParticleId,
-        /// Displacement over the step [m].
+        /// Displacement over the step \[m\].
         displacement: f64,
-        /// Its size h_s [m].
+        /// Its size h_s \[m\].
         size: f64,
     },
     /// The particle turned more than π/8 in one step (003 §2.2).
     RotationTooLarge {
         /// The particle.
         particle: ParticleId,
-        /// Rotation angle over the step [rad].
+        /// Rotation angle over the step \[rad\].
         angle: f64,
     },
     /// Two linked particles came closer than half their rest distance (deep interpenetration).
@@ -36,16 +36,16 @@ pub enum Diagnostic {
         link: LinkId,
         /// Its particles.
         particles: [ParticleId; 2],
-        /// Current centre distance [m].
+        /// Current centre distance \[m\].
         distance: f64,
-        /// Rest distance [m].
+        /// Rest distance \[m\].
         rest_distance: f64,
     },
     /// The step exceeds the elastic stability bound of the explicit scheme.
     DtAboveElasticLimit {
-        /// Step used [s].
+        /// Step used \[s\].
         dt: f64,
-        /// Bound [s] (see [`crate::dem::Solid::elastic_dt_limit`]).
+        /// Bound \[s\] (see [`crate::dem::Solid::elastic_dt_limit`]).
         limit: f64,
         /// The particle whose stiffness sets the bound.
         particle: ParticleId,
@@ -66,11 +66,11 @@ pub struct BrokenLink {
     pub link: LinkId,
     /// Its particles.
     pub particles: [ParticleId; 2],
-    /// Relative elongation `(|X_I − X_J| − D⁰)/D⁰` when it broke [-].
+    /// Relative elongation `(|X_I − X_J| − D⁰)/D⁰` when it broke \[-\].
     pub elongation: f64,
 }
 
-/// Energies of the solid [J] (2-D: per unit depth).
+/// Energies of the solid \[J\] (2-D: per unit depth).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Energies {
     /// `Σ ½ m |V|²`.
@@ -101,9 +101,9 @@ impl Energies {
 /// Linear and angular momentum of the solid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Momentum {
-    /// `Σ m V` [kg m/s] (2-D: z = 0).
+    /// `Σ m V` \[kg m/s\] (2-D: z = 0).
     pub linear: [f64; 3],
-    /// `Σ X × m V + Q I ω` about the origin [kg m²/s] (2-D: only z).
+    /// `Σ X × m V + Q I ω` about the origin \[kg m²/s\] (2-D: only z).
     pub angular: [f64; 3],
 }
 
@@ -112,7 +112,7 @@ pub struct Momentum {
 pub struct StepReport {
     /// Steps committed so far (this one included).
     pub step: u64,
-    /// Simulated time after the step [s].
+    /// Simulated time after the step \[s\].
     pub time: f64,
     /// Links broken in this step.
     pub broken_links: Vec<BrokenLink>,

@@ -7,8 +7,9 @@
 //! - A link's shear/compression energy is `½ k |Δu|²` with `Δu = B_I y_I + B_J y_J`,
 //!   `y = M^{1/2} (X, θ)`, `‖B_I‖² ≤ 1/m_I + |r_I|²/I_min,I` (`r_I = G − X_I`). Cauchy–Schwarz
 //!   gives `|Δu|² ≤ 2 (‖B_I‖²|y_I|² + ‖B_J‖²|y_J|²)`.
-//! - The volumetric energy `Σ_I λ V'_I (Σ_J c_IJ g_IJ)²`, `c_IJ = S_IJ/(2V'_I)`, `g = Δu·n`, is
-//!   bounded the same way by a link stiffness `k_v = λ S (C_I + C_J)`, `C_I = Σ_J c_IJ`.
+//! - The volumetric energy `Σ_I ½ λ V'_I (Σ_J c_IJ g_IJ)²`, `c_IJ = S_IJ/(2V'_I)`, `g = Δu·n`,
+//!   is bounded the same way (Cauchy–Schwarz on the sum) by a link stiffness
+//!   `k_v = λ S (C_I + C_J) / 2`, `C_I = Σ_J c_IJ`.
 //! - Flexion–torsion `c_k (1 − a_I·a_J) ≤ ½ c_k |δθ_I − δθ_J|² ≤ c_k (|δθ_I|² + |δθ_J|²)`.
 //!
 //! Summing, `ω_max² ≤ max_I 2 Σ_{J} [(k + k_v)(1/m_I + |r_I|²/I_min,I) + Σ_k |c_k| / I_min,I]`
@@ -35,8 +36,8 @@ pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
         if broken[l] {
             continue;
         }
-        let k =
-            link.k_shear + lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]);
+        let k = link.k_shear
+            + 0.5 * lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]);
         let flex = if model.dim == 3 {
             link.flex.iter().map(|c| c.abs()).sum::<f64>()
         } else {

@@ -185,3 +185,60 @@ fn forces_and_energy_vanish_at_rest() {
         }
     }
 }
+
+mod properties {
+    //! Property tests: mass properties of rotated boxes through the convex hull are those of
+    //! the box, whatever the rotation.
+
+    use nalgebra::{Rotation3, Vector3};
+    use proptest::prelude::*;
+
+    use crate::dem::geometry::{convex_hull_faces, inertia_from_second_moment, polyhedron_mass};
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 64,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(0),
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        })]
+        #[test]
+        fn rotated_box_mass_properties(
+            a in 0.1f64..2.0, b in 0.1f64..2.0, c in 0.1f64..2.0,
+            roll in -3.0f64..3.0, pitch in -1.5f64..1.5, yaw in -3.0f64..3.0,
+            tx in -5.0f64..5.0, ty in -5.0f64..5.0, tz in -5.0f64..5.0,
+        ) {
+            let rot = Rotation3::from_euler_angles(roll, pitch, yaw);
+            let shift = Vector3::new(tx, ty, tz);
+            let pts: Vec<Vector3<f64>> = (0..8)
+                .map(|k| {
+                    let local = Vector3::new(
+                        a * ((k & 1) as f64 - 0.5),
+                        b * (((k >> 1) & 1) as f64 - 0.5),
+                        c * ((k >> 2) as f64 - 0.5),
+                    );
+                    rot * local + shift
+                })
+                .collect();
+            let faces = convex_hull_faces(&pts).unwrap();
+            prop_assert_eq!(faces.len(), 6);
+            let m = polyhedron_mass(&pts, &faces);
+            let scale = a.max(b).max(c);
+            prop_assert!((m.volume - a * b * c).abs() < 1e-12 * scale.powi(3));
+            prop_assert!((m.centroid - shift).norm() < 1e-12 * (scale + shift.norm()));
+            let inertia = inertia_from_second_moment(&m.second_moment, 1.0);
+            let mut got: Vec<f64> = inertia.symmetric_eigen().eigenvalues.iter().copied().collect();
+            got.sort_by(f64::total_cmp);
+            let mass = a * b * c;
+            let mut want = vec![
+                mass * (b * b + c * c) / 12.0,
+                mass * (a * a + c * c) / 12.0,
+                mass * (a * a + b * b) / 12.0,
+            ];
+            want.sort_by(f64::total_cmp);
+            for (g, w) in got.iter().zip(&want) {
+                prop_assert!((g - w).abs() < 1e-10 * mass * scale * scale);
+            }
+        }
+    }
+}

@@ -22,7 +22,7 @@ pub struct WetSurfaceData {
     pub dim: usize,
     /// Incremented when the connectivity or wet flags change.
     pub revision: u64,
-    /// Vertex coordinates [m], `dim` each.
+    /// Vertex coordinates \[m\], `dim` each.
     pub vertices: Vec<f64>,
     /// `dim` vertex indices per element, oriented with normals out of the solid.
     pub elements: Vec<u32>,
@@ -30,13 +30,13 @@ pub struct WetSurfaceData {
     pub element_particle: Vec<u32>,
     /// Whether each element touches the fluid (`false`: internal face of an unbroken link).
     pub wet: Vec<bool>,
-    /// Element area [m²] (2-D: length, per unit depth).
+    /// Element area \[m²\] (2-D: length, per unit depth).
     pub area: Vec<f64>,
     /// Unit outward normal, `dim` each.
     pub normal: Vec<f64>,
-    /// Element centroid [m], `dim` each.
+    /// Element centroid \[m\], `dim` each.
     pub centroid: Vec<f64>,
-    /// Velocity of the owner particle's rigid motion at the element centroid [m/s], `dim` each.
+    /// Velocity of the owner particle's rigid motion at the element centroid \[m/s\], `dim` each.
     pub velocity: Vec<f64>,
 }
 

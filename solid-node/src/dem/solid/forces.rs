@@ -54,7 +54,7 @@ pub(super) fn internal_forces(
             if broken[l] {
                 return 0.0;
             }
-            let link = &model.links[l];
+            let link = &model.kernels[l];
             let (i, j) = (link.i as usize, link.j as usize);
             if dim == 3 {
                 link_gap_3d(
@@ -79,7 +79,7 @@ pub(super) fn internal_forces(
             let range = model.incidence_start[p] as usize..model.incidence_start[p + 1] as usize;
             let mut acc = 0.0;
             for &(l, _) in &model.incidence[range] {
-                acc += model.links[l as usize].area * gaps_ro[l as usize];
+                acc += model.kernels[l as usize].area * gaps_ro[l as usize];
             }
             acc * model.particles[p].vol_weight
         });
@@ -89,7 +89,7 @@ pub(super) fn internal_forces(
         if broken[l] {
             return LinkOut::default();
         }
-        let link = &model.links[l];
+        let link = &model.kernels[l];
         let (i, j) = (link.i as usize, link.j as usize);
         let e = if with_volume {
             eps_ro[i] + eps_ro[j]

@@ -27,7 +27,7 @@ const CHUNK: usize = 256;
 /// Safety factor applied to the elastic bound in [`Solid::max_dt`].
 pub const ELASTIC_SAFETY: f64 = 0.9;
 
-/// Rotation allowed per step (003 §2.2) [rad].
+/// Rotation allowed per step (003 §2.2) \[rad\].
 pub const MAX_ROTATION: f64 = std::f64::consts::PI / 8.0;
 
 /// Serializable dynamic state (the checkpoint).
@@ -39,9 +39,9 @@ struct State {
     time: f64,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
-    /// 3-D: quaternion (w, x, y, z) of the principal frame; 2-D: `[θ, 0, 0, 0]`.
+    /// 3-D: quaternion (w, x, y, z) of the principal frame; 2-D: `\[θ, 0, 0, 0\]`.
     rot: Vec<[f64; 4]>,
-    /// 3-D: body angular momentum `I ω`; 2-D: `[0, 0, ω]`.
+    /// 3-D: body angular momentum `I ω`; 2-D: `\[0, 0, ω\]`.
     ang: Vec<[f64; 3]>,
     broken: Vec<bool>,
     dissipated: f64,
@@ -55,7 +55,7 @@ struct ParticleTrial {
     x: [f64; 3],
     v_half: [f64; 3],
     rot: [f64; 4],
-    /// 3-D: `m⁻ = Ωᵀ m½`; 2-D: `[0, 0, ω½]`.
+    /// 3-D: `m⁻ = Ωᵀ m½`; 2-D: `\[0, 0, ω½\]`.
     ang: [f64; 3],
     /// Mean angular velocity over the step, space frame.
     omega: [f64; 3],
@@ -68,14 +68,14 @@ struct ParticleTrial {
 pub struct Trial {
     /// Spatial dimension.
     pub dim: usize,
-    /// Centres `X^{n+1}` [m], `dim` each.
+    /// Centres `X^{n+1}` \[m\], `dim` each.
     pub position: Vec<f64>,
-    /// Orientation at n+1 relative to t = 0: 2-D the angle [rad], 3-D the unit quaternion
+    /// Orientation at n+1 relative to t = 0: 2-D the angle \[rad\], 3-D the unit quaternion
     /// `(w, x, y, z)` of `Q^{n+1}` (identity at t = 0).
     pub orientation: Vec<f64>,
-    /// `V^{n+1/2}` [m/s], `dim` each.
+    /// `V^{n+1/2}` \[m/s\], `dim` each.
     pub velocity_half: Vec<f64>,
-    /// Mean angular velocity `Ω^{n+1/2}` over the step, space frame [rad/s] (2-D: 1 each).
+    /// Mean angular velocity `Ω^{n+1/2}` over the step, space frame \[rad/s\] (2-D: 1 each).
     pub omega_half: Vec<f64>,
     /// Wet surface at n+1; element velocities are `V^{n+1/2} + Ω^{n+1/2} × (x − X^{n+1})`.
     pub wet: WetSurfaceData,
@@ -125,10 +125,15 @@ pub struct Solid {
     topo: WetTopology,
     wet: WetSurfaceData,
     sums: Vec<(Vector3<f64>, u32)>,
+    /// Reused per-particle buffers for the wet-surface geometry (x, v, ω, orientation).
+    kin: KinematicsScratch,
     limit: (f64, u32),
 }
 
-/// Fills `out[k] = f(k)` over a fixed partition.
+/// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.
+type KinematicsScratch = (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 4]>);
+
+/// Fills `out\[k\] = f(k)` over a fixed partition.
 fn par_fill<T: Send>(
     pool: Option<&rayon::ThreadPool>,
     out: &mut [T],
@@ -289,6 +294,7 @@ impl Solid {
             topo,
             wet: WetSurfaceData::default(),
             sums: Vec::new(),
+            kin: (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
             limit,
             model,
         };
@@ -318,22 +324,22 @@ impl Solid {
         self.state.step
     }
 
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub fn time(&self) -> f64 {
         self.state.time
     }
 
-    /// Centre of particle `p` [m] (`dim` components used).
+    /// Centre of particle `p` \[m\] (`dim` components used).
     pub fn position(&self, p: ParticleId) -> [f64; 3] {
         self.state.x[p.0 as usize]
     }
 
-    /// Velocity of particle `p` [m/s].
+    /// Velocity of particle `p` \[m/s\].
     pub fn velocity(&self, p: ParticleId) -> [f64; 3] {
         self.state.v[p.0 as usize]
     }
 
-    /// Orientation relative to t = 0: 2-D `[θ, 0, 0, 0]`, 3-D the quaternion `(w, x, y, z)`.
+    /// Orientation relative to t = 0: 2-D `\[θ, 0, 0, 0\]`, 3-D the quaternion `(w, x, y, z)`.
     pub fn orientation(&self, p: ParticleId) -> [f64; 4] {
         let i = p.0 as usize;
         if self.model.dim == 3 {
@@ -361,7 +367,7 @@ impl Solid {
         ]
     }
 
-    /// Angular velocity of particle `p`, space frame [rad/s] (2-D: z only).
+    /// Angular velocity of particle `p`, space frame \[rad/s\] (2-D: z only).
     pub fn angular_velocity(&self, p: ParticleId) -> [f64; 3] {
         let i = p.0 as usize;
         if self.model.dim == 3 {
@@ -374,7 +380,7 @@ impl Solid {
         }
     }
 
-    /// Sets the velocity of a free particle [m/s] (initial conditions).
+    /// Sets the velocity of a free particle \[m/s\] (initial conditions).
     pub fn set_velocity(&mut self, p: ParticleId, v: &[f64]) {
         let i = p.0 as usize;
         if self.model.particles[i].motion == ParticleMotion::Free {
@@ -383,7 +389,7 @@ impl Solid {
         self.trial_valid = false;
     }
 
-    /// Sets the angular velocity of a free particle, space frame [rad/s] (2-D: one value).
+    /// Sets the angular velocity of a free particle, space frame \[rad/s\] (2-D: one value).
     pub fn set_angular_velocity(&mut self, p: ParticleId, omega: &[f64]) {
         let i = p.0 as usize;
         if self.model.particles[i].motion != ParticleMotion::Free {
@@ -409,12 +415,12 @@ impl Solid {
         self.state.broken[l.0 as usize]
     }
 
-    /// Internal force on particle `p` at the current configuration [N].
+    /// Internal force on particle `p` at the current configuration \[N\].
     pub fn internal_force(&self, p: ParticleId) -> [f64; 3] {
         self.force_int[p.0 as usize]
     }
 
-    /// Internal torque on particle `p` (space frame) [N m].
+    /// Internal torque on particle `p` (space frame) \[N m\].
     pub fn internal_torque(&self, p: ParticleId) -> [f64; 3] {
         self.torque_int[p.0 as usize]
     }
@@ -433,7 +439,7 @@ impl Solid {
     }
 
     /// Evaluates every unbroken link at the committed configuration again (the step does this
-    /// itself; exposed for benchmarks and diagnostics). Returns the elastic energy [J].
+    /// itself; exposed for benchmarks and diagnostics). Returns the elastic energy \[J\].
     pub fn recompute_internal_forces(&mut self) -> f64 {
         self.update_forces();
         self.elastic
@@ -461,9 +467,9 @@ impl Solid {
 
     fn update_wet(&mut self) {
         let n = self.n_particles();
-        let omega: Vec<[f64; 3]> = (0..n)
-            .map(|p| self.angular_velocity(ParticleId(p as u32)))
-            .collect();
+        let mut omega = std::mem::take(&mut self.kin.2);
+        omega.clear();
+        omega.extend((0..n).map(|p| self.angular_velocity(ParticleId(p as u32))));
         let dim = self.model.dim;
         let rot = &self.state.rot;
         let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rot[p], v);
@@ -477,9 +483,10 @@ impl Solid {
             &mut self.sums,
             &mut self.wet,
         );
+        self.kin.2 = omega;
     }
 
-    /// The largest step allowed now [s]: `ELASTIC_SAFETY ×` the elastic bound, the step that
+    /// The largest step allowed now \[s\]: `ELASTIC_SAFETY ×` the elastic bound, the step that
     /// moves a particle by its size h_s or by `displacement_cap` (the caller's limit, e.g. one
     /// fluid cell), and the step that turns a particle by π/8 (003 §2.2).
     pub fn max_dt(&self, displacement_cap: f64) -> f64 {
@@ -497,7 +504,7 @@ impl Solid {
         dt
     }
 
-    /// Elastic stability bound of the explicit scheme [s] and the particle that sets it
+    /// Elastic stability bound of the explicit scheme \[s\] and the particle that sets it
     /// (see [`crate::dem::stability`]).
     pub fn elastic_dt_limit(&self) -> (f64, ParticleId) {
         (self.limit.0, ParticleId(self.limit.1))
@@ -555,7 +562,7 @@ impl Solid {
         }
     }
 
-    /// Normal stress of each particle [Pa]: the mean over its unbroken links of the normal
+    /// Normal stress of each particle \[Pa\]: the mean over its unbroken links of the normal
     /// traction `F_J→I · (X_J − X_I)/|X_J − X_I| / S_IJ` (positive in tension, 0 without links),
     /// the quantity plotted in 000 Fig. 16.
     pub fn normal_stress(&self) -> Vec<f64> {

@@ -26,8 +26,8 @@ impl Solid {
         self.trial_valid = false;
     }
 
-    /// Trial positions and velocities for external loads `force` (`dim` per particle, [N]) and
-    /// `torque` (1 per particle in 2-D, 3 in 3-D, space frame, about the centre [N m]), held
+    /// Trial positions and velocities for external loads `force` (`dim` per particle, \[N\]) and
+    /// `torque` (1 per particle in 2-D, 3 in 3-D, space frame, about the centre \[N m\]), held
     /// fixed over the step. May be called repeatedly; nothing is committed.
     pub fn trial(&mut self, force: &[f64], torque: &[f64]) -> &Trial {
         assert!(self.dt > 0.0, "begin_step must precede trial");
@@ -84,20 +84,27 @@ impl Solid {
                 t.omega_half.push(pt.omega[2]);
             }
         }
-        let xs: Vec<[f64; 3]> = self.particle_trial.iter().map(|p| p.x).collect();
-        let vs: Vec<[f64; 3]> = self.particle_trial.iter().map(|p| p.v_half).collect();
-        let ws: Vec<[f64; 3]> = self.particle_trial.iter().map(|p| p.omega).collect();
-        let rots: Vec<[f64; 4]> = self.particle_trial.iter().map(|p| p.rot).collect();
+        let (xs, vs, ws, rots) = &mut self.kin;
+        xs.clear();
+        vs.clear();
+        ws.clear();
+        rots.clear();
+        for pt in &self.particle_trial {
+            xs.push(pt.x);
+            vs.push(pt.v_half);
+            ws.push(pt.omega);
+            rots.push(pt.rot);
+        }
         write_connectivity(&self.model, &self.state.broken, &self.topo, &mut t.wet);
         t.wet.revision = self.state.wet_revision;
         let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rots[p], v);
         write_geometry(
             &self.model,
             &self.topo,
-            &xs,
+            xs,
             &rotate,
-            &vs,
-            &ws,
+            vs,
+            ws,
             &mut self.sums,
             &mut t.wet,
         );
