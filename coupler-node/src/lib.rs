@@ -2,3 +2,6 @@
 //! and inspection, and the launcher that starts and supervises the nodes.
 
 #![warn(missing_docs)]
+
+pub mod inspect;
+pub mod record;
