@@ -231,6 +231,28 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
     assert_eq!(streamed, rec.messages.len());
 }
 
+/// Writes a complete and a cut sample recording into `$COSIM_RECORD_SAMPLE_DIR` (when set) for
+/// `tests/py/check_mcap.py`.
+#[test]
+fn write_samples_for_the_python_check() {
+    let Ok(dir) = std::env::var("COSIM_RECORD_SAMPLE_DIR") else {
+        return;
+    };
+    let (bytes, _, ends) = record_run(5, RecordLevel::Exchange);
+    let dir = std::path::Path::new(&dir);
+    std::fs::write(dir.join("sample.mcap"), &bytes).unwrap();
+    std::fs::write(
+        dir.join("sample-cut.mcap"),
+        &bytes[..(ends[2] + ends[3]) / 2],
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("sample-recovered.mcap"),
+        recover(&bytes[..ends[3] - 5]).unwrap(),
+    )
+    .unwrap();
+}
+
 #[test]
 fn same_run_records_the_same_message_bytes() {
     let (a, _, _) = record_run(4, RecordLevel::Exchange);
