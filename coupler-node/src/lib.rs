@@ -1,11 +1,19 @@
 //! The coupler: the time loop, the handshake, the conservation ledger, the MCAP record, replay
 //! and inspection, and the launcher that starts and supervises the nodes.
+//!
+//! - [`scheme`]: the handshake as a sans-IO state machine; [`dt`]: time-step agreement;
+//!   [`ledger`]: the conservation balance.
+//! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
+//! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs).
+//! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`]: reading it back.
+//! - [`cli`]: the command line.
 
 #![warn(missing_docs)]
 
 pub mod cli;
 pub mod driver;
 pub mod dt;
+pub mod inspect;
 pub mod launch;
 pub mod ledger;
 pub mod record;

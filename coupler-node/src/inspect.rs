@@ -1,0 +1,284 @@
+//! `coupler-node inspect`: pure functions over a [`Recording`]: a table of the recorded steps
+//! and a dump of the arrays exchanged at one step (JSON or CSV).
+//!
+//! Step data come from the diagnostics JSON messages (see [`crate::record`]); a step without
+//! them (level `exchange` runs cut short, older files) falls back to decoding the bincode frames
+//! (`StepPlan` for t and dt, `FixedPointDecision` for the residuals, `ConservedTotals` for the
+//! ledger).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use protocol::codec;
+use protocol::wire::Message;
+use serde_json::{Value, json};
+
+use crate::record::{DIAGNOSTICS_TOPIC, RecordError, Recorded, Recording};
+
+/// Output format of [`export_step`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExportFormat {
+    /// One JSON document: `{"step": n, "messages": [{topic, sequence, kind, ...fields}]}`.
+    Json,
+    /// One section per message: a `# topic ...` comment line, a `field,index,value` header
+    /// line, then one row per array element (scalars have index 0).
+    Csv,
+}
+
+/// What is known about one step.
+#[derive(Default)]
+struct StepRow {
+    t: Option<f64>,
+    dt: Option<f64>,
+    iterations: Option<u64>,
+    residuals: Vec<f64>,
+    ledger: BTreeMap<String, f64>,
+    from_diagnostics: bool,
+}
+
+/// A table of the recorded steps: step, t, dt, iterations, residual history and ledger totals.
+pub fn list_steps(rec: &Recording) -> Result<String, RecordError> {
+    let mut rows: BTreeMap<u64, StepRow> = BTreeMap::new();
+    for m in rec.topic(DIAGNOSTICS_TOPIC) {
+        let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
+        let step = value
+            .get("step")
+            .and_then(Value::as_u64)
+            .unwrap_or(m.log_time);
+        let row = rows.entry(step).or_default();
+        row.from_diagnostics = true;
+        row.t = value.get("t").and_then(Value::as_f64);
+        row.dt = value.get("dt").and_then(Value::as_f64);
+        row.iterations = value.get("iterations").and_then(Value::as_u64);
+        row.residuals = value
+            .get("residuals")
+            .and_then(Value::as_array)
+            .map(|a| a.iter().filter_map(Value::as_f64).collect())
+            .unwrap_or_default();
+        if let Some(ledger) = value.get("ledger").and_then(Value::as_object) {
+            for (key, v) in ledger {
+                if let Some(x) = v.as_f64() {
+                    row.ledger.insert(key.clone(), x);
+                }
+            }
+        }
+    }
+    // Fallback: decode the frames of steps the diagnostics do not cover.
+    for m in rec.messages.iter().filter(|m| is_frame_topic(&m.topic)) {
+        let (_, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
+        let row = rows.entry(m.log_time).or_default();
+        if row.from_diagnostics {
+            continue;
+        }
+        match msg {
+            Message::StepPlan(plan) => {
+                row.t = Some(plan.t);
+                row.dt = Some(plan.dt);
+            }
+            Message::FixedPointDecision(d) => {
+                row.residuals.push(d.residual);
+                row.iterations = Some(u64::from(d.stamp.iteration) + 1);
+            }
+            Message::ConservedTotals(totals) => {
+                let node = totals.node.name();
+                row.ledger.insert(format!("{node}_mass"), totals.mass);
+                row.ledger.insert(format!("{node}_energy"), totals.energy);
+            }
+            _ => {}
+        }
+    }
+    let mut out = String::new();
+    writeln!(
+        out,
+        "{:>8}  {:>12}  {:>11}  {:>5}  {:<40}  ledger",
+        "step", "t", "dt", "iter", "residuals"
+    )
+    .expect("writing to a String");
+    for (step, row) in &rows {
+        let residuals = row
+            .residuals
+            .iter()
+            .map(|r| format!("{r:.2e}"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let ledger = row
+            .ledger
+            .iter()
+            .map(|(k, v)| format!("{k}={v:.6e}"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        writeln!(
+            out,
+            "{:>8}  {:>12}  {:>11}  {:>5}  {:<40}  {}",
+            step,
+            opt(row.t, |t| format!("{t:.6e}")),
+            opt(row.dt, |dt| format!("{dt:.4e}")),
+            opt(row.iterations, |i| i.to_string()),
+            if residuals.is_empty() {
+                "-".to_string()
+            } else {
+                residuals
+            },
+            if ledger.is_empty() { "-" } else { &ledger },
+        )
+        .expect("writing to a String");
+    }
+    writeln!(
+        out,
+        "{} steps, {} messages{}",
+        rows.len(),
+        rec.messages.len(),
+        if rec.truncated {
+            format!(
+                " (file truncated: {} bytes unreadable)",
+                rec.unreadable_bytes
+            )
+        } else {
+            String::new()
+        }
+    )
+    .expect("writing to a String");
+    Ok(out)
+}
+
+/// Dumps what was exchanged at `step`: every recorded frame (decoded) and diagnostics message
+/// whose log time is `step`.
+pub fn export_step(
+    rec: &Recording,
+    step: u64,
+    format: ExportFormat,
+) -> Result<String, RecordError> {
+    let at_step: Vec<&Recorded> = rec.messages.iter().filter(|m| m.log_time == step).collect();
+    if at_step.is_empty() {
+        let mut steps: Vec<u64> = rec.messages.iter().map(|m| m.log_time).collect();
+        steps.sort_unstable();
+        steps.dedup();
+        return Err(RecordError::NoSuchStep {
+            step,
+            n_steps: steps.len(),
+            first: steps.first().copied().unwrap_or(0),
+            last: steps.last().copied().unwrap_or(0),
+        });
+    }
+    let mut entries = Vec::new();
+    for m in at_step {
+        let (kind, fields) = if m.topic == DIAGNOSTICS_TOPIC {
+            let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
+            ("Diagnostics".to_string(), value)
+        } else if is_frame_topic(&m.topic) {
+            let (header, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
+            let mut fields = message_fields(&msg).map_err(|e| decode_err(m, e))?;
+            if let Value::Object(map) = &mut fields {
+                map.insert("iteration".into(), json!(header.stamp.iteration));
+                map.insert("sender".into(), json!(header.sender.name()));
+            }
+            (format!("{:?}", header.kind), fields)
+        } else {
+            continue;
+        };
+        entries.push(json!({
+            "topic": m.topic,
+            "sequence": m.sequence,
+            "kind": kind,
+            "fields": fields,
+        }));
+    }
+    match format {
+        ExportFormat::Json => {
+            let doc = json!({"step": step, "messages": entries});
+            serde_json::to_string_pretty(&doc).map_err(|e| RecordError::Decode {
+                topic: "export".into(),
+                step,
+                reason: e.to_string(),
+            })
+        }
+        ExportFormat::Csv => {
+            let mut out = String::new();
+            for entry in &entries {
+                writeln!(
+                    out,
+                    "# topic={} sequence={} kind={} step={step}",
+                    entry["topic"].as_str().unwrap_or(""),
+                    entry["sequence"],
+                    entry["kind"].as_str().unwrap_or(""),
+                )
+                .expect("writing to a String");
+                out.push_str("field,index,value\n");
+                csv_rows(&mut out, "", &entry["fields"]);
+                out.push('\n');
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// The fields of a message as JSON, with checkpoint bytes replaced by their length.
+fn message_fields(msg: &Message) -> Result<Value, serde_json::Error> {
+    let mut value = serde_json::to_value(msg)?;
+    // Externally tagged enum: {"Kind": {fields}}.
+    let inner = match &mut value {
+        Value::Object(map) if map.len() == 1 => map.values_mut().next().map(std::mem::take),
+        _ => None,
+    };
+    let mut fields = inner.unwrap_or(value);
+    if let Message::Checkpoint(cp) = msg
+        && let Value::Object(map) = &mut fields
+    {
+        map.insert("bytes".into(), json!(format!("<{} bytes>", cp.bytes.len())));
+    }
+    Ok(fields)
+}
+
+/// Flattens a JSON value into `field,index,value` rows (nested objects join names with `.`).
+fn csv_rows(out: &mut String, name: &str, value: &Value) {
+    match value {
+        Value::Object(map) => {
+            for (key, v) in map {
+                let child = if name.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{name}.{key}")
+                };
+                csv_rows(out, &child, v);
+            }
+        }
+        Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
+            for (i, v) in items.iter().enumerate() {
+                writeln!(out, "{name},{i},{}", csv_scalar(v)).expect("writing to a String");
+            }
+        }
+        Value::Array(items) => {
+            for (i, v) in items.iter().enumerate() {
+                csv_rows(out, &format!("{name}[{i}]"), v);
+            }
+        }
+        scalar => writeln!(out, "{name},0,{}", csv_scalar(scalar)).expect("writing to a String"),
+    }
+}
+
+fn csv_scalar(value: &Value) -> String {
+    match value {
+        Value::String(s) if s.contains([',', '"', '\n']) => {
+            format!("\"{}\"", s.replace('"', "\"\""))
+        }
+        Value::String(s) => s.clone(),
+        Value::Null => String::new(),
+        other => other.to_string(),
+    }
+}
+
+fn is_frame_topic(topic: &str) -> bool {
+    topic != DIAGNOSTICS_TOPIC
+}
+
+fn opt<T>(value: Option<T>, show: impl Fn(T) -> String) -> String {
+    value.map_or_else(|| "-".to_string(), show)
+}
+
+fn decode_err(m: &Recorded, err: impl std::fmt::Display) -> RecordError {
+    RecordError::Decode {
+        topic: m.topic.clone(),
+        step: m.log_time,
+        reason: err.to_string(),
+    }
+}

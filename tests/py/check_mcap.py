@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Checks a co-simulation MCAP recording with the Python `mcap` package (pip install 'mcap==1.*').
+
+usage: check_mcap.py FILE.mcap [--truncated]
+
+Opens the file, reads every message, and checks that
+  - every channel is a known topic with the expected message encoding and schema
+    (bus and checkpoint channels: "bincode", schema "protocol::wire::Message"/"bincode-serde";
+    "diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object),
+  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 1,
+  - every diagnostics message parses as a JSON object with an integer "step" equal to log_time,
+  - sequence numbers count up from 0 per channel, and the metadata "scene" and "run" exist,
+  - the file has a summary whose message count matches (unless --truncated: then the file is
+    read with the streaming reader up to where it ends).
+Prints "ok N messages" and exits 0, or prints the first problem and exits 1.
+"""
+
+import json
+import struct
+import sys
+
+from mcap.reader import make_reader
+from mcap.records import Channel, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+
+FRAME_TOPICS = {
+    "fluid-to-coupler",
+    "coupler-to-fluid",
+    "solid-to-coupler",
+    "coupler-to-solid",
+    "checkpoint/fluid",
+    "checkpoint/solid",
+}
+DIAGNOSTICS = "diagnostics"
+PROTOCOL_VERSION = 1
+
+
+class CheckError(Exception):
+    pass
+
+
+def check_channel(channel, schema):
+    if channel.topic in FRAME_TOPICS:
+        if channel.message_encoding != "bincode":
+            raise CheckError(f"{channel.topic}: message encoding {channel.message_encoding!r}, want 'bincode'")
+        if schema is None or schema.name != "protocol::wire::Message" or schema.encoding != "bincode-serde":
+            raise CheckError(f"{channel.topic}: schema {schema and (schema.name, schema.encoding)!r}")
+        if b"protocol version" not in schema.data:
+            raise CheckError(f"{channel.topic}: schema data does not name the protocol version")
+    elif channel.topic == DIAGNOSTICS:
+        if channel.message_encoding != "json":
+            raise CheckError(f"diagnostics: message encoding {channel.message_encoding!r}, want 'json'")
+        if schema is None or schema.encoding != "jsonschema":
+            raise CheckError(f"diagnostics: schema {schema and (schema.name, schema.encoding)!r}")
+        doc = json.loads(schema.data)
+        if doc.get("type") != "object" or "step" not in doc.get("properties", {}):
+            raise CheckError("diagnostics: json schema is not an object schema with 'step'")
+    else:
+        raise CheckError(f"unknown topic {channel.topic!r}")
+
+
+def check_message(channel, message, next_seq):
+    want = next_seq.get(channel.id, 0)
+    if message.sequence != want:
+        raise CheckError(f"{channel.topic}: sequence {message.sequence}, want {want}")
+    next_seq[channel.id] = want + 1
+    data = message.data
+    if channel.topic == DIAGNOSTICS:
+        value = json.loads(data)
+        if not isinstance(value, dict) or not isinstance(value.get("step"), int):
+            raise CheckError(f"diagnostics at log_time {message.log_time}: not an object with an integer step")
+        if value["step"] != message.log_time:
+            raise CheckError(f"diagnostics step {value['step']} != log_time {message.log_time}")
+    else:
+        if len(data) < 24 or data[:4] != b"FSI\x00":
+            raise CheckError(f"{channel.topic} seq {message.sequence}: not a frame (magic {data[:4]!r})")
+        (version,) = struct.unpack_from("<I", data, 4)
+        if version != PROTOCOL_VERSION:
+            raise CheckError(f"{channel.topic} seq {message.sequence}: protocol version {version}")
+
+
+def check_complete(path):
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        try:
+            summary = reader.get_summary()
+        except Exception as e:  # a file without footer makes the summary lookup fail
+            raise CheckError(f"no readable summary ({type(e).__name__}); truncated file? use --truncated")
+        if summary is None:
+            raise CheckError("no summary section (truncated file? use --truncated)")
+        metadata = {m.name for m in reader.iter_metadata()}
+        for name in ("scene", "run"):
+            if name not in metadata:
+                raise CheckError(f"metadata {name!r} missing")
+        next_seq = {}
+        n = 0
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            check_channel(channel, schema)
+            check_message(channel, message, next_seq)
+            n += 1
+        if summary.statistics is not None and summary.statistics.message_count != n:
+            raise CheckError(f"summary counts {summary.statistics.message_count} messages, read {n}")
+        return n
+
+
+def check_truncated(path):
+    schemas, channels, next_seq = {}, {}, {}
+    metadata = set()
+    n = 0
+    with open(path, "rb") as f:
+        try:
+            for record in StreamReader(f, skip_magic=False, emit_chunks=False).records:
+                if isinstance(record, Schema):
+                    schemas[record.id] = record
+                elif isinstance(record, Channel):
+                    channels[record.id] = record
+                elif isinstance(record, Metadata):
+                    metadata.add(record.name)
+                elif isinstance(record, Message):
+                    channel = channels[record.channel_id]
+                    check_channel(channel, schemas.get(channel.schema_id))
+                    check_message(channel, record, next_seq)
+                    n += 1
+        except CheckError:
+            raise
+        except Exception as e:  # the streaming reader ends with an error where the file was cut
+            print(f"stream ends: {type(e).__name__}: {e}", file=sys.stderr)
+    for name in ("scene", "run"):
+        if name not in metadata:
+            raise CheckError(f"metadata {name!r} missing")
+    return n
+
+
+def main(argv):
+    if len(argv) < 2 or argv[1] in ("-h", "--help"):
+        print(__doc__)
+        return 2
+    path = argv[1]
+    try:
+        n = check_truncated(path) if "--truncated" in argv[2:] else check_complete(path)
+    except (CheckError, json.JSONDecodeError, KeyError) as e:
+        print(f"{path}: {e}")
+        return 1
+    print(f"ok {n} messages")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
