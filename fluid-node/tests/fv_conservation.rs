@@ -326,7 +326,7 @@ fn every_scene_parses_and_builds() {
             let name = path.display().to_string();
             let scene = protocol::scene::Scene::from_toml_str(&text, &name)
                 .unwrap_or_else(|e| panic!("{e}"));
-            if let Some(fluid) = &scene.fluid {
+            if let Some(fluid) = scene.fluid.as_ref().filter(|f| f.node == "real") {
                 let s = FluidSolver::from_scene(fluid, 1).unwrap_or_else(|e| panic!("{name}: {e}"));
                 assert!(
                     s.check_state().is_none(),
