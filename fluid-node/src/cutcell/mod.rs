@@ -49,6 +49,8 @@ pub mod stl;
 mod surface;
 pub(crate) mod sweep;
 mod swept;
+#[cfg(test)]
+mod tests;
 
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
