@@ -5,6 +5,15 @@
 //! (`compute` and `swept`, throughput in pieces = (triangle, cell) pairs) and then prints a
 //! summary table with the fitted exponent of time against N and the (triangle, cell) pairs per
 //! second. `CUTCELL_BENCH_MAX=128` caps the finest grid (default 256).
+//!
+//! On a shared machine wall times are noisy; count instructions instead (STYLE §8): with
+//! `CUTCELL_BENCH_ONLY=N` the binary skips criterion, warms the buffers up on an N³ grid and then
+//! calls `measured_compute` and `measured_swept` once each:
+//!
+//! ```text
+//! CUTCELL_BENCH_ONLY=64 valgrind --tool=callgrind --collect-atstart=no \
+//!     --toggle-collect='*measured_compute*' target/release/deps/cutcell-HASH
+//! ```
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -69,6 +78,16 @@ fn best_time(reps: usize, mut f: impl FnMut()) -> f64 {
     best
 }
 
+#[inline(never)]
+fn measured_compute(grid: &Grid, surface: &Surface, geometry: &mut CutGeometry) {
+    compute(grid, black_box(surface), geometry);
+}
+
+#[inline(never)]
+fn measured_swept(grid: &Grid, before: &Surface, after: &Surface, swept: &mut SweptVolumes) {
+    swept_volumes(grid, black_box(before), after, swept);
+}
+
 fn main() {
     // NOTE: the mesh is fixed (≈ 7.2k triangles, edge ≈ 0.02) so that refining the grid only
     // changes the number of cut cells; the sphere's centre is off the grid planes.
@@ -89,6 +108,25 @@ fn main() {
         ..surface
     };
     let n_triangles = surface.n_elements();
+    if let Some(n) = std::env::var("CUTCELL_BENCH_ONLY")
+        .ok()
+        .and_then(|s| s.parse::<usize>().ok())
+    {
+        let grid = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
+        let mut geometry = CutGeometry::new();
+        let mut swept = SweptVolumes::new();
+        compute(&grid, &surface, &mut geometry);
+        swept_volumes(&grid, &surface, &after, &mut swept);
+        measured_compute(&grid, &surface, &mut geometry);
+        measured_swept(&grid, &surface, &after, &mut swept);
+        println!(
+            "n {n}: {n_triangles} triangles, {} cut cells, {} pieces, {} swept entries",
+            geometry.cut_cells.len(),
+            geometry.diagnostics.n_pieces,
+            swept.entries.len()
+        );
+        return;
+    }
 
     let mut criterion = Criterion::default()
         .sample_size(10)
