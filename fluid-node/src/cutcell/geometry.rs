@@ -20,11 +20,11 @@ pub struct SubFace {
     pub element: u32,
     /// Particle of that element.
     pub particle: u32,
-    /// Area [m²] (2-D: length [m]).
+    /// Area, in m² (2-D: length, in m).
     pub area: f64,
     /// Unit normal out of the solid (the element's; zero for a degenerate element).
     pub normal: [f64; 3],
-    /// Area centroid [m] (third coordinate 0 in 2-D).
+    /// Area centroid, in m (third coordinate 0 in 2-D).
     pub centroid: [f64; 3],
     /// First vertex in [`CutGeometry::subface_vertices`].
     pub first_vertex: u32,
@@ -56,7 +56,7 @@ pub struct CutGeometry {
     pub face_fraction: [Vec<f64>; 3],
     /// Sub-faces of the elements inside the domain, sorted by cell then element.
     pub subfaces: Vec<SubFace>,
-    /// Vertices of the sub-face polygons [m] (segment endpoints in 2-D).
+    /// Vertices of the sub-face polygons, in m (segment endpoints in 2-D).
     pub subface_vertices: Vec<[f64; 3]>,
     /// Cells holding at least one sub-face, ascending.
     pub cut_cells: Vec<u32>,

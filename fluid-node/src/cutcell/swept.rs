@@ -30,7 +30,7 @@ pub struct SweptEntry {
     pub cell: u32,
     /// Element (triangle or segment).
     pub element: u32,
-    /// Signed volume [m³] (2-D: area [m²]); positive where the solid advances.
+    /// Signed volume, in m³ (2-D: area, in m²); positive where the solid advances.
     pub volume: f64,
 }
 
@@ -87,7 +87,7 @@ impl SweptVolumes {
         SweptVolumes::default()
     }
 
-    /// Total signed swept volume in the domain [m³] (2-D: [m²]).
+    /// Total signed swept volume in the domain, in m³ (2-D: m²).
     pub fn total(&self) -> f64 {
         self.entries.iter().map(|e| e.volume).sum()
     }
