@@ -5,7 +5,7 @@ use crate::cutcell::measure::{
     Piece, column_moment, polygon_measures, segment_measures, triangle_normal,
 };
 use crate::cutcell::surface::Surface;
-use crate::cutcell::sweep::{Record, SweepSink, sort_records, sweep_rows};
+use crate::cutcell::sweep::{Record, SweepSink, sort_records_by_rows, sweep_rows};
 use crate::grid::Grid;
 
 /// Tolerance under which the running face fraction entering an uncut cell is snapped to 0 or 1.
@@ -71,6 +71,14 @@ pub struct CutGeometry {
     written_faces: [Vec<(u32, u32)>; 3],
     /// Covered runs of the x sweep `(row, from, to, λ)`, whose y and z faces are filled last.
     covered_runs: Vec<(u64, i32, i32, f64)>,
+    /// Scratch of the counting sort.
+    scratch: Vec<Record>,
+    /// Row counts of the counting sort.
+    counts: Vec<u32>,
+    /// Sub-face of each piece (`u32::MAX` outside the domain).
+    piece_subface: Vec<u32>,
+    /// Scratch of the sub-face ordering.
+    subface_scratch: Vec<SubFace>,
 }
 
 /// Linear index of the face of axis `axis` at `ijk` (`ijk[axis]` in `0..=cells[axis]`).
@@ -152,6 +160,7 @@ impl CutGeometry {
         self.subface_vertices.clear();
         self.cut_cells.clear();
         self.pieces.clear();
+        self.piece_subface.clear();
         self.covered_runs.clear();
         self.diagnostics = CutDiagnostics::default();
     }
@@ -176,12 +185,13 @@ pub fn compute(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     // are filled from the listed x runs, again contiguously.
     for axis in 0..grid.dim {
         sweep_axis(grid, axis, out);
+        if axis == 0 {
+            order_subfaces(grid, out);
+        }
     }
     fill_covered_faces(grid, out);
     // NOTE: the key is unique (first_vertex), so the unstable, allocation-free sort is
     // deterministic.
-    out.subfaces
-        .sort_unstable_by_key(|s| (s.cell, s.element, s.first_vertex));
     out.cut_cells.extend(out.subfaces.iter().map(|s| s.cell));
     out.cut_cells.dedup();
 }
@@ -190,6 +200,7 @@ pub fn compute(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
 fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     let CutGeometry {
         pieces,
+        piece_subface,
         subfaces,
         subface_vertices,
         diagnostics,
@@ -211,7 +222,9 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                if let Some(cell_idx) = domain_cell(grid, cell) {
+                let in_domain = domain_cell(grid, cell);
+                piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
+                if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
                         cell: cell_idx,
                         element: e as u32,
@@ -239,7 +252,9 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                if let Some(cell_idx) = domain_cell(grid, cell) {
+                let in_domain = domain_cell(grid, cell);
+                piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
+                if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
                         cell: cell_idx,
                         element: e as u32,
@@ -256,6 +271,23 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
             });
         }
     }
+}
+
+/// Puts the sub-faces in cell order (then element, then piece order) by walking the sorted
+/// records of the x sweep, whose (row, position) order is the cell order: O(pieces), no sort.
+fn order_subfaces(grid: &Grid, out: &mut CutGeometry) {
+    let n = grid.cells[0] as i32;
+    out.subface_scratch.clear();
+    for r in &out.records {
+        if r.pos >= 0 && r.pos < n {
+            let s = out.piece_subface[r.order as usize];
+            if s != u32::MAX {
+                out.subface_scratch.push(out.subfaces[s as usize]);
+            }
+        }
+    }
+    debug_assert_eq!(out.subface_scratch.len(), out.subfaces.len());
+    std::mem::swap(&mut out.subfaces, &mut out.subface_scratch);
 }
 
 /// Linear index of an extended cell if it lies in the domain.
@@ -279,7 +311,8 @@ pub(crate) fn other_axes(axis: usize) -> (usize, usize) {
     }
 }
 
-/// Builds the sweep records of axis `axis` from `pieces` (rows in the domain, positions `-1..=n`).
+/// Builds the (unsorted) sweep records of axis `axis` from `pieces` (rows in the domain, positions
+/// `-1..=n`).
 pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records: &mut Vec<Record>) {
     records.clear();
     let (b, c) = other_axes(axis);
@@ -302,7 +335,6 @@ pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records:
             moment: if axis == 0 { piece.moment } else { 0.0 },
         });
     }
-    sort_records(records);
 }
 
 /// Cell `(row, pos)` of a row along `axis` as `[i, j, k]`.
@@ -382,9 +414,13 @@ fn sweep_axis(grid: &Grid, axis: usize, out: &mut CutGeometry) {
         written_cells,
         written_faces,
         covered_runs,
+        scratch,
+        counts,
         ..
     } = out;
     build_records(grid, axis, pieces, records);
+    let (b, c) = other_axes(axis);
+    sort_records_by_rows(records, scratch, counts, grid.cells[b] * grid.cells[c]);
     let mut sink = GeometrySink {
         grid,
         axis,

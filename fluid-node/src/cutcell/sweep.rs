@@ -39,6 +39,54 @@ pub(crate) fn sort_records(records: &mut [Record]) {
     });
 }
 
+/// Sorts records like [`sort_records`] in O(records + rows): a counting sort on the row (stable,
+/// so each row keeps piece order), then a small sort of each row by position and piece.
+///
+/// NOTE: rows number n_b · n_c ∝ N^(2/3), so this keeps the cost of a sweep proportional to the
+/// cut cells, without the log factor of a comparison sort over all records.
+pub(crate) fn sort_records_by_rows(
+    records: &mut Vec<Record>,
+    scratch: &mut Vec<Record>,
+    counts: &mut Vec<u32>,
+    n_rows: usize,
+) {
+    counts.clear();
+    counts.resize(n_rows + 1, 0);
+    for r in records.iter() {
+        counts[r.row as usize + 1] += 1;
+    }
+    for i in 1..counts.len() {
+        counts[i] += counts[i - 1];
+    }
+    scratch.clear();
+    scratch.resize(
+        records.len(),
+        Record {
+            row: 0,
+            pos: 0,
+            order: 0,
+            flux: 0.0,
+            moment: 0.0,
+        },
+    );
+    for r in records.iter() {
+        let at = &mut counts[r.row as usize];
+        scratch[*at as usize] = *r;
+        *at += 1;
+    }
+    std::mem::swap(records, scratch);
+    let mut start = 0;
+    while start < records.len() {
+        let row = records[start].row;
+        let mut end = start + 1;
+        while end < records.len() && records[end].row == row {
+            end += 1;
+        }
+        records[start..end].sort_unstable_by_key(|x| (x.pos, x.order));
+        start = end;
+    }
+}
+
 /// What a sweep reports.
 pub(crate) trait SweepSink {
     /// A face bounding a cut cell (and the last face of a row) with fraction λ ≠ 0.

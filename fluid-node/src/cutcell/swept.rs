@@ -20,7 +20,7 @@ use crate::cutcell::measure::{
     Piece, column_moment, polygon_measures, segment_measures, triangle_normal,
 };
 use crate::cutcell::surface::Surface;
-use crate::cutcell::sweep::{Record, SweepSink, sweep_rows};
+use crate::cutcell::sweep::{Record, SweepSink, sort_records, sweep_rows};
 use crate::grid::Grid;
 
 /// Signed volume swept by one element inside one cell.
@@ -172,6 +172,7 @@ pub fn swept_volumes(grid: &Grid, before: &Surface, after: &Surface, out: &mut S
             push(a, a1);
         }
         build_records(grid, 0, &out.pieces, &mut out.records);
+        sort_records(&mut out.records);
         let mut sink = PrismSink {
             grid,
             element: e as u32,
