@@ -5,6 +5,15 @@
 //! (`compute` and `swept`, throughput in pieces = (triangle, cell) pairs) and then prints a
 //! summary table with the fitted exponent of time against N and the (triangle, cell) pairs per
 //! second. `CUTCELL_BENCH_MAX=128` caps the finest grid (default 256).
+//!
+//! On a shared machine wall times are noisy; count instructions instead (STYLE §8): with
+//! `CUTCELL_BENCH_ONLY=N` the binary skips criterion, warms the buffers up on an N³ grid and then
+//! calls `measured_compute` and `measured_swept` once each:
+//!
+//! ```text
+//! CUTCELL_BENCH_ONLY=64 valgrind --tool=callgrind --collect-atstart=no \
+//!     --toggle-collect='*measured_compute*' target/release/deps/cutcell-HASH
+//! ```
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -69,26 +78,67 @@ fn best_time(reps: usize, mut f: impl FnMut()) -> f64 {
     best
 }
 
-fn main() {
-    // NOTE: the mesh is fixed (≈ 7.2k triangles, edge ≈ 0.02) so that refining the grid only
-    // changes the number of cut cells; the sphere's centre is off the grid planes.
-    let (vertices, elements) = sphere([0.5013, 0.4987, 0.5021], 0.3, 60, 60);
-    let moved: Vec<f64> = vertices
+#[inline(never)]
+fn measured_compute(grid: &Grid, surface: &Surface, geometry: &mut CutGeometry) {
+    compute(grid, black_box(surface), geometry);
+}
+
+#[inline(never)]
+fn measured_swept(grid: &Grid, before: &Surface, after: &Surface, swept: &mut SweptVolumes) {
+    swept_volumes(grid, black_box(before), after, swept);
+}
+
+/// The sphere (and the same sphere moved by a fraction of a cell) benchmarked on an `n³` grid.
+///
+/// NOTE: by default the mesh is refined with the grid (`n/2 × n` bands and sectors, edges of about
+/// two cells), so the pieces, like the cut cells, grow as N^(2/3); `CUTCELL_BENCH_MESH=fixed` keeps
+/// one 7080-triangle mesh, where the pieces approach that law only once cells are smaller than
+/// triangles. The centre is off the grid planes.
+fn sphere_for(n: usize) -> (Vec<f64>, Vec<f64>, Vec<u32>) {
+    let fixed = std::env::var("CUTCELL_BENCH_MESH").is_ok_and(|m| m == "fixed");
+    let (n_lat, n_lon) = if fixed { (60, 60) } else { (n / 2, n) };
+    let (vertices, elements) = sphere([0.5013, 0.4987, 0.5021], 0.3, n_lat, n_lon);
+    let shift = [0.11, -0.07, 0.09].map(|d| d / n as f64);
+    let moved = vertices
         .iter()
         .enumerate()
-        .map(|(i, x)| x + [0.0011, -0.0007, 0.0009][i % 3])
+        .map(|(i, x)| x + shift[i % 3])
         .collect();
-    let surface = Surface {
+    (vertices, moved, elements)
+}
+
+fn surface<'a>(vertices: &'a [f64], elements: &'a [u32]) -> Surface<'a> {
+    Surface {
         dim: 3,
-        vertices: &vertices,
-        elements: &elements,
+        vertices,
+        elements,
         element_particle: &[],
-    };
-    let after = Surface {
-        vertices: &moved,
-        ..surface
-    };
-    let n_triangles = surface.n_elements();
+    }
+}
+
+fn main() {
+    if let Some(n) = std::env::var("CUTCELL_BENCH_ONLY")
+        .ok()
+        .and_then(|s| s.parse::<usize>().ok())
+    {
+        let (vertices, moved, elements) = sphere_for(n);
+        let (before, after) = (surface(&vertices, &elements), surface(&moved, &elements));
+        let grid = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
+        let mut geometry = CutGeometry::new();
+        let mut swept = SweptVolumes::new();
+        compute(&grid, &before, &mut geometry);
+        swept_volumes(&grid, &before, &after, &mut swept);
+        measured_compute(&grid, &before, &mut geometry);
+        measured_swept(&grid, &before, &after, &mut swept);
+        println!(
+            "n {n}: {} triangles, {} cut cells, {} pieces, {} swept entries",
+            before.n_elements(),
+            geometry.cut_cells.len(),
+            geometry.diagnostics.n_pieces,
+            swept.entries.len()
+        );
+        return;
+    }
 
     let mut criterion = Criterion::default()
         .sample_size(10)
@@ -97,6 +147,9 @@ fn main() {
         .configure_from_args();
     let mut rows = Vec::new();
     for n in resolutions() {
+        let (vertices, moved, elements) = sphere_for(n);
+        let (surface, after) = (surface(&vertices, &elements), surface(&moved, &elements));
+        let n_triangles = surface.n_elements();
         let grid = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
         let mut geometry = CutGeometry::new();
         compute(&grid, &surface, &mut geometry);
@@ -113,17 +166,24 @@ fn main() {
         group.finish();
         let t_compute = best_time(5, || compute(&grid, &surface, &mut geometry));
         let t_swept = best_time(3, || swept_volumes(&grid, &surface, &after, &mut swept));
-        rows.push((n, geometry.cut_cells.len(), pieces, t_compute, t_swept));
+        rows.push((
+            n,
+            n_triangles,
+            geometry.cut_cells.len(),
+            pieces,
+            t_compute,
+            t_swept,
+        ));
     }
     criterion.final_summary();
 
-    println!("\ncut-cell sphere, {n_triangles} triangles (best of repeated calls, buffers reused)");
+    println!("\ncut-cell sphere (best of repeated calls, buffers reused)");
     println!(
-        "    n        N  cut cells    pieces  compute [ms]  swept [ms]  pieces/s  triangles/s"
+        "    n        N  triangles  cut cells    pieces  compute [ms]  swept [ms]  pieces/s  triangles/s"
     );
-    for &(n, cut, pieces, t, ts) in &rows {
+    for &(n, n_triangles, cut, pieces, t, ts) in &rows {
         println!(
-            "{n:5} {:8} {cut:10} {pieces:9} {:13.3} {:11.3} {:9.3e} {:11.3e}",
+            "{n:5} {:8} {n_triangles:10} {cut:10} {pieces:9} {:13.3} {:11.3} {:9.3e} {:11.3e}",
             n * n * n,
             t * 1e3,
             ts * 1e3,
@@ -135,7 +195,7 @@ fn main() {
         // Least-squares slope of log t against log N.
         let pts: Vec<(f64, f64)> = rows
             .iter()
-            .map(|&(n, _, _, t, _)| (((n * n * n) as f64).ln(), t.ln()))
+            .map(|&(n, _, _, _, t, _)| (((n * n * n) as f64).ln(), t.ln()))
             .collect();
         let m = pts.len() as f64;
         let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));

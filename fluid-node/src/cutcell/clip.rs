@@ -20,8 +20,10 @@
 use crate::grid::Grid;
 
 /// Most vertices a clipped polygon may hold. A triangle clipped by a box has at most 9; the margin
-/// absorbs near-degenerate round-off (a vertex beyond it is dropped and counted).
-pub(crate) const MAX_VERTICES: usize = 24;
+/// absorbs near-degenerate round-off (a vertex beyond it would be dropped).
+///
+/// NOTE: kept small: polygons live on the stack and are copied at every split.
+pub(crate) const MAX_VERTICES: usize = 12;
 
 /// A convex polygon with a fixed capacity (no allocation).
 #[derive(Clone, Copy, Debug)]
@@ -72,11 +74,15 @@ pub(crate) fn plane(grid: &Grid, axis: usize, i: i32) -> f64 {
 #[inline]
 pub(crate) fn slab(grid: &Grid, axis: usize, x: f64) -> i32 {
     let n = grid.cells[axis] as i32;
-    let s = ((x - grid.lower[axis]) / grid.dx[axis]).floor();
-    let mut s = if s.is_nan() {
+    let t = (x - grid.lower[axis]) / grid.dx[axis];
+    // NOTE: truncation equals floor for t >= 0 and avoids a software `floor` call on targets
+    // without SSE4.1; the result is clamped to the extended range either way.
+    let mut s = if t.is_nan() || t < 0.0 {
         -1
+    } else if t >= f64::from(n) {
+        n
     } else {
-        s.clamp(-1.0, f64::from(n)) as i32
+        t as i32
     };
     // NOTE: the division above may be off by one ulp near a plane; the comparisons below against
     // the exact plane values decide.
@@ -183,11 +189,15 @@ fn peel(
 }
 
 fn slab_range(grid: &Grid, axis: usize, verts: &[[f64; 3]]) -> (i32, i32) {
-    let mut x_min = f64::INFINITY;
-    let mut x_max = f64::NEG_INFINITY;
-    for x in verts {
-        x_min = x_min.min(x[axis]);
-        x_max = x_max.max(x[axis]);
+    let mut x_min = verts[0][axis];
+    let mut x_max = x_min;
+    for x in &verts[1..] {
+        if x[axis] < x_min {
+            x_min = x[axis];
+        }
+        if x[axis] > x_max {
+            x_max = x[axis];
+        }
     }
     (slab(grid, axis, x_min), slab(grid, axis, x_max))
 }

@@ -5,7 +5,7 @@ use crate::cutcell::measure::{
     Piece, column_moment, polygon_measures, segment_measures, triangle_normal,
 };
 use crate::cutcell::surface::Surface;
-use crate::cutcell::sweep::{Record, SweepSinks, sort_records, sweep_rows};
+use crate::cutcell::sweep::{Record, SweepSink, sort_records_by_rows, sweep_rows};
 use crate::grid::Grid;
 
 /// Tolerance under which the running face fraction entering an uncut cell is snapped to 0 or 1.
@@ -20,11 +20,11 @@ pub struct SubFace {
     pub element: u32,
     /// Particle of that element.
     pub particle: u32,
-    /// Area [m²] (2-D: length [m]).
+    /// Area, in m² (2-D: length, in m).
     pub area: f64,
     /// Unit normal out of the solid (the element's; zero for a degenerate element).
     pub normal: [f64; 3],
-    /// Area centroid [m] (third coordinate 0 in 2-D).
+    /// Area centroid, in m (third coordinate 0 in 2-D).
     pub centroid: [f64; 3],
     /// First vertex in [`CutGeometry::subface_vertices`].
     pub first_vertex: u32,
@@ -56,7 +56,7 @@ pub struct CutGeometry {
     pub face_fraction: [Vec<f64>; 3],
     /// Sub-faces of the elements inside the domain, sorted by cell then element.
     pub subfaces: Vec<SubFace>,
-    /// Vertices of the sub-face polygons [m] (segment endpoints in 2-D).
+    /// Vertices of the sub-face polygons, in m (segment endpoints in 2-D).
     pub subface_vertices: Vec<[f64; 3]>,
     /// Cells holding at least one sub-face, ascending.
     pub cut_cells: Vec<u32>,
@@ -65,8 +65,20 @@ pub struct CutGeometry {
     shape: (usize, [usize; 3]),
     pieces: Vec<Piece>,
     records: Vec<Record>,
-    written_cells: Vec<u32>,
-    written_faces: [Vec<u32>; 3],
+    /// Written ranges `(first, len)` of `solid_fraction`, for the sparse reset.
+    written_cells: Vec<(u32, u32)>,
+    /// Written ranges `(first, len)` of each `face_fraction`.
+    written_faces: [Vec<(u32, u32)>; 3],
+    /// Covered runs of the x sweep `(row, from, to, λ)`, whose y and z faces are filled last.
+    covered_runs: Vec<(u64, i32, i32, f64)>,
+    /// Scratch of the counting sort.
+    scratch: Vec<Record>,
+    /// Row counts of the counting sort.
+    counts: Vec<u32>,
+    /// Sub-face of each piece (`u32::MAX` outside the domain).
+    piece_subface: Vec<u32>,
+    /// Scratch of the sub-face ordering.
+    subface_scratch: Vec<SubFace>,
 }
 
 /// Linear index of the face of axis `axis` at `ijk` (`ijk[axis]` in `0..=cells[axis]`).
@@ -96,8 +108,11 @@ impl CutGeometry {
     /// Solid volume in the domain `Σ Λ V` [m³] (2-D: [m²]).
     pub fn solid_volume(&self, grid: &Grid) -> f64 {
         let mut acc = 0.0;
-        for &c in &self.written_cells {
-            acc += self.solid_fraction[c as usize];
+        for &(first, len) in &self.written_cells {
+            let first = first as usize;
+            acc += self.solid_fraction[first..first + len as usize]
+                .iter()
+                .sum::<f64>();
         }
         acc * grid.cell_volume()
     }
@@ -128,13 +143,15 @@ impl CutGeometry {
         } else {
             // NOTE: only the entries written last time are zeroed, so a call costs O(cut cells +
             // covered cells), not O(grid).
-            for &c in &self.written_cells {
-                self.solid_fraction[c as usize] = 0.0;
+            for &(first, len) in &self.written_cells {
+                let first = first as usize;
+                self.solid_fraction[first..first + len as usize].fill(0.0);
             }
             self.written_cells.clear();
             for axis in 0..3 {
-                for &f in &self.written_faces[axis] {
-                    self.face_fraction[axis][f as usize] = 0.0;
+                for &(first, len) in &self.written_faces[axis] {
+                    let first = first as usize;
+                    self.face_fraction[axis][first..first + len as usize].fill(0.0);
                 }
                 self.written_faces[axis].clear();
             }
@@ -143,6 +160,8 @@ impl CutGeometry {
         self.subface_vertices.clear();
         self.cut_cells.clear();
         self.pieces.clear();
+        self.piece_subface.clear();
+        self.covered_runs.clear();
         self.diagnostics = CutDiagnostics::default();
     }
 }
@@ -161,10 +180,18 @@ pub fn compute(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     out.reset(grid);
     clip_surface(grid, surface, out);
     out.diagnostics.n_pieces = out.pieces.len();
+    // NOTE: x first: its sweep fills Λ and λ_x of the covered runs contiguously and lists them;
+    // the y and z sweeps then report only the faces of cut cells, and the faces of covered cells
+    // are filled from the listed x runs, again contiguously.
     for axis in 0..grid.dim {
         sweep_axis(grid, axis, out);
+        if axis == 0 {
+            order_subfaces(grid, out);
+        }
     }
-    out.subfaces.sort_by_key(|s| (s.cell, s.element));
+    fill_covered_faces(grid, out);
+    // NOTE: the key is unique (first_vertex), so the unstable, allocation-free sort is
+    // deterministic.
     out.cut_cells.extend(out.subfaces.iter().map(|s| s.cell));
     out.cut_cells.dedup();
 }
@@ -173,6 +200,7 @@ pub fn compute(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
 fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     let CutGeometry {
         pieces,
+        piece_subface,
         subfaces,
         subface_vertices,
         diagnostics,
@@ -194,7 +222,9 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                if let Some(cell_idx) = domain_cell(grid, cell) {
+                let in_domain = domain_cell(grid, cell);
+                piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
+                if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
                         cell: cell_idx,
                         element: e as u32,
@@ -222,7 +252,9 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                if let Some(cell_idx) = domain_cell(grid, cell) {
+                let in_domain = domain_cell(grid, cell);
+                piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
+                if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
                         cell: cell_idx,
                         element: e as u32,
@@ -239,6 +271,23 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
             });
         }
     }
+}
+
+/// Puts the sub-faces in cell order (then element, then piece order) by walking the sorted
+/// records of the x sweep, whose (row, position) order is the cell order: O(pieces), no sort.
+fn order_subfaces(grid: &Grid, out: &mut CutGeometry) {
+    let n = grid.cells[0] as i32;
+    out.subface_scratch.clear();
+    for r in &out.records {
+        if r.pos >= 0 && r.pos < n {
+            let s = out.piece_subface[r.order as usize];
+            if s != u32::MAX {
+                out.subface_scratch.push(out.subfaces[s as usize]);
+            }
+        }
+    }
+    debug_assert_eq!(out.subface_scratch.len(), out.subfaces.len());
+    std::mem::swap(&mut out.subfaces, &mut out.subface_scratch);
 }
 
 /// Linear index of an extended cell if it lies in the domain.
@@ -262,11 +311,11 @@ pub(crate) fn other_axes(axis: usize) -> (usize, usize) {
     }
 }
 
-/// Builds the sweep records of axis `axis` from `pieces` (rows in the domain, positions `-1..=n`).
+/// Builds the (unsorted) sweep records of axis `axis` from `pieces` (rows in the domain, positions
+/// `-1..=n`).
 pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records: &mut Vec<Record>) {
     records.clear();
     let (b, c) = other_axes(axis);
-    let last = grid.dim - 1;
     let n = grid.cells[axis] as i32;
     for (order, piece) in pieces.iter().enumerate() {
         let cell = piece.cell;
@@ -283,10 +332,9 @@ pub(crate) fn build_records(grid: &Grid, axis: usize, pieces: &[Piece], records:
             pos: cell[axis],
             order: order as u32,
             flux: piece.area_vector[axis],
-            moment: if axis == last { piece.moment } else { 0.0 },
+            moment: if axis == 0 { piece.moment } else { 0.0 },
         });
     }
-    sort_records(records);
 }
 
 /// Cell `(row, pos)` of a row along `axis` as `[i, j, k]`.
@@ -307,6 +355,55 @@ pub(crate) fn face_area(grid: &Grid, axis: usize) -> f64 {
     grid.dx[b] * grid.dx[c]
 }
 
+/// Writes one axis sweep into the dense arrays, recording the written ranges.
+struct GeometrySink<'a> {
+    grid: &'a Grid,
+    axis: usize,
+    volume: f64,
+    cells: &'a mut [f64],
+    faces: &'a mut [f64],
+    cells_written: &'a mut Vec<(u32, u32)>,
+    faces_written: &'a mut Vec<(u32, u32)>,
+    covered_runs: &'a mut Vec<(u64, i32, i32, f64)>,
+}
+
+impl SweepSink for GeometrySink<'_> {
+    fn face(&mut self, row: u64, pos: i32, lambda: f64) {
+        let f = face_index(
+            self.grid,
+            self.axis,
+            row_ijk(self.grid, self.axis, row, pos),
+        );
+        // NOTE: clamped to [0, 1]: outside, the value differs from 0 or 1 only by round-off (or
+        // the surface is not closed, which `max_uncut_defect` reports).
+        self.faces[f] = lambda.clamp(0.0, 1.0);
+        self.faces_written.push((f as u32, 1));
+    }
+
+    fn cell(&mut self, row: u64, pos: i32, moment: f64, lambda_top: f64) {
+        if self.axis == 0 {
+            let ijk = row_ijk(self.grid, 0, row, pos);
+            let cell = self.grid.index(ijk[0], ijk[1], ijk[2]);
+            self.cells[cell] = (moment / self.volume + lambda_top).clamp(0.0, 1.0);
+            self.cells_written.push((cell as u32, 1));
+        }
+    }
+
+    fn run(&mut self, row: u64, from: i32, to: i32, lambda: f64) {
+        // Only the x sweep fills runs: its cells and x faces are contiguous in memory.
+        let ijk = row_ijk(self.grid, 0, row, from);
+        let cell = self.grid.index(ijk[0], ijk[1], ijk[2]);
+        let face = face_index(self.grid, 0, ijk);
+        let len = (to - from) as usize;
+        let value = lambda.clamp(0.0, 1.0);
+        self.cells[cell..cell + len].fill(value);
+        self.faces[face..face + len].fill(value);
+        self.cells_written.push((cell as u32, len as u32));
+        self.faces_written.push((face as u32, len as u32));
+        self.covered_runs.push((row, from, to, value));
+    }
+}
+
 fn sweep_axis(grid: &Grid, axis: usize, out: &mut CutGeometry) {
     let CutGeometry {
         solid_fraction,
@@ -316,36 +413,55 @@ fn sweep_axis(grid: &Grid, axis: usize, out: &mut CutGeometry) {
         records,
         written_cells,
         written_faces,
+        covered_runs,
+        scratch,
+        counts,
         ..
     } = out;
     build_records(grid, axis, pieces, records);
-    let last = axis == grid.dim - 1;
-    let volume = grid.cell_volume();
-    let faces = &mut face_fraction[axis];
-    let faces_written = &mut written_faces[axis];
-    let mut sinks = SweepSinks {
-        face: |row: u64, pos: i32, lambda: f64| {
-            let f = face_index(grid, axis, row_ijk(grid, axis, row, pos));
-            // NOTE: clamped to [0, 1]: outside, the value differs from 0 or 1 only by round-off
-            // (or the surface is not closed, which `max_uncut_defect` reports).
-            faces[f] = lambda.clamp(0.0, 1.0);
-            faces_written.push(f as u32);
-        },
-        cell: |row: u64, pos: i32, moment: f64, lambda_top: f64| {
-            if last {
-                let ijk = row_ijk(grid, axis, row, pos);
-                let cell = grid.index(ijk[0], ijk[1], ijk[2]);
-                solid_fraction[cell] = (moment / volume + lambda_top).clamp(0.0, 1.0);
-                written_cells.push(cell as u32);
-            }
-        },
+    let (b, c) = other_axes(axis);
+    sort_records_by_rows(records, scratch, counts, grid.cells[b] * grid.cells[c]);
+    let mut sink = GeometrySink {
+        grid,
+        axis,
+        volume: grid.cell_volume(),
+        cells: solid_fraction,
+        faces: &mut face_fraction[axis],
+        cells_written: written_cells,
+        faces_written: &mut written_faces[axis],
+        covered_runs,
     };
     let defect = sweep_rows(
         records,
         grid.cells[axis] as i32,
         face_area(grid, axis),
         Some(SNAP_TOLERANCE),
-        &mut sinks,
+        axis == 0,
+        &mut sink,
     );
     diagnostics.max_uncut_defect = diagnostics.max_uncut_defect.max(defect);
+}
+
+/// Sets the y (and z) faces of the covered runs of the x sweep: both faces of every uncut cell
+/// carry its fraction (the sweeps of those axes reported only the faces of cut cells).
+fn fill_covered_faces(grid: &Grid, out: &mut CutGeometry) {
+    let CutGeometry {
+        face_fraction,
+        written_faces,
+        covered_runs,
+        ..
+    } = out;
+    for &(row, from, to, value) in covered_runs.iter() {
+        let ijk = row_ijk(grid, 0, row, from);
+        let len = (to - from) as usize;
+        for axis in 1..grid.dim {
+            for side in 0..2 {
+                let mut at = ijk;
+                at[axis] += side;
+                let f = face_index(grid, axis, at);
+                face_fraction[axis][f..f + len].fill(value);
+                written_faces[axis].push((f as u32, len as u32));
+            }
+        }
+    }
 }

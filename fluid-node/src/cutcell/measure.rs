@@ -11,8 +11,8 @@ pub(crate) struct Piece {
     pub(crate) cell: [i32; 3],
     /// Vector area `∫ n dA` [m²] (2-D: `∫ n dl` [m]), `n` out of the solid.
     pub(crate) area_vector: [f64; 3],
-    /// Column moment `∫ (x_last - x_last,lo) n_last dA` [m³] (2-D: [m²]) about the lower plane of
-    /// the cell along the last active axis; 0 below the domain (never used there).
+    /// Column moment `∫ (x - x_lo) n_x dA` [m³] (2-D: [m²]) about the lower x plane of the cell;
+    /// 0 left of the domain (never used there).
     pub(crate) moment: f64,
 }
 
@@ -81,6 +81,9 @@ pub(crate) fn segment_measures(a: [f64; 3], b: [f64; 3]) -> ([f64; 3], f64, [f64
 }
 
 /// Column moment of a piece (see [`Piece::moment`]).
+///
+/// NOTE: volumes are integrated along x, the axis contiguous in memory, so that filling the
+/// covered cells of long rows streams through memory instead of striding across planes.
 #[inline]
 pub(crate) fn column_moment(
     grid: &Grid,
@@ -88,11 +91,10 @@ pub(crate) fn column_moment(
     area_vector: [f64; 3],
     centroid: [f64; 3],
 ) -> f64 {
-    let last = grid.dim - 1;
-    if cell[last] < 0 {
+    if cell[0] < 0 {
         0.0
     } else {
-        area_vector[last] * (centroid[last] - plane(grid, last, cell[last]))
+        area_vector[0] * (centroid[0] - plane(grid, 0, cell[0]))
     }
 }
 

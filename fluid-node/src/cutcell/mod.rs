@@ -16,15 +16,33 @@
 //! # Method
 //!
 //! Every element is clipped into the cells of an *extended* grid (one unbounded slab beyond each
-//! side of the domain) by successive axis-aligned splits ([`clip`]), with a fixed tie rule (a point
+//! side of the domain) by successive axis-aligned splits (module `clip`), with a fixed tie rule (a point
 //! on a grid plane belongs to the cell above it) and canonical edge intersections. From the
-//! pieces, row sweeps ([`sweep`]) integrate the divergence theorem: λ along each axis from the
-//! projected areas, Λ along the last axis from the column moments. Only cells holding pieces and
-//! covered cells (Λ = 1, filled by the sweep of their column) are visited, so the cost grows with
-//! the number of cut cells, not with the grid. The surface must be closed (possibly crossing the
-//! domain boundary; several bodies; internal faces carried on both sides cancel); an open surface
-//! is reported by [`CutDiagnostics::max_uncut_defect`].
+//! pieces, row sweeps (module `sweep`) integrate the divergence theorem: λ along each axis from the
+//! projected areas (so identity (19)–(21) holds by construction), Λ along x from the moments
+//! `∫ (x − x_lo) n_x dA`. Covered cells (Λ = 1) get their value from the x sweep of their row, and
+//! their y and z faces from the covered runs of that sweep, so only cut cells and covered cells are
+//! visited: the cost is O(P log P + covered cells) for P pieces, and the dense outputs are reset
+//! sparsely. The surface must be closed (possibly crossing the domain boundary; several bodies;
+//! internal faces carried on both sides cancel); an open surface is reported by
+//! [`CutDiagnostics::max_uncut_defect`].
 //!
+//! Swept volumes: the prism of each element (its two positions plus lateral quads split along a
+//! canonical diagonal) is a closed surface, so the same clipping and x sweep give its signed volume
+//! in each cell; the prisms of a closed surface telescope, hence identity (3) to round-off for any
+//! motion (see [`swept_volumes`]).
+//!
+//! # Conventions
+//!
+//! - Λ, λ are *solid* fractions (paper 003 notation); the fluid aperture is `1 − λ`.
+//! - A face lying exactly in a grid plane belongs to the cell above that plane. Hence a grid face
+//!   coinciding with the lower (−e_a) face of a solid has λ = 0 and one coinciding with its upper
+//!   face has λ = 1: a measure-zero choice, applied the same way everywhere.
+//! - Λ and λ are clamped to `[0, 1]` (they leave it only by round-off for valid input), and a
+//!   running λ entering an uncut cell is snapped to 0 or 1 within [`SNAP_TOLERANCE`].
+//! - 2-D: the grid's z axis is inactive, `face_fraction[2]` is empty, "areas" are lengths and
+//!   "volumes" areas.
+
 //! # Example
 //!
 //! ```
@@ -49,6 +67,8 @@ pub mod stl;
 mod surface;
 pub(crate) mod sweep;
 mod swept;
+#[cfg(test)]
+mod tests;
 
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,

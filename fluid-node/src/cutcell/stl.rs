@@ -38,7 +38,7 @@ impl SurfaceMesh {
         self.element_particle.len()
     }
 
-    /// Signed enclosed volume [m³] (2-D: area [m²]) by the divergence theorem; positive for a
+    /// Signed enclosed volume, in m³ (2-D: area, in m²), by the divergence theorem; positive for a
     /// closed surface whose normals point outwards.
     pub fn enclosed_volume(&self) -> f64 {
         let surface = self.surface();

@@ -11,7 +11,7 @@
 pub struct Surface<'a> {
     /// Spatial dimension, 2 or 3 (the grid's).
     pub dim: usize,
-    /// Vertex coordinates [m], flattened, `dim` per vertex.
+    /// Vertex coordinates, in m, flattened, `dim` per vertex.
     pub vertices: &'a [f64],
     /// Connectivity, `dim` vertex indices per element (triangle or segment).
     pub elements: &'a [u32],

@@ -26,23 +26,76 @@ pub(crate) struct Record {
     pub(crate) order: u32,
     /// Vector-area component along the axis `S_a` [m²].
     pub(crate) flux: f64,
-    /// Column moment [m³] (last axis only, else 0).
+    /// Column moment [m³] (x axis only, else 0).
     pub(crate) moment: f64,
 }
 
 /// Sorts records by row, position and piece number.
 pub(crate) fn sort_records(records: &mut [Record]) {
-    records.sort_unstable_by_key(|x| (x.row, x.pos, x.order));
+    // NOTE: one packed integer key (row, pos + 1, order) compares faster than a tuple; positions
+    // are in -1..=n < 2^31 and rows and piece numbers below 2^32 for any grid that fits memory.
+    records.sort_unstable_by_key(|x| {
+        (u128::from(x.row) << 64) | (u128::from((x.pos + 1) as u32) << 32) | u128::from(x.order)
+    });
 }
 
-/// What a sweep reports through its callbacks.
-pub(crate) struct SweepSinks<F, C> {
-    /// `face(row, face_pos, λ)`: called for every face of a visited row whose λ ≠ 0.
-    pub(crate) face: F,
-    /// `cell(row, cell_pos, moment, λ_top)`: called for every cut cell of a visited row (with its
-    /// summed moment [m³] and the fraction of its upper face), and for every uncut cell with
-    /// λ ≠ 0 (moment 0).
-    pub(crate) cell: C,
+/// Sorts records like [`sort_records`] in O(records + rows): a counting sort on the row (stable,
+/// so each row keeps piece order), then a small sort of each row by position and piece.
+///
+/// NOTE: rows number n_b · n_c ∝ N^(2/3), so this keeps the cost of a sweep proportional to the
+/// cut cells, without the log factor of a comparison sort over all records.
+pub(crate) fn sort_records_by_rows(
+    records: &mut Vec<Record>,
+    scratch: &mut Vec<Record>,
+    counts: &mut Vec<u32>,
+    n_rows: usize,
+) {
+    counts.clear();
+    counts.resize(n_rows + 1, 0);
+    for r in records.iter() {
+        counts[r.row as usize + 1] += 1;
+    }
+    for i in 1..counts.len() {
+        counts[i] += counts[i - 1];
+    }
+    scratch.clear();
+    scratch.resize(
+        records.len(),
+        Record {
+            row: 0,
+            pos: 0,
+            order: 0,
+            flux: 0.0,
+            moment: 0.0,
+        },
+    );
+    for r in records.iter() {
+        let at = &mut counts[r.row as usize];
+        scratch[*at as usize] = *r;
+        *at += 1;
+    }
+    std::mem::swap(records, scratch);
+    let mut start = 0;
+    while start < records.len() {
+        let row = records[start].row;
+        let mut end = start + 1;
+        while end < records.len() && records[end].row == row {
+            end += 1;
+        }
+        records[start..end].sort_unstable_by_key(|x| (x.pos, x.order));
+        start = end;
+    }
+}
+
+/// What a sweep reports.
+pub(crate) trait SweepSink {
+    /// A face bounding a cut cell (and the last face of a row) with fraction λ ≠ 0.
+    fn face(&mut self, row: u64, pos: i32, lambda: f64);
+    /// A cut cell, with its summed moment [m³] and the fraction of its upper face.
+    fn cell(&mut self, row: u64, pos: i32, moment: f64, lambda_top: f64);
+    /// The uncut cells `from..to` and their lower faces `from..to` all have fraction λ ≠ 0 (only
+    /// called when runs are filled).
+    fn run(&mut self, row: u64, from: i32, to: i32, lambda: f64);
 }
 
 /// Sweeps sorted records of rows of `n` cells; `area` is the face area `A_a` [m²].
@@ -52,25 +105,25 @@ pub(crate) struct SweepSinks<F, C> {
 /// largest distance to an integer met there, and the largest |λ| left at the end of a row (0 for a
 /// closed surface), are returned: an open surface shows up as a defect of order one.
 ///
+/// `fill_runs`: report uncut runs through [`SweepSink::run`]; otherwise only the faces of cut cells are
+/// reported (the caller fills the faces of covered cells from the runs of another sweep).
+///
 /// NOTE: snapping stops the round-off of the running sum from drifting along long rows; it moves
 /// λ by at most `snap_tol`, far below any physical scale, and keeps uncovered/covered cells exact.
-pub(crate) fn sweep_rows<F, C>(
+pub(crate) fn sweep_rows(
     records: &[Record],
     n: i32,
     area: f64,
     snap_tol: Option<f64>,
-    sinks: &mut SweepSinks<F, C>,
-) -> f64
-where
-    F: FnMut(u64, i32, f64),
-    C: FnMut(u64, i32, f64, f64),
-{
+    fill_runs: bool,
+    sink: &mut impl SweepSink,
+) -> f64 {
     let mut max_defect: f64 = 0.0;
     let mut i = 0;
     while i < records.len() {
         let row = records[i].row;
         let mut lambda = 0.0;
-        let mut next = 0; // first face (and cell) of the row not yet written
+        let mut next = 0; // first face (and cell) of the row not yet reported
         while i < records.len() && records[i].row == row {
             let pos = records[i].pos;
             let mut flux = 0.0;
@@ -81,9 +134,11 @@ where
                 i += 1;
             }
             if pos >= 0 {
-                fill(row, next, pos, lambda, sinks);
+                if fill_runs && lambda != 0.0 && next < pos {
+                    sink.run(row, next, pos, lambda);
+                }
                 if lambda != 0.0 {
-                    (sinks.face)(row, pos, lambda);
+                    sink.face(row, pos, lambda);
                 }
             }
             lambda -= flux / area;
@@ -105,14 +160,20 @@ where
                 }
             }
             if pos >= 0 && pos < n {
-                (sinks.cell)(row, pos, moment, lambda);
+                sink.cell(row, pos, moment, lambda);
+                // Upper face of a cut cell followed by an uncut one (else the next record's).
+                if !fill_runs && next_pos > pos + 1 && lambda != 0.0 {
+                    sink.face(row, pos + 1, lambda);
+                }
             }
             next = pos + 1;
         }
-        // Tail: faces next..=n, cells next..n.
-        fill(row, next, n, lambda, sinks);
+        // Tail: cells next..n and faces next..=n.
         if lambda != 0.0 && next <= n {
-            (sinks.face)(row, n, lambda);
+            if fill_runs && next < n {
+                sink.run(row, next, n, lambda);
+            }
+            sink.face(row, n, lambda);
         }
         // Beyond the last piece (slab `n` included) a closed surface leaves nothing.
         if let Some(tol) = snap_tol
@@ -122,20 +183,4 @@ where
         }
     }
     max_defect
-}
-
-/// Writes the uncut run: faces `from..to` and cells `from..to` get `lambda` (skipped when 0).
-#[inline]
-fn fill<F, C>(row: u64, from: i32, to: i32, lambda: f64, sinks: &mut SweepSinks<F, C>)
-where
-    F: FnMut(u64, i32, f64),
-    C: FnMut(u64, i32, f64, f64),
-{
-    if lambda == 0.0 {
-        return;
-    }
-    for p in from..to {
-        (sinks.face)(row, p, lambda);
-        (sinks.cell)(row, p, 0.0, lambda);
-    }
 }

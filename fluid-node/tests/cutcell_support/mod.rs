@@ -298,7 +298,7 @@ pub fn rigid(p: [f64; 3], r: &[[f64; 3]; 3], centre: [f64; 3], shift: [f64; 3]) 
 }
 
 /// Largest violation of identity (2) over every cell and active axis, relative to the face area:
-/// `|A_a (λ_+ − λ_−) + Σ area n_a|`.
+/// `|A_a (λ_+ − λ_−) + Σ area n_a|`; for uncut cells also `|λ − Λ|` on each face.
 pub fn identity_residual(grid: &Grid, geo: &CutGeometry) -> f64 {
     let mut projected = vec![[0.0; 3]; grid.n_cells()];
     for s in &geo.subfaces {
@@ -320,6 +320,11 @@ pub fn identity_residual(grid: &Grid, geo: &CutGeometry) -> f64 {
             let upper = geo.face_fraction[a][face_index(grid, a, up)];
             let r = (area * (upper - lower) + projected[cell][a]).abs() / area;
             worst = worst.max(r);
+            // An uncut cell is covered or empty: its faces carry its fraction.
+            if geo.cut_cells.binary_search(&(cell as u32)).is_err() {
+                let l = geo.solid_fraction[cell];
+                worst = worst.max((lower - l).abs()).max((upper - l).abs());
+            }
         }
     }
     worst
