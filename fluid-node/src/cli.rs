@@ -38,7 +38,34 @@ pub struct Args {
 
 /// Tools of the fluid node.
 #[derive(Debug, Subcommand)]
-pub enum Command {}
+pub enum Command {
+    /// Cut-cell geometry of a surface in a scene's grid: Λ, λ, sub-faces (VTK, CSV) and a JSON
+    /// line with volumes, areas, timings and (with --to) swept volumes.
+    CutCells(crate::cutcell_cmd::CutCellsArgs),
+    /// Studies of the flow solver.
+    #[command(subcommand)]
+    Report(Report),
+}
+
+/// Reports.
+#[derive(Debug, Subcommand)]
+pub enum Report {
+    /// L1 density error against wall time for several resolutions and orders of a 1-D Riemann
+    /// scene, with a second-order TVD reference; writes a CSV table and an SVG plot.
+    WorkPrecision {
+        /// A 1-D scene with two constant states (e.g. scenes/sod.toml).
+        scene: PathBuf,
+        /// Cell counts.
+        #[arg(long, value_delimiter = ',', default_value = "100,200,400,800,1600")]
+        cells: Vec<u32>,
+        /// OSMP orders.
+        #[arg(long, value_delimiter = ',', default_value = "3,5,7")]
+        orders: Vec<u32>,
+        /// Output directory.
+        #[arg(long, default_value = "out/report")]
+        out: PathBuf,
+    },
+}
 
 /// Entry point of the binary: prints `fluid-node: error` and exits 2 on bad input, 3 on
 /// numerical failure, 4 when the exchange with the coupler fails.
@@ -60,7 +87,28 @@ pub fn main() -> ExitCode {
 
 fn run(args: Args) -> anyhow::Result<()> {
     if let Some(command) = args.command {
-        match command {}
+        return match command {
+            Command::CutCells(args) => crate::cutcell_cmd::run(&args),
+            Command::Report(Report::WorkPrecision {
+                scene,
+                cells,
+                orders,
+                out,
+            }) => {
+                let text = std::fs::read_to_string(&scene)
+                    .with_context(|| format!("reading scene {}", scene.display()))?;
+                let scene = Scene::from_toml_str(&text, &scene.display().to_string())?;
+                let rows = crate::report::work_precision(&scene, &cells, &orders, &out)
+                    .map_err(anyhow::Error::msg)?;
+                print!("{}", crate::report::to_csv(&rows));
+                eprintln!(
+                    "fluid-node: wrote {0}/work_precision_{1}.csv and {0}/work_precision_{1}.svg",
+                    out.display(),
+                    scene.name
+                );
+                Ok(())
+            }
+        };
     }
     let scene_path = args.scene.context("--scene is required")?;
     let run_id = args.run_id.context("--run-id is required")?;
