@@ -17,7 +17,13 @@
 //!   [`LIVENESS_PERIOD`]: dead nodes of the run's domain (`Node::list`) are cleaned up and
 //!   reported as [`TransportError::PeerDead`]; so is a peer that was seen and then left. A peer
 //!   that has not shown up yet is not dead (startup). Cleanups fire the `notifier_dead_event`,
-//!   which wakes every waiter at once.
+//!   which wakes every waiter at once. A receive from one peer reports only that peer's death
+//!   (so a coupler can still collect the last words of one node after the other left); a
+//!   receive from any peer, and [`Bus::check_peers`], report any. Frames a peer sent before it
+//!   died are delivered first, provided this end had received from it before (iceoryx2 keeps a
+//!   departed publisher's queued samples only for subscribers already connected to it).
+//! - **Sharing.** A `Bus` is `Send` (iceoryx2's thread-safe service flavour), not meant to be
+//!   shared: one thread drives it.
 //! - **Lossless.** Overflow is disabled; a full subscriber queue back-pressures the sender in
 //!   slices of [`LIVENESS_PERIOD`], between which the peers and signals are checked, until the
 //!   send timeout ([`Bus::set_send_timeout`]). A send never blocks forever. A frame sent before

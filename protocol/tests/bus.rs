@@ -369,3 +369,31 @@ fn cleanup_of_a_crashed_run_removes_its_shm_files() {
     cleanup_run(&run.0).unwrap();
     assert_eq!(leftovers(&run.0), Vec::<String>::new());
 }
+
+#[test]
+fn a_bus_can_move_to_another_thread() {
+    fn assert_send<T: Send>() {}
+    assert_send::<Bus>();
+}
+
+#[test]
+fn sending_to_a_killed_peer_with_a_full_queue_fails_instead_of_blocking() {
+    let run = Run::new("full");
+    let mut coupler = Bus::open(&run.0, NodeKind::Coupler, &[NodeKind::Fluid]).unwrap();
+    let mut child = spawn_child("fluid", &run.0);
+    coupler.recv(None, LONG).unwrap();
+    child.kill().expect("SIGKILL to the child");
+    child.wait().expect("reaping the child");
+    let killed = Instant::now();
+    // The dead subscriber's queue fills up; then the send must give up, not block (pitfall 4).
+    let err = (0..100)
+        .map(|i| coupler.send(NodeKind::Fluid, &[i as u8; 64]))
+        .find_map(Result::err)
+        .expect("a send to a dead peer fails");
+    assert_eq!(err, TransportError::PeerDead(NodeKind::Fluid));
+    assert!(
+        killed.elapsed() < Duration::from_secs(2),
+        "{:?}",
+        killed.elapsed()
+    );
+}
