@@ -425,13 +425,21 @@ impl Bus {
     }
 
     /// `PeerDead` if the peer waited for (any peer for `None`) is dead and has nothing queued.
-    fn dead_peer(&self, peer: Option<NodeKind>) -> Result<(), TransportError> {
-        for link in &self.links {
-            if link.dead && peer.is_none_or(|p| p == link.peer) {
-                return Err(TransportError::PeerDead(link.peer));
-            }
+    fn dead_peer(&mut self, peer: Option<NodeKind>) -> Result<(), TransportError> {
+        let Some(dead) = self
+            .links
+            .iter()
+            .find(|l| l.dead && peer.is_none_or(|p| p == l.peer))
+            .map(|l| l.peer)
+        else {
+            return Ok(());
+        };
+        // Last words that arrived while the liveness check ran come first.
+        self.drain()?;
+        if self.pending.iter().any(|(p, _)| *p == dead) {
+            return Ok(());
         }
-        Ok(())
+        Err(TransportError::PeerDead(dead))
     }
 }
 
