@@ -345,8 +345,9 @@ fn sigterm_during_a_wait_is_interrupted() {
     let mut child = spawn_child("coupler", &run.0);
     let (_, frame) = fluid.recv(None, LONG).unwrap();
     assert_eq!(frame, b"ready");
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+    // The shell's builtin `kill`: no procps needed.
+    let status = Command::new("sh")
+        .args(["-c", &format!("kill -TERM {}", child.id())])
         .status()
         .expect("running kill");
     assert!(status.success());
