@@ -39,7 +39,7 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::node::NodeView;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -344,6 +344,9 @@ impl Bus {
     /// Blocks until a listener fires or `timeout` passes; consumes the notifications. Returns
     /// whether a liveness check is due now (a peer's notifier was dropped or died).
     fn block(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+        if let [link] = self.links.as_mut_slice() {
+            return block_on_one(link, timeout, &self.node);
+        }
         let waitset = WaitSetBuilder::new()
             .create::<Svc>()
             .map_err(|e| other("creating a wait set".to_string(), e))?;
@@ -523,6 +526,43 @@ impl Transport for Bus {
             self.wait_round(from, deadline, timeout, Duration::MAX)?;
         }
     }
+}
+
+/// [`Bus::block`] for an end with a single peer (a node): waits on the listener itself, which
+/// saves building a wait set per wait.
+fn block_on_one(
+    link: &mut Link,
+    timeout: Duration,
+    node: &Node<Svc>,
+) -> Result<bool, TransportError> {
+    let mut check_now = false;
+    let mut seen = false;
+    let waited = link.listener.timed_wait(
+        |event| {
+            if event.id == EV_NOTIFIER_DROPPED || event.id == EV_NOTIFIER_DEAD {
+                check_now = true;
+            } else if event.id == EV_NOTIFIER_CREATED || event.id == EV_SAMPLE {
+                seen = true;
+            }
+        },
+        timeout,
+    );
+    match waited {
+        Ok(_) => {}
+        // NOTE: any signal interrupts the wait; only SIGINT/SIGTERM set iceoryx2's flag.
+        Err(ListenerWaitError::InterruptSignal) => {
+            node.wait(Duration::ZERO)
+                .map_err(|_| TransportError::Interrupted)?;
+        }
+        Err(e) => {
+            return Err(other(
+                format!("waiting on the listener of {}", link.peer),
+                e,
+            ));
+        }
+    }
+    link.seen_publisher |= seen;
+    Ok(check_now)
 }
 
 /// Removes leftovers (stale nodes, services, `/dev/shm/<prefix>*` and `/tmp/iceoryx2` files) of
