@@ -115,9 +115,9 @@ pub const DIAGNOSTICS_SCHEMA: &str = r#"{
 pub struct Diagnostics {
     /// Coupling step.
     pub step: u64,
-    /// Time at the end of the step [s].
+    /// Time at the end of the step \[s\].
     pub t: f64,
-    /// Step size [s].
+    /// Step size \[s\].
     pub dt: f64,
     /// Fixed-point iterations.
     pub iterations: u32,
@@ -134,11 +134,11 @@ pub struct Diagnostics {
 /// Seconds each process computed during a step.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BusySeconds {
-    /// Fluid node [s].
+    /// Fluid node \[s\].
     pub fluid: f64,
-    /// Solid node [s].
+    /// Solid node \[s\].
     pub solid: f64,
-    /// Coupler [s].
+    /// Coupler \[s\].
     pub coupler: f64,
 }
 
@@ -393,7 +393,7 @@ pub struct Recorded {
     pub topic: String,
     /// Coupling step.
     pub log_time: u64,
-    /// Wall clock [ns since the UNIX epoch].
+    /// Wall clock \[ns since the UNIX epoch\].
     pub publish_time: u64,
     /// Sequence number within its channel.
     pub sequence: u32,

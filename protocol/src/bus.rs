@@ -17,7 +17,13 @@
 //!   [`LIVENESS_PERIOD`]: dead nodes of the run's domain (`Node::list`) are cleaned up and
 //!   reported as [`TransportError::PeerDead`]; so is a peer that was seen and then left. A peer
 //!   that has not shown up yet is not dead (startup). Cleanups fire the `notifier_dead_event`,
-//!   which wakes every waiter at once.
+//!   which wakes every waiter at once. A receive from one peer reports only that peer's death
+//!   (so a coupler can still collect the last words of one node after the other left); a
+//!   receive from any peer, and [`Bus::check_peers`], report any. Frames a peer sent before it
+//!   died are delivered first, provided this end had received from it before (iceoryx2 keeps a
+//!   departed publisher's queued samples only for subscribers already connected to it).
+//! - **Sharing.** A `Bus` is `Send` (iceoryx2's thread-safe service flavour), not meant to be
+//!   shared: one thread drives it.
 //! - **Lossless.** Overflow is disabled; a full subscriber queue back-pressures the sender in
 //!   slices of [`LIVENESS_PERIOD`], between which the peers and signals are checked, until the
 //!   send timeout ([`Bus::set_send_timeout`]). A send never blocks forever. A frame sent before
@@ -33,7 +39,7 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::node::NodeView;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -338,6 +344,9 @@ impl Bus {
     /// Blocks until a listener fires or `timeout` passes; consumes the notifications. Returns
     /// whether a liveness check is due now (a peer's notifier was dropped or died).
     fn block(&mut self, timeout: Duration) -> Result<bool, TransportError> {
+        if let [link] = self.links.as_mut_slice() {
+            return block_on_one(link, timeout, &self.node);
+        }
         let waitset = WaitSetBuilder::new()
             .create::<Svc>()
             .map_err(|e| other("creating a wait set".to_string(), e))?;
@@ -419,13 +428,21 @@ impl Bus {
     }
 
     /// `PeerDead` if the peer waited for (any peer for `None`) is dead and has nothing queued.
-    fn dead_peer(&self, peer: Option<NodeKind>) -> Result<(), TransportError> {
-        for link in &self.links {
-            if link.dead && peer.is_none_or(|p| p == link.peer) {
-                return Err(TransportError::PeerDead(link.peer));
-            }
+    fn dead_peer(&mut self, peer: Option<NodeKind>) -> Result<(), TransportError> {
+        let Some(dead) = self
+            .links
+            .iter()
+            .find(|l| l.dead && peer.is_none_or(|p| p == l.peer))
+            .map(|l| l.peer)
+        else {
+            return Ok(());
+        };
+        // Last words that arrived while the liveness check ran come first.
+        self.drain()?;
+        if self.pending.iter().any(|(p, _)| *p == dead) {
+            return Ok(());
         }
-        Ok(())
+        Err(TransportError::PeerDead(dead))
     }
 }
 
@@ -509,6 +526,43 @@ impl Transport for Bus {
             self.wait_round(from, deadline, timeout, Duration::MAX)?;
         }
     }
+}
+
+/// [`Bus::block`] for an end with a single peer (a node): waits on the listener itself, which
+/// saves building a wait set per wait.
+fn block_on_one(
+    link: &mut Link,
+    timeout: Duration,
+    node: &Node<Svc>,
+) -> Result<bool, TransportError> {
+    let mut check_now = false;
+    let mut seen = false;
+    let waited = link.listener.timed_wait(
+        |event| {
+            if event.id == EV_NOTIFIER_DROPPED || event.id == EV_NOTIFIER_DEAD {
+                check_now = true;
+            } else if event.id == EV_NOTIFIER_CREATED || event.id == EV_SAMPLE {
+                seen = true;
+            }
+        },
+        timeout,
+    );
+    match waited {
+        Ok(_) => {}
+        // NOTE: any signal interrupts the wait; only SIGINT/SIGTERM set iceoryx2's flag.
+        Err(ListenerWaitError::InterruptSignal) => {
+            node.wait(Duration::ZERO)
+                .map_err(|_| TransportError::Interrupted)?;
+        }
+        Err(e) => {
+            return Err(other(
+                format!("waiting on the listener of {}", link.peer),
+                e,
+            ));
+        }
+    }
+    link.seen_publisher |= seen;
+    Ok(check_now)
 }
 
 /// Removes leftovers (stale nodes, services, `/dev/shm/<prefix>*` and `/tmp/iceoryx2` files) of

@@ -324,6 +324,7 @@ fn a_killed_peer_process_is_reported_dead_within_a_second_and_cleaned_up() {
     let err = coupler.recv(Some(NodeKind::Fluid), LONG).unwrap_err();
     let took = killed.elapsed();
     assert_eq!(err, TransportError::PeerDead(NodeKind::Fluid));
+    println!("killed peer reported dead after {took:?}");
     assert!(
         took < Duration::from_secs(2),
         "dead peer reported after {took:?}"
@@ -344,8 +345,9 @@ fn sigterm_during_a_wait_is_interrupted() {
     let mut child = spawn_child("coupler", &run.0);
     let (_, frame) = fluid.recv(None, LONG).unwrap();
     assert_eq!(frame, b"ready");
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+    // The shell's builtin `kill`: no procps needed.
+    let status = Command::new("sh")
+        .args(["-c", &format!("kill -TERM {}", child.id())])
         .status()
         .expect("running kill");
     assert!(status.success());
@@ -368,4 +370,33 @@ fn cleanup_of_a_crashed_run_removes_its_shm_files() {
     assert!(!leftovers(&run.0).is_empty());
     cleanup_run(&run.0).unwrap();
     assert_eq!(leftovers(&run.0), Vec::<String>::new());
+}
+
+#[test]
+fn a_bus_can_move_to_another_thread() {
+    fn assert_send<T: Send>() {}
+    assert_send::<Bus>();
+}
+
+#[test]
+fn sending_to_a_killed_peer_with_a_full_queue_fails_instead_of_blocking() {
+    let run = Run::new("full");
+    let mut coupler = Bus::open(&run.0, NodeKind::Coupler, &[NodeKind::Fluid]).unwrap();
+    let mut child = spawn_child("fluid", &run.0);
+    coupler.recv(None, LONG).unwrap();
+    child.kill().expect("SIGKILL to the child");
+    child.wait().expect("reaping the child");
+    let killed = Instant::now();
+    // The dead subscriber's queue fills up; then the send must give up, not block (pitfall 4).
+    let err = (0..100)
+        .map(|i| coupler.send(NodeKind::Fluid, &[i as u8; 64]))
+        .find_map(Result::err)
+        .expect("a send to a dead peer fails");
+    assert_eq!(err, TransportError::PeerDead(NodeKind::Fluid));
+    println!("send to killed peer failed after {:?}", killed.elapsed());
+    assert!(
+        killed.elapsed() < Duration::from_secs(2),
+        "{:?}",
+        killed.elapsed()
+    );
 }

@@ -1,0 +1,71 @@
+//! Recording throughput: 64 KiB and 1 MiB frames through [`Recorder`] into a `Vec` and into a
+//! file in `/tmp`, with `end_step` after every 4 frames (a step's worth).
+//!
+//! `CARGO_TARGET_DIR=... cargo bench -p coupler-node --bench record`
+
+use std::fs::File;
+use std::io::{BufWriter, Cursor};
+use std::time::Duration;
+
+use coupler_node::record::Recorder;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use protocol::scene::RecordLevel;
+use protocol::wire::NodeKind;
+
+const FRAMES_PER_ITER: usize = 16;
+
+/// A frame of f64 values as the bus carries them (seeded, not compressible to nothing).
+fn frame(len: usize) -> Vec<u8> {
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    (0..len / 8)
+        .flat_map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 11) as f64 / (1u64 << 53) as f64).to_le_bytes()
+        })
+        .collect()
+}
+
+fn record<W: std::io::Write + std::io::Seek>(writer: W, frame: &[u8]) -> W {
+    let mut rec = Recorder::new(writer, RecordLevel::Exchange, "bench", "").expect("recorder");
+    for i in 0..FRAMES_PER_ITER {
+        let step = (i / 4) as u64;
+        rec.record_frame(NodeKind::Fluid, NodeKind::Coupler, step, 0, frame)
+            .expect("record");
+        if i % 4 == 3 {
+            rec.end_step().expect("end step");
+        }
+    }
+    rec.finish().expect("finish")
+}
+
+fn bench_record(c: &mut Criterion) {
+    let mut group = c.benchmark_group("record");
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(4));
+    let path = std::env::temp_dir().join(format!("cosim-record-bench-{}.mcap", std::process::id()));
+    for len in [64usize << 10, 1 << 20] {
+        let data = frame(len);
+        group.throughput(Throughput::Bytes((FRAMES_PER_ITER * len) as u64));
+        group.bench_with_input(BenchmarkId::new("vec", len), &data, |b, data| {
+            b.iter(|| {
+                record(
+                    Cursor::new(Vec::with_capacity(FRAMES_PER_ITER * len * 2)),
+                    data,
+                )
+            })
+        });
+        group.bench_with_input(BenchmarkId::new("file", len), &data, |b, data| {
+            b.iter(|| {
+                let file = File::create(&path).expect("create bench file");
+                record(BufWriter::new(file), data)
+            })
+        });
+    }
+    group.finish();
+    let _ = std::fs::remove_file(&path);
+}
+
+criterion_group!(benches, bench_record);
+criterion_main!(benches);
