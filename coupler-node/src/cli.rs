@@ -4,7 +4,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
+use protocol::wire::NodeKind;
 
 use crate::launch::{self, RunOptions};
 
@@ -130,8 +132,82 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Command::Replay { .. } | Command::Inspect { .. } => {
-            anyhow::bail!("not available yet")
+        Command::Replay {
+            file,
+            step,
+            node,
+            double,
+            timeout_s,
+        } => {
+            let node = match node.as_str() {
+                "fluid" => NodeKind::Fluid,
+                "solid" => NodeKind::Solid,
+                other => anyhow::bail!("--node {other:?}: expected fluid or solid"),
+            };
+            let outcome = crate::replay::replay(&crate::replay::ReplayOptions {
+                file,
+                step,
+                node,
+                implementation: double,
+                timeout: Duration::from_secs_f64(timeout_s),
+                bin: None,
+            })?;
+            match outcome {
+                crate::replay::Outcome::Identical {
+                    compared,
+                    from_step,
+                } => {
+                    println!("identical");
+                    eprintln!(
+                        "coupler-node: {compared} {node} messages compared, steps {from_step} to {step}"
+                    );
+                    Ok(ExitCode::SUCCESS)
+                }
+                crate::replay::Outcome::Differs(diff) => {
+                    println!("differs: {diff}");
+                    Ok(ExitCode::from(1))
+                }
+            }
+        }
+        Command::Inspect {
+            file,
+            step,
+            export,
+            recover,
+        } => {
+            let bytes = std::fs::read(&file)
+                .with_context(|| format!("reading record {}", file.display()))?;
+            if recover {
+                let fixed = crate::record::recover(&bytes)
+                    .with_context(|| format!("recovering {}", file.display()))?;
+                let target = file.with_extension("recovered.mcap");
+                std::fs::write(&target, &fixed)
+                    .with_context(|| format!("writing {}", target.display()))?;
+                eprintln!("coupler-node: wrote {}", target.display());
+            }
+            let rec = crate::record::read_recording(&bytes)
+                .with_context(|| format!("reading record {}", file.display()))?;
+            match step {
+                Some(step) => {
+                    let format = match export.as_str() {
+                        "json" => crate::inspect::ExportFormat::Json,
+                        "csv" => crate::inspect::ExportFormat::Csv,
+                        other => anyhow::bail!("--export {other:?}: expected json or csv"),
+                    };
+                    print!("{}", crate::inspect::export_step(&rec, step, format)?);
+                }
+                None => {
+                    if rec.truncated {
+                        eprintln!(
+                            "coupler-node: {} ends early ({} unreadable bytes): a killed run; --recover rewrites it whole",
+                            file.display(),
+                            rec.unreadable_bytes
+                        );
+                    }
+                    print!("{}", crate::inspect::list_steps(&rec)?);
+                }
+            }
+            Ok(ExitCode::SUCCESS)
         }
     }
 }

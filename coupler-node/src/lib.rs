@@ -17,5 +17,6 @@ pub mod inspect;
 pub mod launch;
 pub mod ledger;
 pub mod record;
+pub mod replay;
 pub mod scheme;
 pub mod sink;

@@ -105,7 +105,11 @@ pub fn run(
         match link.recv()? {
             Message::Shutdown(_) => break,
             Message::CheckpointRequest(r) => {
-                let bytes = model.checkpoint();
+                // The loop's own state (the current wet surface) travels with the model's.
+                let frame = surface.as_ref().map(|s| {
+                    protocol::codec::encode(NodeKind::Fluid, &Message::SolidState(s.clone()))
+                });
+                let bytes = protocol::codec::encode_blob(&(model.checkpoint(), frame));
                 link.send(&Message::Checkpoint(Checkpoint {
                     stamp: r.stamp,
                     node: NodeKind::Fluid,
@@ -113,9 +117,16 @@ pub fn run(
                 }))?;
             }
             Message::Checkpoint(c) => {
-                model
-                    .restore(&c.bytes)
-                    .map_err(|e| fail(link, c.stamp, e))?;
+                let (bytes, frame): (Vec<u8>, Option<Vec<u8>>) =
+                    protocol::codec::decode_blob(&c.bytes).map_err(|e| fail(link, c.stamp, e))?;
+                model.restore(&bytes).map_err(|e| fail(link, c.stamp, e))?;
+                surface = match frame.map(|f| protocol::codec::decode(&f)) {
+                    Some(Ok((_, Message::SolidState(s)))) => Some(s),
+                    Some(_) => {
+                        return Err(fail(link, c.stamp, "checkpoint holds a bad surface".into()));
+                    }
+                    None => None,
+                };
                 step = c.stamp.step;
                 propose(model, link, step)?;
             }

@@ -59,6 +59,7 @@ impl Script {
     pub fn from_mcap(bytes: &[u8], node: NodeKind) -> Result<Script, ReplayError> {
         let from_topic = format!("{}-to-coupler", node.name());
         let to_topic = format!("coupler-to-{}", node.name());
+        let checkpoint_topic = format!("checkpoint/{}", node.name());
         let stream = mcap::MessageStream::new_with_options(
             bytes,
             mcap::read::Options::IgnoreEndMagic.into(),
@@ -74,7 +75,7 @@ impl Script {
                 }
                 Err(e) => return Err(ReplayError::Mcap(e.to_string())),
             };
-            let dir = if msg.channel.topic == from_topic {
+            let dir = if msg.channel.topic == from_topic || msg.channel.topic == checkpoint_topic {
                 Direction::FromNode
             } else if msg.channel.topic == to_topic {
                 Direction::ToNode

@@ -1,0 +1,318 @@
+//! `coupler-node replay FILE --step N --node fluid|solid`: re-run one node on the recorded
+//! inputs and compare every message it sends with the record.
+//!
+//! The node's binary (real or double) is started on the recorded scene. The replay plays the
+//! coupler: it sends the recorded coupler → node frames and compares each node → coupler frame
+//! with the recorded one, byte for byte. With checkpoints in the record, the node is restored
+//! from the nearest checkpoint at or before step N (after its greeting), and the comparison
+//! starts there. The first difference is reported with the channel, step, iteration, field,
+//! index and both values.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use protocol::codec;
+use protocol::transport::Transport;
+use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
+use serde_json::Value;
+
+use crate::record::{self, Recording};
+
+/// Options of `coupler-node replay`.
+#[derive(Clone, Debug)]
+pub struct ReplayOptions {
+    /// The record.
+    pub file: PathBuf,
+    /// Last step compared.
+    pub step: u64,
+    /// The node to re-run.
+    pub node: NodeKind,
+    /// Implementation to run (default: the one in the recorded hello).
+    pub implementation: Option<String>,
+    /// Deadline for any one message.
+    pub timeout: Duration,
+    /// Explicit node binary.
+    pub bin: Option<PathBuf>,
+}
+
+/// What the replay found.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// Every compared message matched.
+    Identical {
+        /// Messages compared.
+        compared: usize,
+        /// Step the comparison started at (a checkpoint, or 0).
+        from_step: u64,
+    },
+    /// The first difference.
+    Differs(String),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dir {
+    FromNode,
+    ToNode,
+    Checkpoint,
+}
+
+fn script(rec: &Recording, node: NodeKind) -> Vec<(Dir, u64, Vec<u8>)> {
+    let from = record::frame_topic(node, NodeKind::Coupler).expect("a node topic");
+    let to = record::frame_topic(NodeKind::Coupler, node).expect("a node topic");
+    let ckpt = record::checkpoint_topic(node).expect("a node topic");
+    rec.messages
+        .iter()
+        .filter_map(|m| {
+            let dir = if m.topic == from {
+                Dir::FromNode
+            } else if m.topic == to {
+                Dir::ToNode
+            } else if m.topic == ckpt {
+                Dir::Checkpoint
+            } else {
+                return None;
+            };
+            Some((dir, m.log_time, m.data.clone()))
+        })
+        .collect()
+}
+
+/// Runs the replay.
+pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
+    let bytes = std::fs::read(&opts.file)
+        .with_context(|| format!("reading record {}", opts.file.display()))?;
+    let rec = record::read_recording(&bytes)
+        .with_context(|| format!("reading record {}", opts.file.display()))?;
+    let scene_toml = rec
+        .metadata
+        .get("scene")
+        .and_then(|m| m.get("toml"))
+        .context("the record holds no scene metadata")?;
+    let frames = script(&rec, opts.node);
+    anyhow::ensure!(
+        !frames.is_empty(),
+        "the record holds no messages of the {} node (record = \"exchange\" or \"all\" keeps them)",
+        opts.node
+    );
+    let recorded_impl = frames
+        .iter()
+        .find_map(|(dir, _, f)| match (dir, codec::decode(f)) {
+            (Dir::FromNode, Ok((_, Message::Hello(h)))) => Some(h.implementation),
+            _ => None,
+        })
+        .context("the record holds no hello of that node")?;
+    let implementation = opts.implementation.clone().unwrap_or(recorded_impl);
+    // Nearest checkpoint at or before the step.
+    let checkpoint = frames
+        .iter()
+        .filter(|(dir, step, _)| *dir == Dir::Checkpoint && *step <= opts.step)
+        .map(|(_, step, f)| (*step, f.clone()))
+        .next_back();
+
+    let dir = std::env::temp_dir().join(format!("cosim-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, scene_toml)
+        .with_context(|| format!("writing {}", scene_path.display()))?;
+    let run_id = format!("replay{}", std::process::id());
+    protocol::bus::cleanup_run(&run_id)?;
+    let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &[opts.node])?;
+    let binary = crate::launch::node_binary(opts.node, opts.bin.as_deref())?;
+    let mut child = std::process::Command::new(&binary)
+        .arg("--scene")
+        .arg(&scene_path)
+        .arg("--run-id")
+        .arg(&run_id)
+        .arg("--double")
+        .arg(&implementation)
+        .arg("--timeout-s")
+        .arg(opts.timeout.as_secs_f64().to_string())
+        .stdin(std::process::Stdio::null())
+        .spawn()
+        .with_context(|| format!("starting {}", binary.display()))?;
+    let result = drive(&mut bus, opts, &frames, checkpoint);
+    // Tell the node to stop, whatever happened, then reap it.
+    let bye = codec::encode(
+        NodeKind::Coupler,
+        &Message::Shutdown(Shutdown {
+            stamp: Stamp::step(opts.step),
+            reason: ShutdownReason::Completed,
+        }),
+    );
+    let _ = bus.send(opts.node, &bye);
+    let deadline = std::time::Instant::now() + Duration::from_secs(2);
+    while std::time::Instant::now() < deadline {
+        if let Ok(Some(_)) = child.try_wait() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    drop(bus);
+    let _ = protocol::bus::cleanup_run(&run_id);
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+fn drive(
+    bus: &mut dyn Transport,
+    opts: &ReplayOptions,
+    frames: &[(Dir, u64, Vec<u8>)],
+    checkpoint: Option<(u64, Vec<u8>)>,
+) -> anyhow::Result<Outcome> {
+    let node = opts.node;
+    let recv = |bus: &mut dyn Transport| -> anyhow::Result<Vec<u8>> {
+        let (_, frame) = bus
+            .recv(Some(node), opts.timeout)
+            .with_context(|| format!("waiting for the {node} node"))?;
+        Ok(frame)
+    };
+    let mut compared = 0;
+    let mut at = 0;
+    let from_step = checkpoint.as_ref().map_or(0, |c| c.0);
+    // The greeting: compared as well, it depends only on the scene.
+    while at < frames.len() {
+        let (dir, _, frame) = &frames[at];
+        let kind = codec::decode_header(frame).map(|h| h.kind).ok();
+        if *dir == Dir::FromNode && kind == Some(MessageKind::DtProposal) {
+            break;
+        }
+        match dir {
+            Dir::ToNode => bus.send(node, frame)?,
+            Dir::FromNode => {
+                let got = recv(bus)?;
+                if let Some(diff) = compare(node, frame, &got) {
+                    return Ok(Outcome::Differs(diff));
+                }
+                compared += 1;
+            }
+            Dir::Checkpoint => {}
+        }
+        at += 1;
+    }
+    if let Some((step, ckpt)) = &checkpoint {
+        // The fresh node proposes for step 0; restore it, then resume where the record has the
+        // proposal for the checkpoint's step.
+        let _ = recv(bus)?;
+        bus.send(node, ckpt)?;
+        at = frames
+            .iter()
+            .position(|(dir, s, f)| {
+                *dir == Dir::FromNode
+                    && *s == *step
+                    && codec::decode_header(f).is_ok_and(|h| h.kind == MessageKind::DtProposal)
+            })
+            .context("the record has no proposal at the checkpoint's step")?;
+    }
+    while at < frames.len() {
+        let (dir, step, frame) = &frames[at];
+        if *step > opts.step {
+            break;
+        }
+        match dir {
+            Dir::ToNode => {
+                let kind = codec::decode_header(frame).map(|h| h.kind).ok();
+                // Checkpoint requests are not replayed (the node's answer is a checkpoint,
+                // compared only through the state it leads to).
+                if kind != Some(MessageKind::CheckpointRequest)
+                    && kind != Some(MessageKind::Shutdown)
+                {
+                    bus.send(node, frame)?;
+                }
+            }
+            Dir::FromNode => {
+                let got = recv(bus)?;
+                if let Some(diff) = compare(node, frame, &got) {
+                    return Ok(Outcome::Differs(diff));
+                }
+                compared += 1;
+            }
+            Dir::Checkpoint => {}
+        }
+        at += 1;
+    }
+    anyhow::ensure!(compared > 0, "nothing to compare up to step {}", opts.step);
+    Ok(Outcome::Identical {
+        compared,
+        from_step,
+    })
+}
+
+/// `None` when equal; otherwise where the first difference is.
+fn compare(node: NodeKind, recorded: &[u8], replayed: &[u8]) -> Option<String> {
+    if recorded == replayed {
+        return None;
+    }
+    let channel = format!("{node}-to-coupler");
+    let (rh, rm) = match codec::decode(recorded) {
+        Ok(x) => x,
+        Err(e) => {
+            return Some(format!(
+                "{channel}: the recorded frame does not decode: {e}"
+            ));
+        }
+    };
+    let (ph, pm) = match codec::decode(replayed) {
+        Ok(x) => x,
+        Err(e) => {
+            return Some(format!(
+                "{channel}: the replayed frame does not decode: {e}"
+            ));
+        }
+    };
+    let head = format!(
+        "{channel} step {} iteration {}",
+        rh.stamp.step, rh.stamp.iteration
+    );
+    if rh.kind != ph.kind || rh.stamp != ph.stamp {
+        return Some(format!(
+            "{head}: recorded {:?} (step {}, iteration {}), replayed {:?} (step {}, iteration {})",
+            rh.kind, rh.stamp.step, rh.stamp.iteration, ph.kind, ph.stamp.step, ph.stamp.iteration
+        ));
+    }
+    let a = serde_json::to_value(&rm).unwrap_or(Value::Null);
+    let b = serde_json::to_value(&pm).unwrap_or(Value::Null);
+    let (path, va, vb) = first_difference(&a, &b, String::new()).unwrap_or((
+        "(bytes)".into(),
+        Value::Null,
+        Value::Null,
+    ));
+    Some(format!(
+        "{head}: field {path}: recorded {va}, replayed {vb}"
+    ))
+}
+
+fn first_difference(a: &Value, b: &Value, path: String) -> Option<(String, Value, Value)> {
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            for (k, va) in x {
+                let vb = y.get(k).unwrap_or(&Value::Null);
+                let sub = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                if let Some(d) = first_difference(va, vb, sub) {
+                    return Some(d);
+                }
+            }
+            None
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            for i in 0..x.len().max(y.len()) {
+                let va = x.get(i).unwrap_or(&Value::Null);
+                let vb = y.get(i).unwrap_or(&Value::Null);
+                if let Some(d) = first_difference(va, vb, format!("{path}[{i}]")) {
+                    return Some(d);
+                }
+            }
+            None
+        }
+        // NOTE: numbers are compared by their bits through the JSON text, which prints the
+        // shortest representation that round-trips, so different bits print differently.
+        _ if a == b => None,
+        _ => Some((path, a.clone(), b.clone())),
+    }
+}
