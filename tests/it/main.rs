@@ -1,3 +1,4 @@
 //! End-to-end and cross-crate tests (one test binary).
 
 mod doubles;
+mod e2e;
