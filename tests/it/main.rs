@@ -2,3 +2,4 @@
 
 mod doubles;
 mod e2e;
+mod tidy;
