@@ -35,6 +35,7 @@ fn solid_state(step: u64, iteration: u32) -> Message {
         orientation: vec![0.1],
         velocity: vec![0.5, -0.5],
         angular_velocity: vec![0.0],
+        diameter: vec![0.1],
         surface: WetSurface {
             revision: 1,
             dim: 2,
@@ -58,6 +59,7 @@ fn record_step<W: Write + Seek>(
         t: step as f64 * 1e-3,
         dt: 1e-3,
         scheme: Scheme::SemiImplicit,
+        output: None,
     });
     frames.push((
         NodeKind::Coupler,

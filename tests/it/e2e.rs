@@ -157,13 +157,15 @@ fn replay_is_identical_and_names_an_altered_value() {
     let mut changed = None;
     for m in &rec.messages {
         let mut data = m.data.clone();
-        if m.topic == "solid-to-coupler" && changed.is_none() && m.log_time == 125 {
-            if let Ok((_, Message::SolidState(mut s))) = codec::decode(&data) {
-                let old = s.position[0];
-                s.position[0] = old + 1e-9;
-                changed = Some((old, s.position[0]));
-                data = codec::encode(NodeKind::Solid, &Message::SolidState(s));
-            }
+        if m.topic == "solid-to-coupler"
+            && changed.is_none()
+            && m.log_time == 125
+            && let Ok((_, Message::SolidState(mut s))) = codec::decode(&data)
+        {
+            let old = s.position[0];
+            s.position[0] = old + 1e-9;
+            changed = Some((old, s.position[0]));
+            data = codec::encode(NodeKind::Solid, &Message::SolidState(s));
         }
         let topic = m.topic.as_str();
         let result = match topic {
