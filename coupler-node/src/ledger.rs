@@ -27,7 +27,8 @@ pub struct LedgerEntry {
     pub dissipated: f64,
     /// |mass now − mass at start| / mass at start (0 when there is no mass).
     pub mass_rel_err: f64,
-    /// |energy now − energy at start| / max(|energy at start|, largest |interface work|).
+    /// |energy now − energy at start| / max(|energy at start|, largest |interface work|, largest
+    /// magnitude of the energies' parts).
     pub energy_rel_err: f64,
     /// |energy now − energy at start| / largest |interface work| so far (0 without exchange).
     pub energy_err_vs_exchange: f64,
@@ -45,6 +46,7 @@ pub struct Ledger {
     initial_mass: Option<f64>,
     initial_energy: Option<f64>,
     max_exchange: f64,
+    max_scale: f64,
     /// Largest relative mass error seen.
     pub max_mass_rel_err: f64,
     /// Largest relative energy error seen.
@@ -82,9 +84,17 @@ impl Ledger {
             0.0
         };
         let energy_abs_err = (energy - initial_energy).abs();
-        // NOTE: relative to the initial energy, or to the largest interface exchange when that
-        // is larger (a system that starts at rest has no initial energy to compare with).
-        let scale = initial_energy.abs().max(self.max_exchange);
+        // NOTE: relative to the initial energy, or to the largest interface exchange, or to the
+        // largest magnitude of the energies' parts, whichever is larger (a beam released under
+        // gravity has a total energy near zero while kinetic and potential energy swap).
+        let parts = fluid.map_or(0.0, |f| {
+            f.energy_scale + f.dissipated.abs() + f.boundary_energy_out.abs()
+        }) + solid.map_or(0.0, |s| s.energy_scale + s.dissipated.abs());
+        self.max_scale = self.max_scale.max(parts);
+        let scale = initial_energy
+            .abs()
+            .max(self.max_exchange)
+            .max(self.max_scale);
         let energy_rel_err = if scale > 0.0 {
             energy_abs_err / scale
         } else {
@@ -140,7 +150,24 @@ mod tests {
             boundary_mass_out: out_m,
             boundary_energy_out: out_e,
             links_broken: 0,
+            energy_scale: energy.abs(),
         }
+    }
+
+    #[test]
+    fn energy_error_is_relative_to_the_parts_when_the_total_is_zero() {
+        // A beam released under gravity: kinetic and potential energy cancel in the total.
+        let mut ledger = Ledger::default();
+        let mut s = totals(NodeKind::Solid, 10.0, 0.0, 0.0, 0.0);
+        ledger.update(0, None, Some(&s));
+        s.energy = 1e-3;
+        s.energy_scale = 20.0;
+        let e = ledger.update(1, None, Some(&s));
+        assert!(
+            (e.energy_rel_err - 5e-5).abs() < 1e-18,
+            "{}",
+            e.energy_rel_err
+        );
     }
 
     #[test]
@@ -173,6 +200,7 @@ mod tests {
         assert_eq!((e.work_fluid, e.work_solid), (1.0, 1.0));
         s.energy = 2.5;
         let e = ledger.update(2, Some(&f), Some(&s));
+        // Scale: the initial energy 5 (the parts' magnitudes reported never exceed it).
         assert!((e.energy_rel_err - 0.1).abs() < 1e-15);
         assert!((e.energy_err_vs_exchange - 0.5).abs() < 1e-15);
     }

@@ -207,6 +207,7 @@ impl FluidModel for PressureDouble {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: 0,
+            energy_scale: self.work.abs(),
         }
     }
 

@@ -140,6 +140,7 @@ impl FluidModel for RealFluid {
             boundary_mass_out: totals.outflow_mass,
             boundary_energy_out: totals.outflow_energy,
             links_broken: 0,
+            energy_scale: totals.energy.abs(),
         }
     }
 

@@ -288,6 +288,10 @@ pub struct ConservedTotals {
     pub boundary_energy_out: f64,
     /// Links broken since the start (solid only).
     pub links_broken: u64,
+    /// Magnitude of the energies involved [J]: the sum of the absolute values of the parts of
+    /// `energy` (kinetic, elastic, gravity, internal ...), so the ledger can state an energy
+    /// error relative to something even when the parts cancel.
+    pub energy_scale: f64,
 }
 
 /// A node's full state, opaque to the coupler (node-private bincode).

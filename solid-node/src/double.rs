@@ -271,6 +271,7 @@ impl SolidModel for PrescribedDouble {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: 0,
+            energy_scale: energy.abs(),
         }
     }
 

@@ -223,6 +223,11 @@ impl SolidModel for RealSolid {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: self.links_broken,
+            energy_scale: e.kinetic_translation
+                + e.kinetic_rotation
+                + e.elastic.abs()
+                + e.gravity.abs()
+                + e.dissipated.abs(),
         }
     }
 
