@@ -173,8 +173,10 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);
     // A node that died explains a lost peer better than the transport does.
-    if error.is_some()
-        && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
+    if matches!(
+        error,
+        Some(driver::DriverError::Transport(_) | driver::DriverError::Aborted(_))
+    ) && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
     {
         summary.status = format!("{node} node died ({}): {}", status.text, summary.status);
     }

@@ -649,9 +649,18 @@ impl Scene {
         from_body.or(from_double).unwrap_or(0)
     }
 
-    /// A stable 64-bit hash (FNV-1a) of the resolved scene, sent in hello messages.
+    /// A stable 64-bit hash (FNV-1a) of the resolved scene, sent in hello messages. Which
+    /// implementation runs a side (`fluid.node`, `solid.node`) is not part of it: a double or a
+    /// replay stands in for a node of the same scene.
     pub fn hash(&self) -> u64 {
-        let text = self.to_toml();
+        let mut physics = self.clone();
+        if let Some(f) = physics.fluid.as_mut() {
+            f.node = default_node_impl();
+        }
+        if let Some(s) = physics.solid.as_mut() {
+            s.node = default_node_impl();
+        }
+        let text = physics.to_toml();
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         for b in text.bytes() {
             h ^= u64::from(b);

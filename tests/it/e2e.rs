@@ -421,3 +421,169 @@ fn python_mcap_reads_the_record() {
     );
     let _ = std::fs::remove_dir_all(out);
 }
+
+#[test]
+fn a_recorded_node_replays_as_a_double_the_coupler_cannot_tell() {
+    let scene = workspace().join("scenes/backbone-doubles.toml");
+    let first = out_dir("replay-double-a");
+    run_scene(&scene, &first, &[]);
+    let record = first.join("exchange.mcap");
+    let second = out_dir("replay-double-b");
+    let solid = format!("replay:{}", record.display());
+    run_scene(&scene, &second, &["--solid", &solid]);
+    let s = summary(&second);
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["nodes"]["solid"], solid.as_str());
+    // The real pressure double, fed the recorded solid, sends exactly what it sent before.
+    let (a, b) = (
+        frames_by_topic(&record),
+        frames_by_topic(&second.join("exchange.mcap")),
+    );
+    let pick = |v: &Vec<(String, Vec<Vec<u8>>)>, t: &str| {
+        v.iter().find(|(n, _)| n == t).map(|(_, f)| f.clone())
+    };
+    for topic in [
+        "fluid-to-coupler",
+        "solid-to-coupler",
+        "coupler-to-solid",
+        "coupler-to-fluid",
+    ] {
+        assert!(pick(&a, topic) == pick(&b, topic), "{topic} differs");
+    }
+    // Asked for more than the record holds (a record cut short, as a killed run leaves it),
+    // the double fails clearly.
+    let bytes = std::fs::read(&record).expect("record");
+    let cut = first.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 6 / 10]).expect("write");
+    let third = out_dir("replay-double-c");
+    let r = coupler()
+        .args([
+            "run",
+            "--quiet",
+            "--solid",
+            &format!("replay:{}", cut.display()),
+            "--out",
+        ])
+        .arg(&third)
+        .arg(&scene)
+        .output()
+        .expect("starts");
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        stderr.contains("after the end of the record (the record was cut short)"),
+        "{stderr}"
+    );
+    for dir in [first, second, third] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+#[test]
+fn sigterm_ends_every_process_and_finishes_the_record() {
+    let dir = out_dir("sigterm");
+    let scene = long_doubles_scene(&dir);
+    let out = dir.join("out");
+    let mut child = coupler()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("coupler starts");
+    let record = out.join("exchange.mcap");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 100_000 {
+        assert!(Instant::now() < deadline, "the run did not start recording");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let run_id = format!("backbonedoub{}", child.id());
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(status.success());
+    let sent = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(
+            sent.elapsed() < Duration::from_secs(10),
+            "coupler still running 10 s after SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert!(!status.success());
+    let s = summary(&out);
+    assert!(
+        s["status"]
+            .as_str()
+            .expect("status")
+            .contains("interrupted"),
+        "{s}"
+    );
+    // The record is complete (summary and footer), not just readable.
+    let rec = record::read_recording(&std::fs::read(&record).expect("record")).expect("readable");
+    assert!(!rec.truncated, "the record was not finished");
+    // No node of the run is left.
+    let left = Command::new("pgrep")
+        .args(["-f", &format!("--run-id {run_id} ")])
+        .output()
+        .expect("pgrep");
+    assert!(
+        String::from_utf8_lossy(&left.stdout).trim().is_empty(),
+        "nodes left running"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_solid_only_scene_runs_through_the_coupler() {
+    let dir = out_dir("solid-only");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("bar.toml");
+    std::fs::write(
+        &path,
+        r#"name = "bar"
+[run]
+t_end = 0.01
+[solid]
+density = 1000.0
+young = 1.0e6
+poisson = 0.0
+gravity = [0.0, -9.81]
+[[solid.bodies]]
+shape = { box = { center = [0.5, 0.0], size = [1.0, 0.1] } }
+divisions = [10, 1]
+[[solid.constraints]]
+region = { box = { lower = [-1.0, -1.0], upper = [0.1, 1.0] } }
+motion = "fixed"
+[[output.probes]]
+name = "tip"
+particle_at = [0.95, 0.0]
+"#,
+    )
+    .expect("write");
+    let out = dir.join("out");
+    run_scene(&path, &out, &[]);
+    let s = summary(&out);
+    assert_eq!(s["status"], "completed");
+    assert!(s["energy_rel_err"].as_f64().expect("energy") < 1e-2, "{s}");
+    let csv = std::fs::read_to_string(out.join("solid_0.csv")).expect("solid_0.csv");
+    assert_eq!(csv.lines().count(), 11, "{csv}");
+    assert!(csv.starts_with("id,x,y,vx,vy,"), "{csv}");
+    let probe = std::fs::read_to_string(out.join("probe_tip.csv")).expect("probe");
+    assert!(probe.starts_with("t,x,y,vx,vy,sigma_n\n"), "{probe}");
+    // The tip falls under gravity: its last y is below its first.
+    let ys: Vec<f64> = probe
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).expect("y").parse().expect("number"))
+        .collect();
+    assert!(ys.len() as u64 == s["steps"].as_u64().expect("steps"));
+    assert!(ys.last() < ys.first(), "{:?} {:?}", ys.first(), ys.last());
+    let _ = std::fs::remove_dir_all(dir);
+}
