@@ -148,6 +148,36 @@ pub struct FluidConfig {
     /// Settings of the pressure double (`fluid-node --double pressure`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure: Option<PressureField>,
+    /// A smooth analytic initial state (verification cases); replaces `init` when present.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Profile>,
+}
+
+/// `fluid.profile`: smooth initial states with exact solutions (exact cell averages).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Profile {
+    /// `ρ = 1 + amplitude sin(2π Σ_a wave_a (x_a − lower_a)/L_a)` at uniform velocity and
+    /// pressure: advected unchanged on a periodic grid.
+    DensityWave {
+        /// Amplitude (< 1) [kg/m³].
+        amplitude: f64,
+        /// Integer wave numbers per axis.
+        wave: Vec<f64>,
+        /// Uniform velocity [m/s].
+        velocity: Vec<f64>,
+        /// Uniform pressure \[Pa\].
+        p: f64,
+    },
+    /// Isentropic vortex of Shu (1998), ρ∞ = p∞ = 1, strength `beta`, 2-D only.
+    IsentropicVortex {
+        /// Strength.
+        beta: f64,
+        /// Centre at t = 0 [m].
+        center: Vec<f64>,
+        /// Free-stream velocity [m/s].
+        velocity: Vec<f64>,
+    },
 }
 
 fn default_node_impl() -> String {
@@ -832,7 +862,41 @@ impl Scene {
             }
             positive("fluid.vacuum.rho", fluid.vacuum.rho)?;
             positive("fluid.vacuum.p", fluid.vacuum.p)?;
-            if fluid.node == "real" && fluid.init.is_empty() {
+            match &fluid.profile {
+                Some(Profile::DensityWave {
+                    amplitude,
+                    wave,
+                    velocity,
+                    p,
+                }) => {
+                    if !(amplitude.abs() < 1.0 && *p > 0.0) {
+                        return Err(invalid(
+                            "fluid.profile.density_wave",
+                            "|amplitude| < 1 and p > 0",
+                            format!("amplitude {amplitude}, p {p}"),
+                        ));
+                    }
+                    check_len("fluid.profile.density_wave.wave", wave)?;
+                    check_len("fluid.profile.density_wave.velocity", velocity)?;
+                }
+                Some(Profile::IsentropicVortex {
+                    beta,
+                    center,
+                    velocity,
+                }) => {
+                    if dim != 2 || !beta.is_finite() {
+                        return Err(invalid(
+                            "fluid.profile.isentropic_vortex",
+                            "a 2-D scene and a finite beta",
+                            format!("{dim}-D, beta {beta}"),
+                        ));
+                    }
+                    check_len("fluid.profile.isentropic_vortex.center", center)?;
+                    check_len("fluid.profile.isentropic_vortex.velocity", velocity)?;
+                }
+                None => {}
+            }
+            if fluid.node == "real" && fluid.init.is_empty() && fluid.profile.is_none() {
                 return Err(invalid(
                     "fluid.init",
                     "at least one [[fluid.init]] entry",

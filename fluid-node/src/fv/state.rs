@@ -7,7 +7,7 @@
 //! scratch line
 //! and are filled from the boundary conditions at every sweep (`sweep.rs`).
 
-use protocol::scene::{Boundary, FluidConfig};
+use protocol::scene::{Boundary, FluidConfig, Profile};
 
 use crate::fv::euler::{Primitive, conserved};
 use crate::fv::line::FluxKind;
@@ -174,6 +174,45 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
         }
     }
     let mut state = FluidState::zeros(dim, grid.n_cells());
+    if let Some(profile) = &cfg.profile {
+        let to3 = |v: &[f64]| std::array::from_fn(|a| v.get(a).copied().unwrap_or(0.0));
+        match profile {
+            Profile::DensityWave {
+                amplitude,
+                wave,
+                velocity,
+                p,
+            } => crate::fv::init::density_wave(
+                &mut state,
+                &grid,
+                *amplitude,
+                to3(wave),
+                to3(velocity),
+                *p,
+                params.gamma,
+                0.0,
+            ),
+            Profile::IsentropicVortex {
+                beta,
+                center,
+                velocity,
+            } => {
+                if dim != 2 {
+                    return Err(format!("the isentropic vortex is 2-D, the grid is {dim}-D"));
+                }
+                crate::fv::init::isentropic_vortex(
+                    &mut state,
+                    &grid,
+                    *beta,
+                    [center[0], center[1]],
+                    [velocity[0], velocity[1]],
+                    params.gamma,
+                    0.0,
+                );
+            }
+        }
+        return Ok((grid, params, state));
+    }
     for idx in 0..grid.n_cells() {
         let ijk = grid.ijk(idx);
         let x = grid.cell_center(ijk);
