@@ -77,6 +77,38 @@ pub fn run_id(scene: &Scene) -> String {
     format!("{short}{}", std::process::id())
 }
 
+/// Cleans the leftovers of earlier runs that crashed: every run id with files under
+/// `/dev/shm/cosim_<id>_*` whose nodes are all dead. Runs still alive are left alone
+/// ([`protocol::bus::cleanup_run`] refuses them). Returns the run ids cleaned.
+pub fn sweep_stale_runs() -> Vec<String> {
+    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+        return Vec::new();
+    };
+    let mut ids: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let rest = name.strip_prefix("cosim_")?;
+            Some(rest.split('_').next()?.to_string())
+        })
+        .filter(|id| !id.is_empty() && protocol::bus::validate_run_id(id).is_ok())
+        .collect();
+    ids.sort();
+    ids.dedup();
+    ids.into_iter()
+        .filter(|id| match protocol::bus::cleanup_run(id) {
+            Ok(removed) => !removed.is_empty(),
+            Err(err) => {
+                // A run still alive (a parallel run) is left alone; say so for the others.
+                if !err.to_string().contains("live node") {
+                    eprintln!("coupler-node: could not clean the leftovers of run {id}: {err}");
+                }
+                false
+            }
+        })
+        .collect()
+}
+
 /// The binary of a node: explicit path, `COSIM_<NODE>_BIN`, or beside this executable.
 pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
     if let Some(p) = explicit {
@@ -124,6 +156,10 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     std::fs::write(&resolved, scene.to_toml())
         .with_context(|| format!("writing {}", resolved.display()))?;
     let run_id = run_id(&scene);
+    let swept = sweep_stale_runs();
+    if !swept.is_empty() && opts.progress {
+        eprintln!("coupler-node: cleaned the leftovers of crashed runs {swept:?}");
+    }
     protocol::bus::cleanup_run(&run_id).context("cleaning leftovers of an earlier run")?;
     let peers: Vec<NodeKind> = nodes.iter().map(|(n, _)| *n).collect();
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
