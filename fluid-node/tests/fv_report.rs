@@ -49,6 +49,14 @@ fn csv_and_vtk_writers() {
     let vortex = scene("isentropic-vortex");
     let mut fluid = vortex.fluid.clone().expect("fluid");
     fluid.cells = vec![4, 3];
+    // The free stream alone (the scene's vortex profile replaced by a uniform state).
+    fluid.profile = None;
+    fluid.init = vec![protocol::scene::InitEntry {
+        region: protocol::scene::Region::All,
+        rho: 1.0,
+        p: 1.0,
+        velocity: vec![1.0, 1.0],
+    }];
     let s = FluidSolver::from_scene(&fluid, 1).expect("solver");
     let mut out = Vec::new();
     write_fluid_csv(&mut out, s.grid(), s.state(), 1.4, None).expect("in memory");
