@@ -138,7 +138,25 @@ pub fn play(
             }
         }
     }
-    // The script is over: only a shutdown may follow.
+    // The script is over. If it ends on a coupler → node frame, the coupler now waits for an
+    // answer the record does not hold: say so at once instead of waiting out the deadline.
+    if let Some((Direction::ToNode, last)) = script.frames.last()
+        && codec::decode_header(last).is_ok_and(|h| h.kind != MessageKind::Shutdown)
+    {
+        return Err(ReplayError::Mismatch {
+            node: me,
+            what: format!(
+                "the coupler waits for the answer to {}, after the end of the record{}",
+                describe(last),
+                if script.truncated {
+                    " (the record was cut short)"
+                } else {
+                    ""
+                }
+            ),
+        });
+    }
+    // Otherwise only a shutdown may follow.
     let (_, got) = transport.recv(Some(NodeKind::Coupler), timeout)?;
     match codec::decode(&got) {
         Ok((_, Message::Shutdown(_))) => Ok(()),

@@ -209,6 +209,15 @@ fn replay_is_identical_and_names_an_altered_value() {
     let _ = std::fs::remove_dir_all(out);
 }
 
+/// Process ids of the nodes of a run (`--` so pgrep does not read the pattern as an option).
+fn node_pids(run_id: &str) -> String {
+    let out = Command::new("pgrep")
+        .args(["-f", "--", &format!("--run-id {run_id} ")])
+        .output()
+        .expect("pgrep");
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
 fn long_doubles_scene(dir: &Path) -> PathBuf {
     std::fs::create_dir_all(dir).expect("dir");
     let text = std::fs::read_to_string(workspace().join("scenes/backbone-doubles.toml"))
@@ -529,14 +538,7 @@ fn sigterm_ends_every_process_and_finishes_the_record() {
     let rec = record::read_recording(&std::fs::read(&record).expect("record")).expect("readable");
     assert!(!rec.truncated, "the record was not finished");
     // No node of the run is left.
-    let left = Command::new("pgrep")
-        .args(["-f", &format!("--run-id {run_id} ")])
-        .output()
-        .expect("pgrep");
-    assert!(
-        String::from_utf8_lossy(&left.stdout).trim().is_empty(),
-        "nodes left running"
-    );
+    assert!(node_pids(&run_id).is_empty(), "nodes left running");
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -613,4 +615,65 @@ fn density_wave_scene_returns_to_its_initial_state() {
     // OSMP5, N = 200, one period: 3.57e-10 measured.
     assert!(l1 < 5e-10, "L1 density error {l1:e}");
     let _ = std::fs::remove_dir_all(out);
+}
+
+#[test]
+fn leftovers_of_a_crashed_run_are_cleaned_at_the_next_start() {
+    let dir = out_dir("crashed");
+    let scene = long_doubles_scene(&dir);
+    let out = dir.join("out");
+    let mut child = coupler()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("coupler starts");
+    let record = out.join("exchange.mcap");
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 100_000 {
+        assert!(Instant::now() < deadline, "the run did not start recording");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let run_id = format!("backbonedoub{}", child.id());
+    assert!(
+        !node_pids(&run_id).is_empty(),
+        "no nodes found for {run_id}"
+    );
+    // SIGKILL: no cleanup runs in the coupler; its nodes see it gone and exit.
+    child.kill().expect("kill");
+    child.wait().expect("reaped");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !node_pids(&run_id).is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "nodes of the killed coupler still run"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let prefix = format!("cosim_{run_id}_");
+    let leftovers = || {
+        std::fs::read_dir("/dev/shm")
+            .expect("/dev/shm")
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+            .count()
+    };
+    assert!(leftovers() > 0, "the crash left nothing to clean");
+    let next = dir.join("next");
+    let r = coupler()
+        .arg("run")
+        .arg(workspace().join("scenes/backbone-doubles.toml"))
+        .arg("--out")
+        .arg(&next)
+        .output()
+        .expect("coupler starts");
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    // Another test's coupler starting meanwhile may have swept them first: what matters is
+    // that they are gone once a run has started.
+    assert_eq!(leftovers(), 0, "leftovers of {run_id} survived: {stderr}");
+    let _ = std::fs::remove_dir_all(dir);
 }
