@@ -140,13 +140,16 @@ pub fn play(
     }
     // The script is over. If it ends on a coupler → node frame, the coupler now waits for an
     // answer the record does not hold: say so at once instead of waiting out the deadline.
-    if let Some((Direction::ToNode, last)) = script.frames.last()
+    // A record cut short (a killed run) holds nothing more either, and the coupler may be waiting
+    // for this node's next message: stop now too.
+    if let Some((dir, last)) = script.frames.last()
+        && (script.truncated || *dir == Direction::ToNode)
         && codec::decode_header(last).is_ok_and(|h| h.kind != MessageKind::Shutdown)
     {
         return Err(ReplayError::Mismatch {
             node: me,
             what: format!(
-                "the coupler waits for the answer to {}, after the end of the record{}",
+                "the record ends after {}: nothing more to replay, after the end of the record{}",
                 describe(last),
                 if script.truncated {
                     " (the record was cut short)"
