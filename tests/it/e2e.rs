@@ -229,27 +229,41 @@ fn long_doubles_scene(dir: &Path) -> PathBuf {
     path
 }
 
-fn kill_node_and_time_the_coupler(node: &str) {
-    let dir = out_dir(&format!("kill-{node}"));
-    let scene = long_doubles_scene(&dir);
-    let out = dir.join("out");
-    let mut child = coupler()
+/// Starts the coupler on a long scene and waits (bounded) until it has recorded `bytes`.
+fn start_long_run(
+    scene: &Path,
+    out: &Path,
+    bytes: u64,
+    stderr: bool,
+) -> (std::process::Child, String) {
+    let child = coupler()
         .arg("run")
-        .arg(&scene)
+        .arg(scene)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .arg("--quiet")
-        .stderr(Stdio::piped())
+        .stderr(if stderr {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        })
         .spawn()
         .expect("coupler starts");
-    // Wait (bounded) until steps are being recorded.
     let record = out.join("exchange.mcap");
     let deadline = Instant::now() + Duration::from_secs(30);
-    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 200_000 {
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < bytes {
         assert!(Instant::now() < deadline, "the run did not start recording");
         std::thread::sleep(Duration::from_millis(20));
     }
     let run_id = format!("backbonedoub{}", child.id());
+    (child, run_id)
+}
+
+fn kill_node_and_time_the_coupler(node: &str) {
+    let dir = out_dir(&format!("kill-{node}"));
+    let scene = long_doubles_scene(&dir);
+    let out = dir.join("out");
+    let (mut child, run_id) = start_long_run(&scene, &out, 200_000, true);
     let bin = if node == "fluid" {
         "it-fluid-node"
     } else {
@@ -298,7 +312,8 @@ fn kill_node_and_time_the_coupler(node: &str) {
             .contains(&format!("{node} node")),
         "{s}"
     );
-    let rec = record::read_recording(&std::fs::read(&record).expect("record")).expect("readable");
+    let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
+        .expect("readable");
     assert!(rec.messages.len() > 100, "{} messages", rec.messages.len());
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -493,22 +508,7 @@ fn sigterm_ends_every_process_and_finishes_the_record() {
     let dir = out_dir("sigterm");
     let scene = long_doubles_scene(&dir);
     let out = dir.join("out");
-    let mut child = coupler()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("coupler starts");
-    let record = out.join("exchange.mcap");
-    let deadline = Instant::now() + Duration::from_secs(30);
-    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 100_000 {
-        assert!(Instant::now() < deadline, "the run did not start recording");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let run_id = format!("backbonedoub{}", child.id());
+    let (mut child, run_id) = start_long_run(&scene, &out, 100_000, true);
     let status = Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
         .status()
@@ -535,7 +535,8 @@ fn sigterm_ends_every_process_and_finishes_the_record() {
         "{s}"
     );
     // The record is complete (summary and footer), not just readable.
-    let rec = record::read_recording(&std::fs::read(&record).expect("record")).expect("readable");
+    let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
+        .expect("readable");
     assert!(!rec.truncated, "the record was not finished");
     // No node of the run is left.
     assert!(node_pids(&run_id).is_empty(), "nodes left running");
@@ -622,22 +623,7 @@ fn leftovers_of_a_crashed_run_are_cleaned_at_the_next_start() {
     let dir = out_dir("crashed");
     let scene = long_doubles_scene(&dir);
     let out = dir.join("out");
-    let mut child = coupler()
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("coupler starts");
-    let record = out.join("exchange.mcap");
-    let deadline = Instant::now() + Duration::from_secs(30);
-    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 100_000 {
-        assert!(Instant::now() < deadline, "the run did not start recording");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let run_id = format!("backbonedoub{}", child.id());
+    let (mut child, run_id) = start_long_run(&scene, &out, 100_000, false);
     assert!(
         !node_pids(&run_id).is_empty(),
         "no nodes found for {run_id}"
