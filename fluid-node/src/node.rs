@@ -4,10 +4,11 @@
 
 use std::path::Path;
 
-use protocol::transport::{Link, LinkError};
+use protocol::session::{fail, propose, unexpected};
+use protocol::transport::Link;
 use protocol::wire::{
-    Checkpoint, ConservedTotals, Decision, DtProposal, Failure, Hello, InterfaceLoads, Message,
-    NodeKind, PROTOCOL_VERSION, SolidState, Stamp, StepPlan,
+    Checkpoint, ConservedTotals, Decision, Hello, InterfaceLoads, Message, NodeKind,
+    PROTOCOL_VERSION, SolidState, Stamp, StepPlan,
 };
 
 /// What the loop needs from a fluid implementation.
@@ -40,40 +41,7 @@ pub trait FluidModel {
     fn write_probes(&self, out: &Path) -> std::io::Result<()>;
 }
 
-/// How the node's run ended.
-#[derive(Debug, thiserror::Error)]
-pub enum NodeError {
-    /// Exchange with the coupler failed.
-    #[error(transparent)]
-    Link(#[from] LinkError),
-    /// Numerical trouble, already reported to the coupler.
-    #[error("numerical failure at step {step}: {report}")]
-    Numerical {
-        /// Step.
-        step: u64,
-        /// Report.
-        report: String,
-    },
-    /// Writing outputs failed.
-    #[error("writing outputs to {dir}: {source}")]
-    Output {
-        /// The output directory.
-        dir: String,
-        /// The IO error.
-        source: std::io::Error,
-    },
-}
-
-/// What the loop needs from the scene.
-#[derive(Clone, Debug)]
-pub struct LoopConfig {
-    /// Hash of the resolved scene.
-    pub scene_hash: u64,
-    /// A solid node takes part.
-    pub coupled: bool,
-    /// Where outputs go (`None`: write nothing).
-    pub out: Option<std::path::PathBuf>,
-}
+pub use protocol::session::{LoopConfig, NodeError};
 
 /// Runs the fluid side of the handshake until the coupler's shutdown.
 pub fn run(
@@ -100,7 +68,7 @@ pub fn run(
         }
     }
     let mut step = 0;
-    propose(model, link, step)?;
+    propose(link, step, model.dt_max())?;
     loop {
         match link.recv()? {
             Message::Shutdown(_) => break,
@@ -128,7 +96,7 @@ pub fn run(
                     None => None,
                 };
                 step = c.stamp.step;
-                propose(model, link, step)?;
+                propose(link, step, model.dt_max())?;
             }
             Message::StepPlan(plan) => {
                 step = plan.stamp.step;
@@ -171,16 +139,13 @@ pub fn run(
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
                     model
                         .write_output(k, t_end, out)
-                        .map_err(|source| NodeError::Output {
-                            dir: out.display().to_string(),
-                            source,
-                        })?;
+                        .map_err(|source| NodeError::output(out, source))?;
                 }
                 link.send(&Message::ConservedTotals(
                     model.totals(Stamp::step(step), t_end),
                 ))?;
                 step += 1;
-                propose(model, link, step)?;
+                propose(link, step, model.dt_max())?;
             }
             other => {
                 return Err(unexpected(
@@ -193,45 +158,9 @@ pub fn run(
     if let Some(out) = &cfg.out {
         model
             .write_probes(out)
-            .map_err(|source| NodeError::Output {
-                dir: out.display().to_string(),
-                source,
-            })?;
+            .map_err(|source| NodeError::output(out, source))?;
     }
     Ok(())
-}
-
-fn propose(model: &dyn FluidModel, link: &mut Link<'_>, step: u64) -> Result<(), NodeError> {
-    let (dt_max, limiter) = model.dt_max();
-    link.send(&Message::DtProposal(DtProposal {
-        stamp: Stamp::step(step),
-        dt_max,
-        limiter,
-    }))?;
-    Ok(())
-}
-
-fn unexpected(msg: &Message, expected: &str) -> NodeError {
-    NodeError::Link(LinkError::Unexpected(format!(
-        "{:?} (step {}, iteration {}) while waiting for {expected}",
-        msg.kind(),
-        msg.stamp().step,
-        msg.stamp().iteration
-    )))
-}
-
-/// Reports numerical trouble to the coupler, then returns the error that ends the node.
-fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
-    // The coupler may already be gone; the local error is what matters then.
-    let _ = link.send(&Message::Failure(Failure {
-        stamp,
-        node: NodeKind::Fluid,
-        report: report.clone(),
-    }));
-    NodeError::Numerical {
-        step: stamp.step,
-        report,
-    }
 }
 
 /// Builds the fluid implementation named `implementation` (`real` or `pressure`) for a scene.

@@ -4,6 +4,7 @@
 //! - [`wire`]: message types, pure data.
 //! - [`codec`]: a 24-byte header plus the bincode 2 payload; version checks.
 //! - [`scene`]: the scene file schema and its validation.
+//! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
@@ -16,6 +17,7 @@
 
 pub mod codec;
 pub mod scene;
+pub mod session;
 pub mod transport;
 pub mod wire;
 
