@@ -124,6 +124,8 @@ fn results_are_bit_identical_for_1_and_2_threads() {
         for bc in [BoundaryKind::Wall, BoundaryKind::Outflow] {
             let mut a = blast(dim, n, bc, 5, 1);
             let mut b = blast(dim, n, bc, 5, 2);
+            a.keep_directional_pressures(true);
+            b.keep_directional_pressures(true);
             run_steps(&mut a, 8);
             run_steps(&mut b, 8);
             assert_eq!(bits(&a), bits(&b), "{dim}-D {bc:?}");
@@ -132,7 +134,10 @@ fn results_are_bit_identical_for_1_and_2_threads() {
             assert_eq!(ta.energy.to_bits(), tb.energy.to_bits());
             assert_eq!(ta.outflow_energy.to_bits(), tb.outflow_energy.to_bits());
             for axis in 0..dim {
-                let (pa, pb) = (a.directional_pressures(axis), b.directional_pressures(axis));
+                let (pa, pb) = (
+                    a.directional_pressures(axis).unwrap(),
+                    b.directional_pressures(axis).unwrap(),
+                );
                 assert!(pa.iter().zip(pb).all(|(x, y)| x.to_bits() == y.to_bits()));
             }
         }
@@ -143,11 +148,13 @@ fn results_are_bit_identical_for_1_and_2_threads() {
 fn directional_pressures_are_the_sweep_start_pressures() {
     // 2-D: step 0 sweeps x then y, so p̄_x is the pressure at t^n.
     let mut s = blast(2, 24, BoundaryKind::Wall, 5, 1);
+    assert_eq!(s.directional_pressures(0), None, "off by default");
+    s.keep_directional_pressures(true);
     let before: Vec<f64> = (0..s.grid().n_cells()).map(|i| s.primitive(i).2).collect();
     let rep = s.advance(s.max_dt());
     assert_eq!(rep.sweeps, vec![0, 1]);
-    assert_eq!(s.directional_pressures(0), &before[..]);
-    assert_ne!(s.directional_pressures(1), &before[..]);
+    assert_eq!(s.directional_pressures(0), Some(&before[..]));
+    assert_ne!(s.directional_pressures(1), Some(&before[..]));
     let rep = s.advance(s.max_dt());
     assert_eq!(rep.sweeps, vec![1, 0]);
 }
@@ -155,14 +162,18 @@ fn directional_pressures_are_the_sweep_start_pressures() {
 #[test]
 fn checkpoint_round_trip_continues_identically() {
     let mut a = blast(3, 12, BoundaryKind::Wall, 7, 2);
+    a.keep_directional_pressures(true);
     run_steps(&mut a, 3);
     let bytes = a.to_checkpoint();
     let mut b = blast(3, 12, BoundaryKind::Wall, 7, 1);
+    b.keep_directional_pressures(true);
     b.restore_checkpoint(&bytes).expect("same grid");
     assert_eq!(b.steps(), 3);
+    assert_eq!(a.directional_pressures(2), b.directional_pressures(2));
     run_steps(&mut a, 4);
     run_steps(&mut b, 4);
     assert_eq!(bits(&a), bits(&b));
+    assert_eq!(a.directional_pressures(1), b.directional_pressures(1));
     let mut other = blast(3, 10, BoundaryKind::Wall, 7, 1);
     let err = other.restore_checkpoint(&bytes).expect_err("other grid");
     assert!(err.contains("checkpoint for grid"), "{err}");

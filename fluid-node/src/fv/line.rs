@@ -18,10 +18,9 @@
 
 use crate::fv::euler::{
     NQ, Primitive, RoeAverage, State, flux_hllc, flux_hlle, flux_lax_friedrichs, physical_flux,
-    primitive, roe_average, roe_eigenvalues, roe_eigenvector, roe_star_states_positive,
-    roe_strengths,
+    primitive, roe_eigenvector, roe_star_states_positive, roe_strengths,
 };
-use crate::fv::osmp::{WaveLine, WaveSpeed, osmp_psi, stencil_radius};
+use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
 
 /// Rounds of the a-posteriori positivity fix.
 pub const MAX_FIXES: usize = 3;
@@ -96,6 +95,9 @@ pub struct LineStats {
 }
 
 /// Reusable buffers of one line update (one per worker thread).
+///
+/// Cell and interface quantities are kept as one array each (structure of arrays), so that the
+/// loops over a line vectorise.
 #[derive(Clone, Debug, Default)]
 pub struct LineScratch {
     /// Input states, `n + 2 ng` (filled by the caller).
@@ -104,15 +106,69 @@ pub struct LineScratch {
     pub new: Vec<State>,
     /// Output: face fluxes, `n + 1` (face `i` is the left face of interior cell `i`).
     pub face: Vec<State>,
-    prim: Vec<Primitive>,
+    cells: CellLine,
     phys: Vec<State>,
     vacuum: Vec<bool>,
-    roe: Vec<RoeAverage>,
+    roe: RoeLine,
     bad_prefix: Vec<u32>,
+    speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
+    psi: [Vec<f64>; NQ],
+    star_ok: Vec<bool>,
     kind: Vec<FaceFlux>,
     left: Vec<State>,
     right: Vec<State>,
+}
+
+/// Primitive variables of the cells of a line, with `√ρ` and the total enthalpy `H` of the
+/// Roe averages.
+#[derive(Clone, Debug, Default)]
+struct CellLine {
+    rho: Vec<f64>,
+    vel: [Vec<f64>; 3],
+    p: Vec<f64>,
+    sqrt_rho: Vec<f64>,
+    h: Vec<f64>,
+}
+
+impl CellLine {
+    fn resize(&mut self, len: usize) {
+        for v in [&mut self.rho, &mut self.p, &mut self.sqrt_rho, &mut self.h] {
+            v.resize(len, 0.0);
+        }
+        for v in &mut self.vel {
+            v.resize(len, 0.0);
+        }
+    }
+
+    fn primitive(&self, i: usize) -> Primitive {
+        Primitive {
+            rho: self.rho[i],
+            vel: [self.vel[0][i], self.vel[1][i], self.vel[2][i]],
+            p: self.p[i],
+        }
+    }
+}
+
+/// Roe averages at the interfaces of a line.
+#[derive(Clone, Debug, Default)]
+struct RoeLine {
+    vel: [Vec<f64>; 3],
+    h: Vec<f64>,
+    c: Vec<f64>,
+    valid: Vec<bool>,
+}
+
+impl RoeLine {
+    fn resize(&mut self, n: usize) {
+        for v in [&mut self.h, &mut self.c] {
+            v.resize(n, 0.0);
+        }
+        for v in &mut self.vel {
+            v.resize(n, 0.0);
+        }
+        self.valid.resize(n, false);
+    }
 }
 
 impl LineScratch {
@@ -122,14 +178,21 @@ impl LineScratch {
         self.u.resize(len, [0.0; NQ]);
         self.new.resize(n, [0.0; NQ]);
         self.face.resize(n + 1, [0.0; NQ]);
-        self.prim.resize(len, Primitive::default());
+        self.cells.resize(len);
         self.phys.resize(len, [0.0; NQ]);
         self.vacuum.resize(len, false);
-        self.roe.resize(len - 1, RoeAverage::default());
+        self.roe.resize(len - 1);
         self.bad_prefix.resize(len, 0);
+        for sp in &mut self.speeds {
+            sp.resize(len - 1);
+        }
         for w in &mut self.waves {
             w.resize(len - 1);
         }
+        for p in &mut self.psi {
+            p.resize(n + 1, 0.0);
+        }
+        self.star_ok.resize(n + 1, false);
         self.kind.resize(n + 1, FaceFlux::Regular);
         self.left.resize(len, [0.0; NQ]);
         self.right.resize(len, [0.0; NQ]);
@@ -155,15 +218,13 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
     let len = n + 2 * ng;
     debug_assert!(s.u.len() == len && s.face.len() == n + 1);
     let mut stats = LineStats::default();
-    for i in 0..len {
-        let w = primitive(&s.u[i], gamma);
-        s.prim[i] = w;
-        s.phys[i] = physical_flux(&s.u[i], &w);
-        s.vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
-    }
+    cell_pass(s, setup);
     match setup.flux {
-        FluxKind::Osmp(order) => osmp_faces(s, setup, order, &mut stats),
-        FluxKind::MusclHancock => muscl_faces(s, setup, &mut stats),
+        FluxKind::Osmp(3) => osmp_faces::<3>(s, setup),
+        FluxKind::Osmp(5) => osmp_faces::<5>(s, setup),
+        FluxKind::Osmp(7) => osmp_faces::<7>(s, setup),
+        FluxKind::Osmp(order) => panic!("osmp order {order} (3, 5 or 7; checked at setup)"),
+        FluxKind::MusclHancock => muscl_faces(s, setup),
     }
     for side in 0..2 {
         if setup.wall[side] {
@@ -249,7 +310,118 @@ fn n_waves(setup: &LineSetup) -> usize {
     3 + setup.n_shear
 }
 
-fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut LineStats) {
+/// Primitive variables, `√ρ`, `H`, physical fluxes and vacuum flags of every cell of the line.
+fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
+    let len = s.u.len();
+    let gamma = setup.gamma;
+    let u = &s.u[..len];
+    let c = &mut s.cells;
+    let (rho, p, sqrt_rho, h) = (
+        &mut c.rho[..len],
+        &mut c.p[..len],
+        &mut c.sqrt_rho[..len],
+        &mut c.h[..len],
+    );
+    let [v0, v1, v2] = &mut c.vel;
+    let (v0, v1, v2) = (&mut v0[..len], &mut v1[..len], &mut v2[..len]);
+    let (phys, vacuum) = (&mut s.phys[..len], &mut s.vacuum[..len]);
+    for i in 0..len {
+        let w = primitive(&u[i], gamma);
+        rho[i] = w.rho;
+        [v0[i], v1[i], v2[i]] = w.vel;
+        p[i] = w.p;
+        // √ρ and H of the Roe average (NaN or infinite where ρ ≤ 0: such interfaces are
+        // marked invalid before use).
+        sqrt_rho[i] = w.rho.sqrt();
+        h[i] = (u[i][4] + w.p) / w.rho;
+        phys[i] = physical_flux(&u[i], &w);
+        vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+    }
+}
+
+/// Roe averages, wave speeds and strengths at every interface of the line. An interface beside
+/// a vacuum cell or with a non-physical average (c² ≤ 0, non-finite) is marked invalid and
+/// gets λ = α = 0.
+fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
+    let nint = s.u.len() - 1;
+    let gamma = setup.gamma;
+    let u = &s.u[..nint + 1];
+    let vacuum = &s.vacuum[..nint + 1];
+    let c = &s.cells;
+    let (rho, sq, h) = (
+        &c.rho[..nint + 1],
+        &c.sqrt_rho[..nint + 1],
+        &c.h[..nint + 1],
+    );
+    let (v0, v1, v2) = (
+        &c.vel[0][..nint + 1],
+        &c.vel[1][..nint + 1],
+        &c.vel[2][..nint + 1],
+    );
+    let r = &mut s.roe;
+    let [rv0, rv1, rv2] = &mut r.vel;
+    let (rv0, rv1, rv2) = (&mut rv0[..nint], &mut rv1[..nint], &mut rv2[..nint]);
+    let (rh, rc, valid) = (&mut r.h[..nint], &mut r.c[..nint], &mut r.valid[..nint]);
+    let [s0, s1, s2] = &mut s.speeds;
+    let (lam0, lam1, lam2) = (
+        &mut s0.lam[..nint],
+        &mut s1.lam[..nint],
+        &mut s2.lam[..nint],
+    );
+    let [w0, w1, w2, w3, w4] = &mut s.waves;
+    let (a0, a1, a2, a3, a4) = (
+        &mut w0.alpha[..nint],
+        &mut w1.alpha[..nint],
+        &mut w2.alpha[..nint],
+        &mut w3.alpha[..nint],
+        &mut w4.alpha[..nint],
+    );
+    for l in 0..nint {
+        // Roe average (Toro 2009, eq. 11.60), as `euler::roe_average`, without its early
+        // return so that the loop vectorises.
+        let (sl, sr) = (sq[l], sq[l + 1]);
+        let inv = 1.0 / (sl + sr);
+        let vel = [
+            (sl * v0[l] + sr * v0[l + 1]) * inv,
+            (sl * v1[l] + sr * v1[l + 1]) * inv,
+            (sl * v2[l] + sr * v2[l + 1]) * inv,
+        ];
+        let hh = (sl * h[l] + sr * h[l + 1]) * inv;
+        let q2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
+        let c2 = (gamma - 1.0) * (hh - 0.5 * q2);
+        let ok = !vacuum[l]
+            & !vacuum[l + 1]
+            & (rho[l] > 0.0)
+            & (rho[l + 1] > 0.0)
+            & (c2 > 0.0)
+            & c2.is_finite()
+            & hh.is_finite();
+        let cc = if ok { c2.sqrt() } else { 0.0 };
+        let roe = RoeAverage {
+            vel,
+            h: hh,
+            c: cc,
+            valid: ok,
+        };
+        let du: State = std::array::from_fn(|q| u[l + 1][q] - u[l][q]);
+        let alpha = roe_strengths(&roe, &du, gamma);
+        let keep = |x: f64| if ok { x } else { 0.0 };
+        [rv0[l], rv1[l], rv2[l]] = vel;
+        rh[l] = hh;
+        rc[l] = cc;
+        valid[l] = ok;
+        lam0[l] = keep(vel[0] - cc);
+        lam1[l] = keep(vel[0] + cc);
+        lam2[l] = keep(vel[0]);
+        a0[l] = keep(alpha[0]);
+        a1[l] = keep(alpha[1]);
+        a2[l] = keep(alpha[2]);
+        a3[l] = keep(alpha[3]);
+        a4[l] = keep(alpha[4]);
+    }
+}
+
+fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     let LineSetup {
         n,
         ng,
@@ -257,45 +429,68 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
         sigma,
         ..
     } = *setup;
-    let len = n + 2 * ng;
-    let radius = stencil_radius(order);
+    let radius = stencil_radius(ORDER);
     let nw = n_waves(setup);
     let inv_sigma = 1.0 / sigma;
-    let _ = stats;
-    s.bad_prefix[0] = 0;
-    for l in 0..len - 1 {
-        let valid = if s.vacuum[l] || s.vacuum[l + 1] {
-            false
-        } else {
-            let roe = roe_average(&s.u[l], &s.prim[l], &s.u[l + 1], &s.prim[l + 1], gamma);
-            s.roe[l] = roe;
-            roe.valid
-        };
-        if valid {
-            let roe = s.roe[l];
-            let mut du = [0.0; NQ];
-            for q in 0..NQ {
-                du[q] = s.u[l + 1][q] - s.u[l][q];
-            }
-            let lam = roe_eigenvalues(&roe);
-            let alpha = roe_strengths(&roe, &du, gamma);
-            for k in 0..2 {
-                s.waves[k].set(l, lam[k], alpha[k], sigma, inv_sigma);
-            }
-            let u_speed = WaveSpeed::new(lam[2], sigma, inv_sigma);
-            for k in 2..nw {
-                s.waves[k].set_with(l, &u_speed, alpha[k]);
-            }
-        } else {
-            s.roe[l].valid = false;
-            for k in 0..nw {
-                s.waves[k].set(l, 0.0, 0.0, sigma, inv_sigma);
-            }
-        }
-        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!valid);
+    interface_pass(s, setup);
+    for sp in &mut s.speeds {
+        sp.fill(ORDER, sigma, inv_sigma);
     }
+    // Wave k travels at speed [u−c, u+c, u, u, u][k].
     for k in 0..nw {
-        s.waves[k].compute_curvatures();
+        let speed = &s.speeds[k.min(2)];
+        s.waves[k].fill(ORDER, speed);
+        psi_line::<ORDER, true>(speed, &s.waves[k], ng - 1, &mut s.psi[k]);
+    }
+    for k in nw..NQ {
+        s.psi[k].fill(0.0);
+    }
+    // Regular (OSMP) flux at every face, and whether its linearised star states are
+    // physical.
+    {
+        let nf = n + 1;
+        let f0 = ng - 1;
+        let (u, phys) = (&s.u[f0..f0 + nf + 1], &s.phys[f0..f0 + nf + 1]);
+        let r = &s.roe;
+        let (rv0, rv1, rv2) = (
+            &r.vel[0][f0..f0 + nf],
+            &r.vel[1][f0..f0 + nf],
+            &r.vel[2][f0..f0 + nf],
+        );
+        let (rh, rc, valid) = (&r.h[f0..f0 + nf], &r.c[f0..f0 + nf], &r.valid[f0..f0 + nf]);
+        let lam: [&[f64]; 3] = std::array::from_fn(|k| &s.speeds[k].lam[f0..f0 + nf]);
+        let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &s.waves[k].alpha[f0..f0 + nf]);
+        let psi: [&[f64]; NQ] = std::array::from_fn(|k| &s.psi[k][..nf]);
+        let (face, star_ok) = (&mut s.face[..nf], &mut s.star_ok[..nf]);
+        for j in 0..nf {
+            let roe = RoeAverage {
+                vel: [rv0[j], rv1[j], rv2[j]],
+                h: rh[j],
+                c: rc[j],
+                valid: valid[j],
+            };
+            let mut flux = [0.0; NQ];
+            for q in 0..NQ {
+                flux[q] = 0.5 * (phys[j][q] + phys[j + 1][q]);
+            }
+            let mut a = [0.0; NQ];
+            for k in 0..NQ {
+                a[k] = alpha[k][j];
+                let coef = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
+                let r = roe_eigenvector(&roe, k);
+                for q in 0..NQ {
+                    flux[q] -= coef * r[q];
+                }
+            }
+            face[j] = flux;
+            star_ok[j] = roe_star_states_positive(&u[j], &u[j + 1], &roe, &a);
+        }
+    }
+    // Faces beside vacuum: Lax–Friedrichs; an invalid average in the stencil or non-physical
+    // star states: HLLE.
+    s.bad_prefix[0] = 0;
+    for l in 0..s.roe.valid.len() {
+        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe.valid[l]);
     }
     for fi in 0..=n {
         let f = ng - 1 + fi;
@@ -303,31 +498,12 @@ fn osmp_faces(s: &mut LineScratch, setup: &LineSetup, order: u32, stats: &mut Li
         if s.vacuum[f] || s.vacuum[f + 1] {
             s.face[fi] = flux_lax_friedrichs(ul, ur, sigma, gamma);
             s.kind[fi] = FaceFlux::LaxFriedrichs;
-            continue;
-        }
-        let n_bad = s.bad_prefix[f + radius + 1] - s.bad_prefix[f - radius];
-        let roe = s.roe[f];
-        let alpha0: [f64; NQ] = std::array::from_fn(|k| s.waves[k].alpha[f]);
-        if n_bad > 0 || !roe_star_states_positive(ul, ur, &roe, &alpha0) {
+        } else if s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius] || !s.star_ok[fi] {
             s.face[fi] = flux_hlle(ul, ur, gamma);
             s.kind[fi] = FaceFlux::Hlle;
-            continue;
+        } else {
+            s.kind[fi] = FaceFlux::Regular;
         }
-        let mut flux = [0.0; NQ];
-        for q in 0..NQ {
-            flux[q] = 0.5 * (s.phys[f][q] + s.phys[f + 1][q]);
-        }
-        for k in 0..nw {
-            let wave = &s.waves[k];
-            let psi = osmp_psi(order, wave, f);
-            let coef = 0.5 * wave.lam[f].abs() * (wave.alpha[f] - psi);
-            let r = roe_eigenvector(&roe, k);
-            for q in 0..NQ {
-                flux[q] -= coef * r[q];
-            }
-        }
-        s.face[fi] = flux;
-        s.kind[fi] = FaceFlux::Regular;
     }
 }
 
@@ -345,7 +521,7 @@ fn slope_mc(a: f64, b: f64) -> f64 {
     }
 }
 
-fn muscl_faces(s: &mut LineScratch, setup: &LineSetup, _stats: &mut LineStats) {
+fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
     let LineSetup {
         n,
         ng,
@@ -355,7 +531,11 @@ fn muscl_faces(s: &mut LineScratch, setup: &LineSetup, _stats: &mut LineStats) {
     } = *setup;
     // Boundary-extrapolated, half-step-evolved states of cells ng−1 ..= ng+n (Toro §14.4.2).
     for i in ng - 1..=ng + n {
-        let (wm, w0, wp) = (s.prim[i - 1], s.prim[i], s.prim[i + 1]);
+        let (wm, w0, wp) = (
+            s.cells.primitive(i - 1),
+            s.cells.primitive(i),
+            s.cells.primitive(i + 1),
+        );
         let field = |w: &Primitive| [w.rho, w.vel[0], w.vel[1], w.vel[2], w.p];
         let (am, a0, ap) = (field(&wm), field(&w0), field(&wp));
         let mut lo = Primitive::default();

@@ -1,10 +1,15 @@
-//! Scalar kernel of the one-step monotonicity-preserving scheme OSMP of Daru & Tenaud (JCP 193,
-//! 2004), orders 3, 5 and 7, in the division-free form of numerics.md §1.5.
+//! Kernel of the one-step monotonicity-preserving scheme OSMP of Daru & Tenaud (JCP 193, 2004),
+//! orders 3, 5 and 7, in the division-free form of numerics.md §1.5, on whole lines.
 //!
 //! For one characteristic wave with speeds `λ_l`, strengths `α_l` and Courant numbers
 //! `ν_l = Δt/Δx |λ_l|` at the interfaces `l` of a line, the kernel returns `Ψ` such that the
 //! wave's share of the interface flux is `−½ |λ_0| (α_0 − Ψ) r_0` (`Ψ = 0`: Roe/upwind,
 //! `Ψ = (1−ν)α`: Lax–Wendroff).
+//!
+//! Layout: one array per quantity over the interfaces of a line (structure of arrays), and
+//! loops without branches (the upwind orientation is a select), so that the compiler
+//! vectorises them. What depends only on a speed ([`SpeedLine`]) is computed once for the
+//! entropy and shear waves, which travel together.
 
 /// Courant numbers and speeds below this are treated as zero in the bounds (avoids 0/0) [-].
 const EPS: f64 = 1e-12;
@@ -18,6 +23,12 @@ pub const fn stencil_radius(order: u32) -> usize {
 /// Ghost cells per side needed by order `order` (`R + 1`).
 pub const fn ghost_cells(order: u32) -> usize {
     stencil_radius(order) + 1
+}
+
+/// Accuracy coefficients `c_q` order `order` uses (`c_1` for 3, `c_1..c_3` for 5, all five
+/// for 7).
+pub const fn n_coefficients(order: u32) -> usize {
+    order as usize - 2
 }
 
 /// Coefficients `c_1..c_5` of the accuracy function at Courant number `nu`.
@@ -37,58 +48,106 @@ pub fn accuracy_coefficients(nu: f64) -> [f64; 5] {
     [c1, c2, c3, c4, c5]
 }
 
-/// `minmod(a, b)`: 0 if the signs differ, else the argument of smaller magnitude.
+/// `min(a, b)` as one machine instruction (`f64::min` also handles NaN, which costs a compare
+/// and a blend per call on x86 without AVX). For a NaN argument the result is `b`; the kernel
+/// never meets one on a valid interface (non-finite states are flagged before use).
+#[inline(always)]
+fn fmin(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// `max(a, b)`, the counterpart of [`fmin`].
+#[inline(always)]
+fn fmax(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
+/// `minmod` of four values: 0 unless all have one sign, else the one of smallest magnitude.
+///
+/// Branch-free: `max(min, 0) + min(max, 0)` is the smallest positive value when all are
+/// positive, the largest negative one when all are negative, and 0 otherwise.
 #[inline]
-pub fn minmod(a: f64, b: f64) -> f64 {
-    if a * b <= 0.0 {
-        0.0
-    } else if a.abs() < b.abs() {
-        a
-    } else {
-        b
-    }
+pub fn minmod4(a: f64, b: f64, c: f64, d: f64) -> f64 {
+    let lo = fmin(fmin(a, b), fmin(c, d));
+    let hi = fmax(fmax(a, b), fmax(c, d));
+    fmax(lo, 0.0) + fmin(hi, 0.0)
 }
 
 /// Suresh–Huynh curvature `d^{M4}_{l+1/2} = minmod(4d_l − d_{l+1}, 4d_{l+1} − d_l, d_l, d_{l+1})`
 /// (JCP 136, 1997, eq. 2.19) from the curvatures `d_l`, `d_{l+1}` of the two adjacent cells.
 #[inline]
 pub fn curvature_m4(d_l: f64, d_r: f64) -> f64 {
-    minmod(minmod(4.0 * d_l - d_r, 4.0 * d_r - d_l), minmod(d_l, d_r))
+    minmod4(4.0 * d_l - d_r, 4.0 * d_r - d_l, d_l, d_r)
 }
 
-/// What depends only on a wave's speed at one interface.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct WaveSpeed {
-    /// Eigenvalue λ [m/s].
-    pub lam: f64,
+/// What depends only on a wave speed, one entry per interface of a line.
+#[derive(Clone, Debug, Default)]
+pub struct SpeedLine {
+    /// Eigenvalue λ [m/s] (filled by the caller).
+    pub lam: Vec<f64>,
     /// Courant number ν = σ|λ| [-].
-    pub nu: f64,
-    /// `1 / max(|λ|, EPS)` [s/m].
-    pub inv_lam: f64,
+    pub nu: Vec<f64>,
     /// `1 / max(ν, EPS)` [-].
-    pub inv_nu: f64,
-    /// `c_1 .. c_5` at ν.
-    pub c: [f64; 5],
+    pub inv_nu: Vec<f64>,
+    /// `1 / max(|λ|, EPS)` [s/m].
+    pub inv_lam: Vec<f64>,
+    /// `c_q(ν)`, q = 1..5 (only the first [`n_coefficients`] are filled).
+    pub c: [Vec<f64>; 5],
 }
 
-impl WaveSpeed {
-    /// Speed data of `lam` for `sigma = Δt/Δx` [s/m] (`inv_sigma = 1/sigma`).
-    #[inline]
-    pub fn new(lam: f64, sigma: f64, inv_sigma: f64) -> WaveSpeed {
-        let nu = sigma * lam.abs();
-        // One division: 1/ν = (1/|λ|)/σ; the EPS floors keep both finite where a wave is
-        // absent.
-        let inv_lam = 1.0 / lam.abs().max(EPS);
-        WaveSpeed {
-            lam,
-            nu,
-            inv_lam,
-            inv_nu: if nu > EPS {
-                inv_lam * inv_sigma
-            } else {
-                1.0 / EPS
-            },
-            c: accuracy_coefficients(nu),
+impl SpeedLine {
+    /// Resizes every array to `n_interfaces` entries (keeps the capacity).
+    pub fn resize(&mut self, n_interfaces: usize) {
+        for v in [
+            &mut self.lam,
+            &mut self.nu,
+            &mut self.inv_nu,
+            &mut self.inv_lam,
+        ] {
+            v.resize(n_interfaces, 0.0);
+        }
+        for v in &mut self.c {
+            v.resize(n_interfaces, 0.0);
+        }
+    }
+
+    /// Fills everything but `lam` from `lam` for order `order` and `sigma = Δt/Δx` [s/m] (`inv_sigma = 1/sigma`).
+    pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
+        let n = self.lam.len();
+        let lam = &self.lam[..n];
+        let (nu, inv_nu, inv_lam) = (
+            &mut self.nu[..n],
+            &mut self.inv_nu[..n],
+            &mut self.inv_lam[..n],
+        );
+        let [c1, c2, c3, c4, c5] = &mut self.c;
+        let (c1, c2, c3, c4, c5) = (
+            &mut c1[..n],
+            &mut c2[..n],
+            &mut c3[..n],
+            &mut c4[..n],
+            &mut c5[..n],
+        );
+        let nc = n_coefficients(order);
+        for l in 0..n {
+            let a = lam[l].abs();
+            let v = sigma * a;
+            // One division: 1/ν = (1/|λ|)/σ; the EPS floors keep both finite where a wave is
+            // absent.
+            let il = 1.0 / fmax(a, EPS);
+            nu[l] = v;
+            inv_lam[l] = il;
+            inv_nu[l] = if v > EPS { il * inv_sigma } else { 1.0 / EPS };
+            let c = accuracy_coefficients(v);
+            c1[l] = c[0];
+            if nc >= 3 {
+                c2[l] = c[1];
+                c3[l] = c[2];
+            }
+            if nc >= 5 {
+                c4[l] = c[3];
+                c5[l] = c[4];
+            }
         }
     }
 }
@@ -96,80 +155,98 @@ impl WaveSpeed {
 /// Per-wave data of a line, one entry per interface (`l` = interface between cells `l`, `l+1`).
 #[derive(Clone, Debug, Default)]
 pub struct WaveLine {
-    /// Eigenvalue λ [m/s].
-    pub lam: Vec<f64>,
-    /// Strength α (units of the conserved variables).
+    /// Strength α (units of the conserved variables; filled by the caller).
     pub alpha: Vec<f64>,
-    /// Courant number ν = σ|λ| [-].
-    pub nu: Vec<f64>,
-    /// `1 / max(ν, EPS)` [-].
-    pub inv_nu: Vec<f64>,
-    /// `1 / max(|λ|, EPS)` [s/m].
-    pub inv_lam: Vec<f64>,
-    /// `(1−ν) α` and `c_q(ν) (1−ν) α` for q = 1..5: `d[l][0]` is `(1−ν)α`, `d[l][q]` the
-    /// product with `c_q`.
-    pub d: Vec<[f64; 6]>,
+    /// `D = (1−ν) α` and its products with `c_1..c_5`: `d[0]` is `D`, `d[q]` is `c_q D`
+    /// (only `1 + n_coefficients` arrays are filled).
+    pub d: [Vec<f64>; 6],
     /// `d^{M4}` at each interface (curvature of `λα`).
     pub dm4: Vec<f64>,
+    /// `λα` and its differences (scratch of the curvatures).
+    la: Vec<f64>,
 }
 
 impl WaveLine {
     /// Resizes every array to `n_interfaces` entries (keeps the capacity).
     pub fn resize(&mut self, n_interfaces: usize) {
-        self.lam.resize(n_interfaces, 0.0);
         self.alpha.resize(n_interfaces, 0.0);
-        self.nu.resize(n_interfaces, 0.0);
-        self.inv_nu.resize(n_interfaces, 0.0);
-        self.inv_lam.resize(n_interfaces, 0.0);
-        self.d.resize(n_interfaces, [0.0; 6]);
+        for v in &mut self.d {
+            v.resize(n_interfaces, 0.0);
+        }
         self.dm4.resize(n_interfaces, 0.0);
+        self.la.resize(n_interfaces, 0.0);
     }
 
-    /// Fills `nu`, `d` at interface `l` from `lam`, `alpha` (`sigma = Δt/Δx` [s/m],
-    /// `inv_sigma = 1/sigma`).
-    #[inline]
-    pub fn set(&mut self, l: usize, lam: f64, alpha: f64, sigma: f64, inv_sigma: f64) {
-        let speed = WaveSpeed::new(lam, sigma, inv_sigma);
-        self.set_with(l, &speed, alpha);
-    }
-
-    /// Fills interface `l` from a precomputed [`WaveSpeed`] (shared by the entropy and shear
-    /// waves, which travel at the same speed) and the strength `alpha`.
-    #[inline]
-    pub fn set_with(&mut self, l: usize, speed: &WaveSpeed, alpha: f64) {
-        let d0 = (1.0 - speed.nu) * alpha;
-        let c = &speed.c;
-        self.lam[l] = speed.lam;
-        self.alpha[l] = alpha;
-        self.nu[l] = speed.nu;
-        self.inv_lam[l] = speed.inv_lam;
-        self.inv_nu[l] = speed.inv_nu;
-        self.d[l] = [d0, c[0] * d0, c[1] * d0, c[2] * d0, c[3] * d0, c[4] * d0];
-    }
-
-    /// Computes `dm4` on interfaces `2 ..= n−3` from `lam·alpha` (the others are set to 0).
-    pub fn compute_curvatures(&mut self) {
-        let n = self.lam.len();
-        self.dm4.iter_mut().for_each(|x| *x = 0.0);
+    /// Fills `d` and `dm4` for order `order` from `alpha` and the wave's `speed` (already
+    /// filled).
+    pub fn fill(&mut self, order: u32, speed: &SpeedLine) {
+        let n = self.alpha.len();
+        let (alpha, nu) = (&self.alpha[..n], &speed.nu[..n]);
+        let [d0, d1, d2, d3, d4, d5] = &mut self.d;
+        let (d0, d1, d2, d3, d4, d5) = (
+            &mut d0[..n],
+            &mut d1[..n],
+            &mut d2[..n],
+            &mut d3[..n],
+            &mut d4[..n],
+            &mut d5[..n],
+        );
+        let [c1, c2, c3, c4, c5] = &speed.c;
+        let (c1, c2, c3, c4, c5) = (&c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n]);
+        let nc = n_coefficients(order);
+        for l in 0..n {
+            let x = (1.0 - nu[l]) * alpha[l];
+            d0[l] = x;
+            d1[l] = c1[l] * x;
+            if nc >= 3 {
+                d2[l] = c2[l] * x;
+                d3[l] = c3[l] * x;
+            }
+            if nc >= 5 {
+                d4[l] = c4[l] * x;
+                d5[l] = c5[l] * x;
+            }
+        }
+        // Curvatures on interfaces 1 ..= n−2 (0 at the two ends): `la[l]` becomes
+        // `λα(l+1) − λα(l)`, the curvature of cell l+1.
+        let (lam, la, dm4) = (&speed.lam[..n], &mut self.la[..n], &mut self.dm4[..n]);
+        for l in 0..n {
+            la[l] = lam[l] * alpha[l];
+        }
+        for l in 0..n.saturating_sub(1) {
+            la[l] = la[l + 1] - la[l];
+        }
+        dm4.fill(0.0);
         if n < 4 {
             return;
         }
-        // d_c = λα(c) − λα(c−1): curvature of cell c, between interfaces c−1 and c.
-        let mut la_prev = self.lam[0] * self.alpha[0];
-        let mut la_here = self.lam[1] * self.alpha[1];
-        let mut d_left = la_here - la_prev;
-        for l in 1..n - 1 {
-            la_prev = la_here;
-            la_here = self.lam[l + 1] * self.alpha[l + 1];
-            let d_right = la_here - la_prev;
-            self.dm4[l] = curvature_m4(d_left, d_right);
-            d_left = d_right;
+        let (left, right) = (&la[..n - 2], &la[1..n - 1]);
+        let out = &mut dm4[1..n - 1];
+        for l in 0..n - 2 {
+            out[l] = curvature_m4(left[l], right[l]);
         }
     }
 }
 
-/// The limited correction `Ψ` of one wave at interface `f` of `wave` (needs interfaces
-/// `f−R ..= f+R`, `R = stencil_radius(order)`).
+/// `nf` consecutive interfaces from `f0` on.
+#[derive(Clone, Copy)]
+struct Window {
+    f0: usize,
+    nf: usize,
+}
+
+impl Window {
+    /// The entries of `x` at the window's interfaces shifted by `o`.
+    #[inline(always)]
+    fn at(self, x: &[f64], o: isize) -> &[f64] {
+        let start = self.f0.wrapping_add_signed(o);
+        &x[start..start + self.nf]
+    }
+}
+
+/// `Ψ` of one wave at the interfaces `f0 .. f0 + out.len()` (each needs interfaces `f−R ..=
+/// f+R`, `R = stencil_radius(ORDER)`); `LIMITED = false` gives the unlimited accuracy
+/// function `P` (order tests of the linear scheme).
 ///
 /// Accuracy function (numerics.md §1.3, upwind-oriented index `m`, `D_m = (1−ν)α` and
 /// `c_q(m)` at interface `f + s·m`, `s = sign λ_f`, `λ = 0` counting as negative):
@@ -187,53 +264,99 @@ impl WaveLine {
 /// breaks mirror symmetry, numerics.md Note 1); (c) the LC bound normalised by the upwind
 /// strength (Suresh–Huynh/MITgcm form, Note 2), which needs no division by `α_0`. Orders are
 /// checked numerically in `fv::tests` (scalar) and `tests/fv_accuracy.rs` (Euler).
-#[inline]
-pub fn osmp_psi(order: u32, wave: &WaveLine, f: usize) -> f64 {
-    let p = os_unlimited(order, wave, f);
-    let up = if wave.lam[f] > 0.0 { f - 1 } else { f + 1 };
-    let nu_up = wave.nu[up];
-    let w0 = wave.alpha[f];
-    let w_up = wave.alpha[up];
-    let inv_a0 = wave.inv_lam[f];
-    // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD, b_ul ↔ u^UL,
-    // b_lc ↔ u^LC.
-    let b_max = 2.0 * w0;
-    let b_ul = 2.0 * (1.0 - nu_up) * w_up * wave.inv_nu[up];
-    let b_md = w0 - wave.dm4[f] * inv_a0;
-    let b_lc = (1.0 - nu_up) * wave.inv_nu[f] * (w_up + wave.dm4[up] * inv_a0);
-    let lo1 = 0.0_f64.min(b_max).min(b_md);
-    let hi1 = 0.0_f64.max(b_max).max(b_md);
-    let lo2 = 0.0_f64.min(b_ul).min(b_lc);
-    let hi2 = 0.0_f64.max(b_ul).max(b_lc);
-    let psi_min = lo1.max(lo2);
-    let psi_max = hi1.min(hi2);
-    psi_min.max(p.min(psi_max))
+pub fn psi_line<const ORDER: u32, const LIMITED: bool>(
+    speed: &SpeedLine,
+    wave: &WaveLine,
+    f0: usize,
+    out: &mut [f64],
+) {
+    let nf = out.len();
+    let win = Window { f0, nf };
+    let w = |x, o| win.at(x, o);
+    let (lam, nu_m, nu_p) = (w(&speed.lam, 0), w(&speed.nu, -1), w(&speed.nu, 1));
+    let (inv_nu, inv_nu_m, inv_nu_p) = (
+        w(&speed.inv_nu, 0),
+        w(&speed.inv_nu, -1),
+        w(&speed.inv_nu, 1),
+    );
+    let inv_lam = w(&speed.inv_lam, 0);
+    let (al, al_m, al_p) = (w(&wave.alpha, 0), w(&wave.alpha, -1), w(&wave.alpha, 1));
+    let (dm4, dm4_m, dm4_p) = (w(&wave.dm4, 0), w(&wave.dm4, -1), w(&wave.dm4, 1));
+    let d = &wave.d;
+    // d[q] at offsets −1, 0, +1 (all orders), ±2 (order ≥ 5), ±3 (order 7); orders below
+    // read arrays they do not use at offset 0 only.
+    let o2 = if ORDER >= 5 { 2 } else { 0 };
+    let o3 = if ORDER >= 7 { 3 } else { 0 };
+    let at = |q: usize, o: isize| w(&d[q], o);
+    let (d0, d1_0, d1_m, d1_p) = (at(0, 0), at(1, 0), at(1, -1), at(1, 1));
+    let (d2_0, d2_m, d2_p, d2_mm, d2_pp) = (at(2, 0), at(2, -1), at(2, 1), at(2, -o2), at(2, o2));
+    let (d3_0, d3_m, d3_p, d3_mm, d3_pp) = (at(3, 0), at(3, -1), at(3, 1), at(3, -o2), at(3, o2));
+    let (d4_0, d4_m, d4_p, d4_mm, d4_pp) = (at(4, 0), at(4, -1), at(4, 1), at(4, -o2), at(4, o2));
+    let (d5_0, d5_m, d5_p, d5_mm, d5_pp) = (at(5, 0), at(5, -1), at(5, 1), at(5, -o2), at(5, o2));
+    let (d5_mmm, d5_ppp) = (at(5, -o3), at(5, o3));
+    for j in 0..nf {
+        // Upwind orientation: D_m is at f + m for λ > 0, at f − m otherwise.
+        let pos = lam[j] > 0.0;
+        // Both loads first, then a select: no control flow, so the loop vectorises.
+        let up = |a: &[f64], b: &[f64]| {
+            let (x, y) = (a[j], b[j]);
+            if pos { x } else { y }
+        };
+        let mut p = d0[j] - (d1_0[j] - up(d1_m, d1_p));
+        if ORDER >= 5 {
+            let (dm1, dm2) = (up(d2_m, d2_p), up(d2_mm, d2_pp));
+            p += d2_0[j] - 2.0 * dm1 + dm2;
+            let (dp1, dm1, dm2) = (up(d3_p, d3_m), up(d3_m, d3_p), up(d3_mm, d3_pp));
+            p -= dp1 - 3.0 * d3_0[j] + 3.0 * dm1 - dm2;
+        }
+        if ORDER >= 7 {
+            let (dp2, dp1) = (up(d4_pp, d4_mm), up(d4_p, d4_m));
+            let (dm1, dm2) = (up(d4_m, d4_p), up(d4_mm, d4_pp));
+            p += dp2 - 4.0 * dp1 + 6.0 * d4_0[j] - 4.0 * dm1 + dm2;
+            let (dp2, dp1) = (up(d5_pp, d5_mm), up(d5_p, d5_m));
+            let (dm1, dm2, dm3) = (up(d5_m, d5_p), up(d5_mm, d5_pp), up(d5_mmm, d5_ppp));
+            p -= dp2 - 5.0 * dp1 + 10.0 * d5_0[j] - 10.0 * dm1 + 5.0 * dm2 - dm3;
+        }
+        if !LIMITED {
+            out[j] = p;
+            continue;
+        }
+        let nu_up = up(nu_m, nu_p);
+        let w0 = al[j];
+        let w_up = up(al_m, al_p);
+        let inv_a0 = inv_lam[j];
+        // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD,
+        // b_ul ↔ u^UL, b_lc ↔ u^LC.
+        let b_max = 2.0 * w0;
+        let b_ul = 2.0 * (1.0 - nu_up) * w_up * up(inv_nu_m, inv_nu_p);
+        let b_md = w0 - dm4[j] * inv_a0;
+        let b_lc = (1.0 - nu_up) * inv_nu[j] * (w_up + up(dm4_m, dm4_p) * inv_a0);
+        let lo1 = fmin(fmin(0.0, b_max), b_md);
+        let hi1 = fmax(fmax(0.0, b_max), b_md);
+        let lo2 = fmin(fmin(0.0, b_ul), b_lc);
+        let hi2 = fmax(fmax(0.0, b_ul), b_lc);
+        let psi_min = fmax(lo1, lo2);
+        let psi_max = fmin(hi1, hi2);
+        out[j] = fmax(psi_min, fmin(p, psi_max));
+    }
 }
 
-/// Unlimited accuracy function `P` (same as [`osmp_psi`] without the TVD/MP bounds); used by
-/// the order tests of the linear scheme.
-#[inline]
-pub fn os_unlimited(order: u32, wave: &WaveLine, f: usize) -> f64 {
-    // Fetch the oriented stencil once (D_m = d[f + s m]); m = −3 only for order 7.
-    let up_pos = wave.lam[f] > 0.0;
-    let at = |m: isize| -> [f64; 6] {
-        let l = if up_pos {
-            f as isize + m
-        } else {
-            f as isize - m
-        };
-        wave.d[l as usize]
-    };
-    let (dm2, dm1, d0, d1) = (at(-2), at(-1), at(0), at(1));
-    let mut p = d0[0] - (d0[1] - dm1[1]);
-    if order >= 5 {
-        p += d0[2] - 2.0 * dm1[2] + dm2[2];
-        p -= d1[3] - 3.0 * d0[3] + 3.0 * dm1[3] - dm2[3];
+/// [`psi_line`] with the order chosen at run time (3, 5 or 7).
+pub fn psi_line_dyn(
+    order: u32,
+    limited: bool,
+    speed: &SpeedLine,
+    wave: &WaveLine,
+    f0: usize,
+    out: &mut [f64],
+) {
+    match (order, limited) {
+        (3, true) => psi_line::<3, true>(speed, wave, f0, out),
+        (3, false) => psi_line::<3, false>(speed, wave, f0, out),
+        (5, true) => psi_line::<5, true>(speed, wave, f0, out),
+        (5, false) => psi_line::<5, false>(speed, wave, f0, out),
+        (7, true) => psi_line::<7, true>(speed, wave, f0, out),
+        (7, false) => psi_line::<7, false>(speed, wave, f0, out),
+        _ => panic!("osmp order {order} (3, 5 or 7)"),
     }
-    if order >= 7 {
-        let (dm3, d2) = (at(-3), at(2));
-        p += d2[4] - 4.0 * d1[4] + 6.0 * d0[4] - 4.0 * dm1[4] + dm2[4];
-        p -= d2[5] - 5.0 * d1[5] + 10.0 * d0[5] - 10.0 * dm1[5] + 5.0 * dm2[5] - dm3[5];
-    }
-    p
 }

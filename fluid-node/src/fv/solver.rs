@@ -1,7 +1,7 @@
 //! [`FluidSolver`]: owns the state, the scratch buffers and the worker pool, and advances the
 //! flow by split steps; reports totals and trouble as data.
 
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 use rayon::prelude::*;
 
@@ -158,7 +158,10 @@ pub struct FluidSolver {
     pencil_out: Vec<PencilOut>,
     scratch: Vec<Mutex<LineScratch>>,
     pool: rayon::ThreadPool,
+    /// `p̄` per active axis, or empty when not kept (see [`FluidSolver::keep_directional_pressures`]).
     pbar: Vec<Vec<f64>>,
+    /// `max_dt` of the current state, once computed (reset whenever the state changes).
+    dt_cache: OnceLock<f64>,
     n_blocks: usize,
     step: u64,
     time: f64,
@@ -211,7 +214,8 @@ impl FluidSolver {
                 .map(|_| Mutex::new(LineScratch::default()))
                 .collect(),
             pool,
-            pbar: (0..grid.dim).map(|_| vec![0.0; n_cells]).collect(),
+            pbar: Vec::new(),
+            dt_cache: OnceLock::new(),
             n_blocks: n_cells.div_ceil(BLOCK_CELLS),
             grid,
             params,
@@ -239,7 +243,20 @@ impl FluidSolver {
 
     /// Mutable conserved state (initial conditions of tests and benches).
     pub fn state_mut(&mut self) -> &mut FluidState {
+        self.dt_cache = OnceLock::new();
         &mut self.state
+    }
+
+    /// Whether to keep the directional pressures `p̄` of every sweep (the coupling needs them,
+    /// a fluid-only run does not; off by default). Turning it on allocates one value per cell
+    /// and axis, zero until the next step.
+    pub fn keep_directional_pressures(&mut self, keep: bool) {
+        let n = self.grid.n_cells();
+        self.pbar = if keep {
+            (0..self.grid.dim).map(|_| vec![0.0; n]).collect()
+        } else {
+            Vec::new()
+        };
     }
 
     /// Simulated time \[s\].
@@ -259,15 +276,25 @@ impl FluidSolver {
 
     /// Directional pressures `p̄_axis` \[Pa\] of the last step, one per cell: the pressure of the
     /// state each sweep along `axis` started from (paper 003 §3.4 step 1). Zero before the
-    /// first step. Panics if `axis >= dim` (a bug in the caller).
-    pub fn directional_pressures(&self, axis: usize) -> &[f64] {
-        &self.pbar[axis]
+    /// first step; `None` unless [`FluidSolver::keep_directional_pressures`] turned them on.
+    /// Panics if `axis >= dim` (a bug in the caller).
+    pub fn directional_pressures(&self, axis: usize) -> Option<&[f64]> {
+        assert!(
+            axis < self.grid.dim,
+            "axis {axis} of a {}-D grid",
+            self.grid.dim
+        );
+        self.pbar.get(axis).map(Vec::as_slice)
     }
 
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
     /// every directional sweep runs at Courant number ≤ `cfl`. Infinite for a fluid at rest
-    /// with zero sound speed everywhere; NaN if a cell is non-finite.
+    /// with zero sound speed everywhere; NaN if a cell is non-finite. Computed once per state.
     pub fn max_dt(&self) -> f64 {
+        *self.dt_cache.get_or_init(|| self.compute_max_dt())
+    }
+
+    fn compute_max_dt(&self) -> f64 {
         let grid = &self.grid;
         let gamma = self.params.gamma;
         let nvar = self.state.nvar;
@@ -333,6 +360,7 @@ impl FluidSolver {
         let area_dt: Vec<f64> = (0..self.grid.dim)
             .map(|a| dt * self.grid.cell_volume() / self.grid.dx[a])
             .collect();
+        self.dt_cache = OnceLock::new();
         for &axis in &order {
             self.record_pressures(axis);
             let grid = &self.grid;
@@ -392,6 +420,9 @@ impl FluidSolver {
     }
 
     fn record_pressures(&mut self, axis: usize) {
+        if self.pbar.is_empty() {
+            return;
+        }
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         let gamma = self.params.gamma;
@@ -508,7 +539,7 @@ impl FluidSolver {
         let cells = self.grid.cells.map(|n| n as u64);
         if c.cells != cells
             || c.u.len() != self.state.u.len()
-            || c.pbar.len() != self.pbar.len()
+            || (!c.pbar.is_empty() && c.pbar.len() != self.grid.dim)
             || c.pbar.iter().any(|p| p.len() != self.grid.n_cells())
         {
             return Err(format!(
@@ -523,7 +554,15 @@ impl FluidSolver {
         self.step = c.step;
         self.time = c.time;
         self.outflow = c.outflow;
-        self.pbar = c.pbar;
+        // Directional pressures come back only where this solver keeps them.
+        if !self.pbar.is_empty() {
+            if c.pbar.is_empty() {
+                self.keep_directional_pressures(true);
+            } else {
+                self.pbar = c.pbar;
+            }
+        }
+        self.dt_cache = OnceLock::new();
         Ok(())
     }
 }
@@ -538,12 +577,12 @@ struct Neumaier {
 impl Neumaier {
     #[inline]
     fn add(&mut self, x: f64) {
+        // Knuth's branch-free TwoSum: `err` is the exact rounding error of `sum + x`, the same
+        // value Neumaier's branch computes, so the totals are unchanged bit for bit.
         let t = self.sum + x;
-        if self.sum.abs() >= x.abs() {
-            self.comp += (self.sum - t) + x;
-        } else {
-            self.comp += (x - t) + self.sum;
-        }
+        let z = t - self.sum;
+        let err = (self.sum - (t - z)) + (x - z);
+        self.comp += err;
         self.sum = t;
     }
 
@@ -557,7 +596,12 @@ impl Neumaier {
 fn to_full(cell: &[f64], dim: usize) -> [f64; NQ] {
     let mut s = [0.0; NQ];
     s[0] = cell[0];
-    s[1..=dim].copy_from_slice(&cell[1..=dim]);
+    // NOTE: an indexed loop, not `copy_from_slice`: a run-time length makes that a `memmove`
+    // call per cell.
+    #[allow(clippy::manual_memcpy)]
+    for a in 0..dim {
+        s[1 + a] = cell[1 + a];
+    }
     s[4] = cell[dim + 1];
     s
 }

@@ -221,21 +221,31 @@ pub fn sweep_axis(
 
 /// Copies the pencil-major `src` of a sweep along `axis` back to the x-fastest `dst`.
 pub fn pencil_to_cells(grid: &Grid, axis: usize, src: &[f64], dst: &mut [f64]) {
-    let nvar = grid.dim + 2;
+    match grid.dim {
+        1 => transpose::<3>(grid, axis, src, dst),
+        2 => transpose::<4>(grid, axis, src, dst),
+        _ => transpose::<5>(grid, axis, src, dst),
+    }
+}
+
+/// [`pencil_to_cells`] for `NV` values per cell (a compile-time size, so each cell is copied
+/// by a few moves instead of a `memmove` call).
+fn transpose<const NV: usize>(grid: &Grid, axis: usize, src: &[f64], dst: &mut [f64]) {
     let pencils = Pencils::new(grid, axis);
     let nx = grid.cells[0];
     let (s, n) = (pencils.stride, pencils.n);
-    dst.par_chunks_mut(nx * nvar)
+    dst.par_chunks_mut(nx * NV)
         .enumerate()
         .for_each(|(row, dst_row)| {
-            for i in 0..nx {
-                let c = i + nx * row;
-                let lo = c % s;
-                let m = (c / s) % n;
-                let hi = c / (s * n);
-                let p = lo + hi * s;
-                let from = (p * n + m) * nvar;
-                dst_row[i * nvar..(i + 1) * nvar].copy_from_slice(&src[from..from + nvar]);
+            // Cell `c = i + nx row` is cell `m` of pencil `lo + hi s`; along the row only `lo`
+            // changes (`nx` divides `s` for a sweep along y or z), by one per cell.
+            let first = nx * row;
+            let (lo0, m, hi) = (first % s, (first / s) % n, first / (s * n));
+            let start = ((lo0 + hi * s) * n + m) * NV;
+            for (i, cell) in dst_row.chunks_exact_mut(NV).enumerate() {
+                let from = start + i * n * NV;
+                let v: &[f64; NV] = src[from..from + NV].try_into().expect("NV values");
+                cell.copy_from_slice(v);
             }
         });
 }

@@ -3,7 +3,18 @@
 
 use crate::fv::euler::*;
 use crate::fv::exact_riemann::{ExactRiemann, Prim1};
-use crate::fv::osmp::{WaveLine, os_unlimited, osmp_psi};
+use crate::fv::osmp::{SpeedLine, WaveLine, psi_line_dyn};
+
+/// Speed and wave lines of `n_interfaces` interfaces for a constant speed `a`.
+fn line(n_interfaces: usize, a: f64, sigma: f64, order: u32) -> (SpeedLine, WaveLine) {
+    let mut speed = SpeedLine::default();
+    let mut wave = WaveLine::default();
+    speed.resize(n_interfaces);
+    wave.resize(n_interfaces);
+    speed.lam.fill(a);
+    speed.fill(order, sigma, 1.0 / sigma);
+    (speed, wave)
+}
 
 /// Linear advection `u_t + a u_x = 0` of a sine over one period, periodic, CFL 0.5, with the
 /// scalar OSMP kernel; returns the L1 error.
@@ -22,23 +33,20 @@ fn advect_sine(n: usize, a: f64, order: u32, limited: bool) -> f64 {
         .collect();
     let mut u = u0.clone();
     let ng = 4;
-    let mut wave = WaveLine::default();
-    wave.resize(n + 2 * ng - 1);
+    let (mut speed, mut wave) = line(n + 2 * ng - 1, a, sigma, order);
+    let mut psi = vec![0.0; n + 1];
     let mut flux = vec![0.0; n + 1];
     for _ in 0..steps {
         let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
         for l in 0..n + 2 * ng - 1 {
-            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
+            wave.alpha[l] = ext[l + 1] - ext[l];
         }
-        wave.compute_curvatures();
+        speed.fill(order, sigma, 1.0 / sigma);
+        wave.fill(order, &speed);
+        psi_line_dyn(order, limited, &speed, &wave, ng - 1, &mut psi);
         for (fi, f) in flux.iter_mut().enumerate() {
             let l = ng - 1 + fi;
-            let psi = if limited {
-                osmp_psi(order, &wave, l)
-            } else {
-                os_unlimited(order, &wave, l)
-            };
-            *f = 0.5 * a * (ext[l] + ext[l + 1]) - 0.5 * a.abs() * (wave.alpha[l] - psi);
+            *f = 0.5 * a * (ext[l] + ext[l + 1]) - 0.5 * a.abs() * (wave.alpha[l] - psi[fi]);
         }
         for i in 0..n {
             u[i] -= sigma * (flux[i + 1] - flux[i]);
@@ -80,18 +88,20 @@ fn limited_scheme_keeps_square_wave_bounded() {
         })
         .collect();
     let ng = 4;
-    let mut wave = WaveLine::default();
-    wave.resize(n + 2 * ng - 1);
+    let (mut speed, mut wave) = line(n + 2 * ng - 1, a, sigma, 7);
+    let mut psi = vec![0.0; n + 1];
     for _ in 0..200 {
         let ext: Vec<f64> = (0..n + 2 * ng).map(|i| u[(i + n - ng) % n]).collect();
         for l in 0..n + 2 * ng - 1 {
-            wave.set(l, a, ext[l + 1] - ext[l], sigma, 1.0 / sigma);
+            wave.alpha[l] = ext[l + 1] - ext[l];
         }
-        wave.compute_curvatures();
+        speed.fill(7, sigma, 1.0 / sigma);
+        wave.fill(7, &speed);
+        psi_line_dyn(7, true, &speed, &wave, ng - 1, &mut psi);
         let flux: Vec<f64> = (0..=n)
             .map(|fi| {
                 let l = ng - 1 + fi;
-                a * ext[l] + 0.5 * a * osmp_psi(7, &wave, l)
+                a * ext[l] + 0.5 * a * psi[fi]
             })
             .collect();
         for i in 0..n {
