@@ -35,7 +35,7 @@ pub enum Command {
         /// Solid implementation: `real`, `prescribed` or `replay:FILE.mcap` (default: the scene's).
         #[arg(long)]
         solid: Option<String>,
-        /// Deadline for any one message [s].
+        /// Deadline for any one message, in seconds.
         #[arg(long, default_value_t = 120.0)]
         timeout_s: f64,
         /// No progress line.
@@ -55,7 +55,7 @@ pub enum Command {
         /// Implementation to run (default: the one recorded in its hello).
         #[arg(long)]
         double: Option<String>,
-        /// Deadline for any one message [s].
+        /// Deadline for any one message, in seconds.
         #[arg(long, default_value_t = 120.0)]
         timeout_s: f64,
     },

@@ -62,13 +62,13 @@ impl RecordSink for NoRecord {
 /// Settings of the loop.
 #[derive(Clone, Debug)]
 pub struct DriverConfig {
-    /// Longest wait for any one message [s].
+    /// Longest wait for any one message \[s\].
     pub timeout: Duration,
     /// Print a progress line on stderr.
     pub progress: bool,
     /// Scene name, for the progress line.
     pub name: String,
-    /// End time [s], for the progress line.
+    /// End time \[s\], for the progress line.
     pub t_end: f64,
 }
 
@@ -101,9 +101,9 @@ pub struct Summary {
     pub status: String,
     /// Coupling steps done.
     pub steps: u64,
-    /// Time reached [s].
+    /// Time reached \[s\].
     pub t_end: f64,
-    /// Wall-clock time of the loop [s].
+    /// Wall-clock time of the loop \[s\].
     pub wall_s: f64,
     /// Busy seconds per node.
     pub busy_s: Busy,

@@ -4,7 +4,7 @@
 /// The step the coupler announces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Agreed {
-    /// Step size [s].
+    /// Step size \[s\].
     pub dt: f64,
     /// `Some(k)` when the step ends exactly at output time `k`.
     pub output: Option<u32>,

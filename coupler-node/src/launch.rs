@@ -31,7 +31,7 @@ pub struct RunOptions {
     pub fluid: Option<String>,
     /// Solid implementation override (`real`, `prescribed`, `replay:FILE`).
     pub solid: Option<String>,
-    /// Deadline for any one message [s].
+    /// Deadline for any one message \[s\].
     pub timeout: Duration,
     /// Progress line on stderr.
     pub progress: bool,

@@ -15,15 +15,15 @@ use serde::Serialize;
 pub struct LedgerEntry {
     /// Step just completed.
     pub step: u64,
-    /// Time at its end [s].
+    /// Time at its end \[s\].
     pub t: f64,
-    /// Fluid mass [kg].
+    /// Fluid mass \[kg\].
     pub fluid_mass: f64,
-    /// Fluid total energy [J].
+    /// Fluid total energy \[J\].
     pub fluid_energy: f64,
-    /// Solid kinetic + elastic energy [J].
+    /// Solid kinetic + elastic energy \[J\].
     pub solid_energy: f64,
-    /// Energy dissipated by broken links [J].
+    /// Energy dissipated by broken links \[J\].
     pub dissipated: f64,
     /// |mass now − mass at start| / mass at start (0 when there is no mass).
     pub mass_rel_err: f64,
@@ -32,9 +32,9 @@ pub struct LedgerEntry {
     pub energy_rel_err: f64,
     /// |energy now − energy at start| / largest |interface work| so far (0 without exchange).
     pub energy_err_vs_exchange: f64,
-    /// Work given by the fluid through the interface [J].
+    /// Work given by the fluid through the interface \[J\].
     pub work_fluid: f64,
-    /// Work received by the solid through the interface [J].
+    /// Work received by the solid through the interface \[J\].
     pub work_solid: f64,
     /// Links broken so far.
     pub links_broken: u64,

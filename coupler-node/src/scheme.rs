@@ -40,7 +40,7 @@ pub struct CouplerConfig {
     pub solid: bool,
     /// Coupling scheme (explicit when one side is absent).
     pub scheme: Scheme,
-    /// Fixed-point tolerance ε of criterion (22) [m].
+    /// Fixed-point tolerance ε of criterion (22) \[m\].
     pub tolerance: f64,
     /// Fixed-point iterations allowed per step.
     pub max_iterations: u32,
@@ -48,7 +48,7 @@ pub struct CouplerConfig {
     pub relaxation: Relaxation,
     /// Steps between checkpoints (0: none).
     pub checkpoint_every: u64,
-    /// Scene cap on the step [s].
+    /// Scene cap on the step \[s\].
     pub dt_cap: Option<f64>,
     /// Output times, increasing, the last one is `t_end`.
     pub outputs: Vec<f64>,
@@ -125,9 +125,9 @@ pub enum Finish {
 pub struct StepReport {
     /// Step index.
     pub step: u64,
-    /// Time at the end of the step [s].
+    /// Time at the end of the step \[s\].
     pub t: f64,
-    /// Step size [s].
+    /// Step size \[s\].
     pub dt: f64,
     /// Who limited the step.
     pub limiter: String,
@@ -311,7 +311,7 @@ impl Coupler {
         self.step
     }
 
-    /// Time at the start of the current step [s].
+    /// Time at the start of the current step \[s\].
     pub fn time(&self) -> f64 {
         self.t
     }

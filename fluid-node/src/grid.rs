@@ -8,13 +8,13 @@
 pub struct Grid {
     /// Number of active axes (1, 2 or 3).
     pub dim: usize,
-    /// Lower corner [m] (inactive axes: 0).
+    /// Lower corner \[m\] (inactive axes: 0).
     pub lower: [f64; 3],
-    /// Upper corner [m] (inactive axes: 1).
+    /// Upper corner \[m\] (inactive axes: 1).
     pub upper: [f64; 3],
     /// Cells per axis (inactive axes: 1).
     pub cells: [usize; 3],
-    /// Cell width per axis [m] (inactive axes: 1).
+    /// Cell width per axis \[m\] (inactive axes: 1).
     pub dx: [f64; 3],
 }
 

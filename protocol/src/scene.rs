@@ -30,7 +30,7 @@ pub struct Scene {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// End time [s] (default 1.0).
+    /// End time \[s\] (default 1.0).
     pub t_end: f64,
     /// Coupling scheme (default semi-implicit; ignored when one side is absent).
     pub scheme: SchemeName,
@@ -44,7 +44,7 @@ pub struct RunConfig {
     pub record: RecordLevel,
     /// Steps between node checkpoints in the record; 0 = none (default 0).
     pub checkpoint_every: u64,
-    /// Optional cap on the coupling step [s].
+    /// Optional cap on the coupling step \[s\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dt_max: Option<f64>,
     /// Optional cap on the number of steps (the run stops with status "max_steps").
@@ -130,9 +130,9 @@ pub struct FluidConfig {
     /// Numerical flux (default OSMP order 5).
     #[serde(default)]
     pub flux: FluxConfig,
-    /// Lower corner of the grid [m]; its length (1, 2 or 3) is the dimension.
+    /// Lower corner of the grid \[m\]; its length (1, 2 or 3) is the dimension.
     pub lower: Vec<f64>,
-    /// Upper corner of the grid [m].
+    /// Upper corner of the grid \[m\].
     pub upper: Vec<f64>,
     /// Cells along each axis.
     pub cells: Vec<u32>,
@@ -173,7 +173,7 @@ pub enum Profile {
     IsentropicVortex {
         /// Strength.
         beta: f64,
-        /// Centre at t = 0 [m].
+        /// Centre at t = 0 \[m\].
         center: Vec<f64>,
         /// Free-stream velocity [m/s].
         velocity: Vec<f64>,
@@ -267,7 +267,7 @@ pub enum Boundary {
 pub struct VacuumConfig {
     /// Density threshold [kg/m³] (default 1e-10).
     pub rho: f64,
-    /// Pressure threshold [Pa] (default 1e-10).
+    /// Pressure threshold \[Pa\] (default 1e-10).
     pub p: f64,
 }
 
@@ -288,7 +288,7 @@ pub struct InitEntry {
     pub region: Region,
     /// Density [kg/m³].
     pub rho: f64,
-    /// Pressure [Pa].
+    /// Pressure \[Pa\].
     pub p: f64,
     /// Velocity [m/s], one entry per axis (default zero).
     #[serde(default)]
@@ -312,7 +312,7 @@ pub enum Region {
     Ball {
         /// Centre.
         center: Vec<f64>,
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
     },
     /// Half space: the side opposite to `normal` (the normal points out of it).
@@ -369,7 +369,7 @@ impl Region {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PressureField {
-    /// Pressure at the origin [Pa].
+    /// Pressure at the origin \[Pa\].
     pub value: f64,
     /// Pressure gradient [Pa/m] (default zero).
     #[serde(default)]
@@ -390,7 +390,7 @@ pub struct SolidConfig {
     /// Density [kg/m³] (required by the real node).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub density: Option<f64>,
-    /// Young's modulus [Pa] (required by the real node).
+    /// Young's modulus \[Pa\] (required by the real node).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub young: Option<f64>,
     /// Poisson's ratio [-] (required by the real node).
@@ -442,31 +442,31 @@ pub struct BodyConfig {
 pub enum Shape {
     /// Axis-aligned box.
     Box {
-        /// Centre [m].
+        /// Centre \[m\].
         center: Vec<f64>,
-        /// Edge lengths [m].
+        /// Edge lengths \[m\].
         size: Vec<f64>,
     },
     /// 2-D ring, one particle thick.
     Ring {
-        /// Centre [m].
+        /// Centre \[m\].
         center: Vec<f64>,
-        /// Inner radius [m].
+        /// Inner radius \[m\].
         inner_radius: f64,
-        /// Outer radius [m].
+        /// Outer radius \[m\].
         outer_radius: f64,
     },
     /// 3-D tube along `axis`, one particle thick.
     Tube {
-        /// Centre [m].
+        /// Centre \[m\].
         center: Vec<f64>,
         /// Axis direction: 0 = x, 1 = y, 2 = z.
         axis: u32,
-        /// Inner radius [m].
+        /// Inner radius \[m\].
         inner_radius: f64,
-        /// Outer radius [m].
+        /// Outer radius \[m\].
         outer_radius: f64,
-        /// Length along the axis [m].
+        /// Length along the axis \[m\].
         length: f64,
     },
     /// Explicit convex particles, each given by its vertices (2-D: counter-clockwise polygon;
@@ -478,7 +478,7 @@ pub enum Shape {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParticleSpec {
-    /// Vertices [m].
+    /// Vertices \[m\].
     pub vertices: Vec<Vec<f64>>,
 }
 
@@ -519,9 +519,9 @@ pub struct PrescribedConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
-    /// Centre [m].
+    /// Centre \[m\].
     pub center: Vec<f64>,
-    /// Edge lengths [m].
+    /// Edge lengths \[m\].
     pub size: Vec<f64>,
 }
 
@@ -535,14 +535,14 @@ pub enum PrescribedMotion {
     Velocity(Vec<f64>),
     /// `x(t) = x0 + amplitude sin(2π frequency t)`.
     Sinusoid {
-        /// Amplitude [m] per axis.
+        /// Amplitude \[m\] per axis.
         amplitude: Vec<f64>,
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         frequency: f64,
     },
     /// A mass on a linear spring driven by the received loads: `m x'' = -k (x - x0) + F`.
     Spring {
-        /// Mass [kg].
+        /// Mass \[kg\].
         mass: f64,
         /// Stiffness [N/m].
         stiffness: f64,
@@ -553,10 +553,10 @@ pub enum PrescribedMotion {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputConfig {
-    /// Output times [s]; the end time is always written.
+    /// Output times \[s\]; the end time is always written.
     #[serde(default)]
     pub times: Vec<f64>,
-    /// Output period [s] (instead of or with `times`).
+    /// Output period \[s\] (instead of or with `times`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub every: Option<f64>,
     /// File formats: `"csv"`, `"vtk"` (default csv).

@@ -130,7 +130,7 @@ pub struct Welcome {
 pub struct DtProposal {
     /// The step this proposal is for.
     pub stamp: Stamp,
-    /// Largest stable time step [s]; `f64::INFINITY` when the node sets no limit.
+    /// Largest stable time step \[s\]; `f64::INFINITY` when the node sets no limit.
     pub dt_max: f64,
     /// What limits it (for example `"cfl"`, `"elastic"`, `"one-cell"`), for the diagnostics.
     pub limiter: String,
@@ -141,9 +141,9 @@ pub struct DtProposal {
 pub struct StepPlan {
     /// The step (iteration 0).
     pub stamp: Stamp,
-    /// Time at the start of the step `t^n` [s].
+    /// Time at the start of the step `t^n` \[s\].
     pub t: f64,
-    /// Step size `dt` [s].
+    /// Step size `dt` \[s\].
     pub dt: f64,
     /// Coupling scheme of this step.
     pub scheme: Scheme,
@@ -158,7 +158,7 @@ pub struct InterfaceLoads {
     pub stamp: Stamp,
     /// Spatial dimension (stride of `force`).
     pub dim: u32,
-    /// Impulse-averaged force on each particle over the step [N] (2-D: per unit depth), flattened.
+    /// Impulse-averaged force on each particle over the step \[N\] (2-D: per unit depth), flattened.
     pub force: Vec<f64>,
     /// Torque on each particle about its centre of mass [N m], flattened (`n_rot(dim)` each).
     pub torque: Vec<f64>,
@@ -174,7 +174,7 @@ pub struct WetSurface {
     pub revision: u64,
     /// Spatial dimension: 3 (triangles) or 2 (segments).
     pub dim: u32,
-    /// Vertex coordinates [m], flattened (`dim` each).
+    /// Vertex coordinates \[m\], flattened (`dim` each).
     pub vertices: Vec<f64>,
     /// Element connectivity, `dim` vertex indices per element, oriented as
     /// [`WetSurface::ORIENTATION`] says (closed 2-D loops run counter-clockwise around the solid).
@@ -213,16 +213,16 @@ pub struct SolidState {
     pub stamp: Stamp,
     /// Spatial dimension (stride of the arrays).
     pub dim: u32,
-    /// Centre of mass of each particle at the end of the step `X^{n+1}` [m], flattened.
+    /// Centre of mass of each particle at the end of the step `X^{n+1}` \[m\], flattened.
     pub position: Vec<f64>,
-    /// Orientation of each particle at the end of the step `Q^{n+1}`: angle [rad] in 2-D, unit
+    /// Orientation of each particle at the end of the step `Q^{n+1}`: angle \[rad\] in 2-D, unit
     /// quaternion `(w, x, y, z)` in 3-D.
     pub orientation: Vec<f64>,
     /// Mid-step velocity `V^{n+1/2}` [m/s], flattened.
     pub velocity: Vec<f64>,
     /// Mid-step angular velocity `Ω^{n+1/2}` in the global frame [rad/s], `n_rot(dim)` each.
     pub angular_velocity: Vec<f64>,
-    /// Diameter `h_s` of each particle [m] (weights the rotation term of criterion (22)).
+    /// Diameter `h_s` of each particle \[m\] (weights the rotation term of criterion (22)).
     pub diameter: Vec<f64>,
     /// Wet surface at the end of the step `F^{n+1}`.
     pub surface: WetSurface,
@@ -266,29 +266,29 @@ pub struct ConservedTotals {
     pub stamp: Stamp,
     /// The reporting node.
     pub node: NodeKind,
-    /// Time at the end of the step [s].
+    /// Time at the end of the step \[s\].
     pub t: f64,
-    /// Mass [kg] (2-D: per unit depth).
+    /// Mass \[kg\] (2-D: per unit depth).
     pub mass: f64,
     /// Linear momentum [kg m/s], `dim` components.
     pub momentum: Vec<f64>,
-    /// Total energy [J]: fluid total energy, or solid kinetic + elastic energy.
+    /// Total energy \[J\]: fluid total energy, or solid kinetic + elastic energy.
     pub energy: f64,
-    /// Energy taken out of the node by dissipation (broken links) since the start [J].
+    /// Energy taken out of the node by dissipation (broken links) since the start \[J\].
     pub dissipated: f64,
-    /// Work done by the interface loads on this node since the start [J] (solid: work received;
+    /// Work done by the interface loads on this node since the start \[J\] (solid: work received;
     /// fluid: work given, counted positive when the fluid loses energy).
     pub interface_work: f64,
     /// Momentum given through the interface since the start [kg m/s], `dim` components.
     pub interface_impulse: Vec<f64>,
-    /// Mass that left or entered through the open domain boundaries since the start [kg]
+    /// Mass that left or entered through the open domain boundaries since the start \[kg\]
     /// (positive: left), so the ledger can separate boundary flux from conservation error.
     pub boundary_mass_out: f64,
-    /// Energy that left through the open domain boundaries since the start [J].
+    /// Energy that left through the open domain boundaries since the start \[J\].
     pub boundary_energy_out: f64,
     /// Links broken since the start (solid only).
     pub links_broken: u64,
-    /// Magnitude of the energies involved [J]: the sum of the absolute values of the parts of
+    /// Magnitude of the energies involved \[J\]: the sum of the absolute values of the parts of
     /// `energy` (kinetic, elastic, gravity, internal ...), so the ledger can state an energy
     /// error relative to something even when the parts cancel.
     pub energy_scale: f64,

@@ -28,7 +28,7 @@ pub struct Args {
     /// Run a test double instead of the solver: `prescribed` or `replay:FILE.mcap`.
     #[arg(long)]
     pub double: Option<String>,
-    /// Deadline for each message from the coupler [s].
+    /// Deadline for each message from the coupler, in seconds.
     #[arg(long, default_value_t = 120.0)]
     pub timeout_s: f64,
     /// Tools.

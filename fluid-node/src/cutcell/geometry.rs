@@ -105,7 +105,7 @@ impl CutGeometry {
         CutGeometry::default()
     }
 
-    /// Solid volume in the domain `Σ Λ V` [m³] (2-D: [m²]).
+    /// Solid volume in the domain `Σ Λ V` \[m³\] (2-D: \[m²\]).
     pub fn solid_volume(&self, grid: &Grid) -> f64 {
         let mut acc = 0.0;
         for &(first, len) in &self.written_cells {
@@ -117,7 +117,7 @@ impl CutGeometry {
         acc * grid.cell_volume()
     }
 
-    /// Wet area in the domain `Σ sub-face areas` [m²] (2-D: [m]).
+    /// Wet area in the domain `Σ sub-face areas` \[m²\] (2-D: \[m\]).
     pub fn wet_area(&self) -> f64 {
         self.subfaces.iter().map(|s| s.area).sum()
     }
