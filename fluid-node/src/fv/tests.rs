@@ -274,3 +274,39 @@ fn sweep_orders_cover_permutations_in_reverse_pairs() {
     assert_eq!(crate::fv::sweep_order(2, 0), vec![0, 1]);
     assert_eq!(crate::fv::sweep_order(2, 1), vec![1, 0]);
 }
+
+#[test]
+fn branch_free_minmod_is_minmod() {
+    // minmod4 against its definition (0 unless all four share a sign, else the smallest
+    // magnitude), over values with zeros of both signs, ties, tiny and huge magnitudes.
+    use crate::fv::osmp::minmod4;
+    let values = [
+        0.0, -0.0, 1.0, -1.0, 2.5, -2.5, 1e-300, -1e-300, 3e300, -3e300, 1.0, 0.5,
+    ];
+    let reference = |x: [f64; 4]| {
+        if x.iter().all(|v| *v > 0.0) {
+            x.iter().cloned().fold(f64::INFINITY, f64::min)
+        } else if x.iter().all(|v| *v < 0.0) {
+            x.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        } else {
+            0.0
+        }
+    };
+    let mut checked = 0;
+    for &a in &values {
+        for &b in &values {
+            for &c in &values {
+                for &d in &values {
+                    let got = minmod4(a, b, c, d);
+                    let want = reference([a, b, c, d]);
+                    assert!(
+                        got == want,
+                        "minmod4({a}, {b}, {c}, {d}) = {got}, expected {want}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(checked, values.len().pow(4));
+}
