@@ -12,6 +12,7 @@ use protocol::scene::PressureField;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::node::FluidModel;
+use protocol::session::NodeModel;
 
 /// The pressure double's state.
 #[derive(Clone, Debug)]
@@ -130,66 +131,13 @@ pub fn integrate_pressure(
     }
 }
 
-impl FluidModel for PressureDouble {
+impl NodeModel for PressureDouble {
     fn implementation(&self) -> &'static str {
         "pressure"
     }
 
-    fn dim(&self) -> usize {
-        self.dim
-    }
-
-    fn set_initial_surface(&mut self, state: &SolidState) {
-        self.previous = Some(state.clone());
-    }
-
     fn dt_max(&self) -> (f64, String) {
         (f64::INFINITY, "none".into())
-    }
-
-    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
-        Ok(())
-    }
-
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
-        let mut loads = InterfaceLoads {
-            stamp: plan.stamp,
-            dim: state.dim,
-            force: Vec::new(),
-            torque: Vec::new(),
-        };
-        integrate_pressure(
-            state,
-            |x, v_n| self.pressure(x, v_n),
-            &mut loads.force,
-            &mut loads.torque,
-        );
-        self.last_loads = Some(loads.clone());
-        loads
-    }
-
-    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
-        let (Some(state), Some(loads)) = (state, &self.last_loads) else {
-            return Ok(());
-        };
-        let dim = self.dim;
-        let n_rot = protocol::wire::n_rot(dim as u32);
-        let previous = self.previous.as_ref().unwrap_or(state);
-        for i in 0..state.n_particles() {
-            for d in 0..dim {
-                let dx = state.position[i * dim + d] - previous.position[i * dim + d];
-                self.work += loads.force[i * dim + d] * dx;
-                self.impulse[d] += loads.force[i * dim + d] * plan.dt;
-            }
-            for r in 0..n_rot {
-                // NOTE: the rotation increment over the step is Ω^{n+1/2} dt (exact for the
-                // 2-D angle, the RATTLE mid-step rate in 3-D).
-                let dtheta = state.angular_velocity[i * n_rot + r] * plan.dt;
-                self.work += loads.torque[i * n_rot + r] * dtheta;
-            }
-        }
-        self.previous = Some(state.clone());
-        Ok(())
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
@@ -246,6 +194,61 @@ impl FluidModel for PressureDouble {
     fn record_probes(&mut self, _t: f64) {}
 
     fn write_probes(&self, _out: &Path) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl FluidModel for PressureDouble {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+
+    fn set_initial_surface(&mut self, state: &SolidState) {
+        self.previous = Some(state.clone());
+    }
+
+    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
+        Ok(())
+    }
+
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
+        let mut loads = InterfaceLoads {
+            stamp: plan.stamp,
+            dim: state.dim,
+            force: Vec::new(),
+            torque: Vec::new(),
+        };
+        integrate_pressure(
+            state,
+            |x, v_n| self.pressure(x, v_n),
+            &mut loads.force,
+            &mut loads.torque,
+        );
+        self.last_loads = Some(loads.clone());
+        loads
+    }
+
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+        let (Some(state), Some(loads)) = (state, &self.last_loads) else {
+            return Ok(());
+        };
+        let dim = self.dim;
+        let n_rot = protocol::wire::n_rot(dim as u32);
+        let previous = self.previous.as_ref().unwrap_or(state);
+        for i in 0..state.n_particles() {
+            for d in 0..dim {
+                let dx = state.position[i * dim + d] - previous.position[i * dim + d];
+                self.work += loads.force[i * dim + d] * dx;
+                self.impulse[d] += loads.force[i * dim + d] * plan.dt;
+            }
+            for r in 0..n_rot {
+                // NOTE: the rotation increment over the step is Ω^{n+1/2} dt (exact for the
+                // 2-D angle, the RATTLE mid-step rate in 3-D).
+                let dtheta = state.angular_velocity[i * n_rot + r] * plan.dt;
+                self.work += loads.torque[i * n_rot + r] * dtheta;
+            }
+        }
+        self.previous = Some(state.clone());
         Ok(())
     }
 }

@@ -13,6 +13,7 @@ use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stam
 
 use crate::fv::{FluidSolver, Trouble};
 use crate::node::FluidModel;
+use protocol::session::NodeModel;
 
 /// The real fluid.
 pub struct RealFluid {
@@ -79,49 +80,13 @@ fn describe(troubles: &[Trouble], step: u64) -> String {
     format!("step {step}: {}", list.join("; "))
 }
 
-impl FluidModel for RealFluid {
+impl NodeModel for RealFluid {
     fn implementation(&self) -> &'static str {
         "real"
     }
 
-    fn dim(&self) -> usize {
-        self.solver.grid().dim
-    }
-
     fn dt_max(&self) -> (f64, String) {
         (self.solver.max_dt(), "cfl".into())
-    }
-
-    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
-        Ok(())
-    }
-
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
-        // Unreachable: a coupled scene is refused in `from_scene`.
-        InterfaceLoads {
-            stamp: plan.stamp,
-            dim: state.dim,
-            force: vec![0.0; state.position.len()],
-            torque: vec![0.0; state.n_particles() * protocol::wire::n_rot(state.dim)],
-        }
-    }
-
-    fn correct(&mut self, plan: &StepPlan, _state: Option<&SolidState>) -> Result<(), String> {
-        let allowed = self.solver.max_dt();
-        // NOTE: the coupler's step is the minimum of the proposals, so it can only exceed the
-        // CFL step through a bug or a tampered message; refuse rather than run unstable.
-        if plan.dt > allowed * (1.0 + 1e-12) {
-            return Err(format!(
-                "step {}: CFL violated: dt = {:e} exceeds the CFL step {:e}",
-                plan.stamp.step, plan.dt, allowed
-            ));
-        }
-        let report = self.solver.advance(plan.dt);
-        if report.ok() {
-            Ok(())
-        } else {
-            Err(describe(&report.troubles, plan.stamp.step))
-        }
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
@@ -193,5 +158,43 @@ impl FluidModel for RealFluid {
             std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
         }
         Ok(())
+    }
+}
+
+impl FluidModel for RealFluid {
+    fn dim(&self) -> usize {
+        self.solver.grid().dim
+    }
+
+    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
+        Ok(())
+    }
+
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
+        // Unreachable: a coupled scene is refused in `from_scene`.
+        InterfaceLoads {
+            stamp: plan.stamp,
+            dim: state.dim,
+            force: vec![0.0; state.position.len()],
+            torque: vec![0.0; state.n_particles() * protocol::wire::n_rot(state.dim)],
+        }
+    }
+
+    fn correct(&mut self, plan: &StepPlan, _state: Option<&SolidState>) -> Result<(), String> {
+        let allowed = self.solver.max_dt();
+        // NOTE: the coupler's step is the minimum of the proposals, so it can only exceed the
+        // CFL step through a bug or a tampered message; refuse rather than run unstable.
+        if plan.dt > allowed * (1.0 + 1e-12) {
+            return Err(format!(
+                "step {}: CFL violated: dt = {:e} exceeds the CFL step {:e}",
+                plan.stamp.step, plan.dt, allowed
+            ));
+        }
+        let report = self.solver.advance(plan.dt);
+        if report.ok() {
+            Ok(())
+        } else {
+            Err(describe(&report.troubles, plan.stamp.step))
+        }
     }
 }

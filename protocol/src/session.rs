@@ -1,11 +1,109 @@
-//! What the fluid and the solid node loops share: their configuration, their errors, and the
-//! small exchanges every node makes (proposals, failure reports). Pure: the loops pass a
-//! [`Link`] in; nothing here opens files or reads clocks.
+//! What the fluid and the solid node loops share: the loop itself ([`run_node`]: hello,
+//! checkpoints, step plans, outputs, totals, proposals, shutdown), its configuration, its errors,
+//! and the small exchanges every node makes. Each node brings only its side of a step. Pure: the
+//! loops pass a [`Link`] in; nothing here opens files or reads clocks (the models write their
+//! outputs themselves).
 
 use std::path::{Path, PathBuf};
 
 use crate::transport::{Link, LinkError};
-use crate::wire::{DtProposal, Failure, Message, Stamp};
+use crate::wire::{
+    Checkpoint, ConservedTotals, DtProposal, Failure, Hello, Message, NodeKind, PROTOCOL_VERSION,
+    Stamp, StepPlan,
+};
+
+/// What every node implementation (real solver or double) gives the loop, whichever side it is.
+pub trait NodeModel {
+    /// `"real"` or the double's name, sent in the hello.
+    fn implementation(&self) -> &'static str;
+    /// Largest stable step and what limits it.
+    fn dt_max(&self) -> (f64, String);
+    /// Conserved totals after the last step.
+    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals;
+    /// Node-private state bytes.
+    fn checkpoint(&self) -> Vec<u8>;
+    /// Restores a checkpoint.
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), String>;
+    /// Writes output `k` at time `t` into `out` (fields, VTK).
+    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()>;
+    /// Appends one row to each probe after a step ending at `t`.
+    fn record_probes(&mut self, t: f64);
+    /// Writes the probe files into `out`.
+    fn write_probes(&self, out: &Path) -> std::io::Result<()>;
+}
+
+/// Runs node `kind` until the coupler's shutdown (DESIGN §3 from a node's side).
+///
+/// The loop greets, sends the initial totals, calls `open` in a coupled run (the initial
+/// wet-surface exchange), proposes a step, then answers checkpoint requests and restores, and
+/// for each step plan calls `advance` (the node's side of the step, coupling iterations
+/// included), records probes, writes the planned output, sends the totals and the next
+/// proposal. Probe files are written at the end.
+pub fn run_node<N: NodeModel + ?Sized>(
+    kind: NodeKind,
+    node: &mut N,
+    link: &mut Link<'_>,
+    cfg: &LoopConfig,
+    mut open: impl FnMut(&mut N, &mut Link<'_>) -> Result<(), NodeError>,
+    mut advance: impl FnMut(&mut N, &mut Link<'_>, &StepPlan) -> Result<(), NodeError>,
+) -> Result<(), NodeError> {
+    link.greet(Hello {
+        node: kind,
+        protocol_version: PROTOCOL_VERSION,
+        scene_hash: cfg.scene_hash,
+        implementation: node.implementation().to_string(),
+        capabilities: vec!["checkpoint".into()],
+    })?;
+    link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
+    if cfg.coupled {
+        open(node, link)?;
+    }
+    let mut step = 0;
+    propose(link, step, node.dt_max())?;
+    loop {
+        match link.recv()? {
+            Message::Shutdown(_) => break,
+            Message::CheckpointRequest(r) => {
+                link.send(&Message::Checkpoint(Checkpoint {
+                    stamp: r.stamp,
+                    node: kind,
+                    bytes: node.checkpoint(),
+                }))?;
+            }
+            Message::Checkpoint(c) => {
+                node.restore(&c.bytes).map_err(|e| fail(link, c.stamp, e))?;
+                step = c.stamp.step;
+                propose(link, step, node.dt_max())?;
+            }
+            Message::StepPlan(plan) => {
+                step = plan.stamp.step;
+                advance(node, link, &plan)?;
+                let t_end = plan.t + plan.dt;
+                node.record_probes(t_end);
+                if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
+                    node.write_output(k, t_end, out)
+                        .map_err(|source| NodeError::output(out, source))?;
+                }
+                link.send(&Message::ConservedTotals(
+                    node.totals(Stamp::step(step), t_end),
+                ))?;
+                step += 1;
+                propose(link, step, node.dt_max())?;
+            }
+            other => {
+                return Err(unexpected(
+                    &other,
+                    "StepPlan, CheckpointRequest or Shutdown",
+                ));
+            }
+        }
+    }
+    if let Some(out) = &cfg.out {
+        node.write_probes(out)
+            .map_err(|source| NodeError::output(out, source))?;
+    }
+    Ok(())
+}
 
 /// What a node loop needs from the scene.
 #[derive(Clone, Debug)]

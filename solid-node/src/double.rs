@@ -12,6 +12,7 @@ use protocol::wire::{
 use serde::{Deserialize, Serialize};
 
 use crate::node::SolidModel;
+use protocol::session::NodeModel;
 
 /// The double's state.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -133,7 +134,7 @@ impl PrescribedDouble {
     }
 }
 
-impl SolidModel for PrescribedDouble {
+impl NodeModel for PrescribedDouble {
     fn implementation(&self) -> &'static str {
         "prescribed"
     }
@@ -153,6 +154,75 @@ impl SolidModel for PrescribedDouble {
         }
     }
 
+    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
+        let (mass, energy) = match self.motion() {
+            PrescribedMotion::Spring { mass, stiffness } => {
+                let v2: f64 = self.v.iter().map(|v| v * v).sum();
+                let dx2: f64 = self
+                    .x
+                    .iter()
+                    .zip(&self.x0)
+                    .map(|(x, x0)| (x - x0) * (x - x0))
+                    .sum();
+                (*mass, 0.5 * mass * v2 + 0.5 * stiffness * dx2)
+            }
+            // NOTE: a kinematic motion is driven from outside: what it receives is absorbed.
+            _ => (0.0, self.work),
+        };
+        ConservedTotals {
+            stamp,
+            node: NodeKind::Solid,
+            t,
+            mass,
+            momentum: self.v.iter().map(|v| mass * v).collect(),
+            energy,
+            dissipated: 0.0,
+            interface_work: self.work,
+            interface_impulse: self.impulse.clone(),
+            boundary_mass_out: 0.0,
+            boundary_energy_out: 0.0,
+            links_broken: 0,
+            energy_scale: energy.abs(),
+        }
+    }
+
+    fn checkpoint(&self) -> Vec<u8> {
+        protocol::codec::encode_blob(self)
+    }
+
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let restored: PrescribedDouble = protocol::codec::decode_blob(bytes)?;
+        let motion = self.motion.take();
+        *self = PrescribedDouble { motion, ..restored };
+        Ok(())
+    }
+
+    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
+        use std::io::Write;
+        let mut f =
+            std::io::BufWriter::new(std::fs::File::create(out.join(format!("solid_{k}.csv")))?);
+        let axes = &["x", "y", "z"][..self.dim];
+        let vaxes = &["vx", "vy", "vz"][..self.dim];
+        writeln!(f, "id,{},{},sigma_n", axes.join(","), vaxes.join(","))?;
+        let fmt = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:e}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        writeln!(f, "0,{},{},0", fmt(&self.x), fmt(&self.v))?;
+        let _ = t;
+        f.flush()
+    }
+
+    fn record_probes(&mut self, _t: f64) {}
+
+    fn write_probes(&self, _out: &Path) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl SolidModel for PrescribedDouble {
     fn begin_step(&mut self, _plan: &StepPlan) -> Result<(), String> {
         Ok(())
     }
@@ -241,73 +311,6 @@ impl SolidModel for PrescribedDouble {
 
     fn state(&self) -> SolidState {
         self.solid_state(&self.x, &self.v)
-    }
-
-    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
-        let (mass, energy) = match self.motion() {
-            PrescribedMotion::Spring { mass, stiffness } => {
-                let v2: f64 = self.v.iter().map(|v| v * v).sum();
-                let dx2: f64 = self
-                    .x
-                    .iter()
-                    .zip(&self.x0)
-                    .map(|(x, x0)| (x - x0) * (x - x0))
-                    .sum();
-                (*mass, 0.5 * mass * v2 + 0.5 * stiffness * dx2)
-            }
-            // NOTE: a kinematic motion is driven from outside: what it receives is absorbed.
-            _ => (0.0, self.work),
-        };
-        ConservedTotals {
-            stamp,
-            node: NodeKind::Solid,
-            t,
-            mass,
-            momentum: self.v.iter().map(|v| mass * v).collect(),
-            energy,
-            dissipated: 0.0,
-            interface_work: self.work,
-            interface_impulse: self.impulse.clone(),
-            boundary_mass_out: 0.0,
-            boundary_energy_out: 0.0,
-            links_broken: 0,
-            energy_scale: energy.abs(),
-        }
-    }
-
-    fn checkpoint(&self) -> Vec<u8> {
-        protocol::codec::encode_blob(self)
-    }
-
-    fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
-        let restored: PrescribedDouble = protocol::codec::decode_blob(bytes)?;
-        let motion = self.motion.take();
-        *self = PrescribedDouble { motion, ..restored };
-        Ok(())
-    }
-
-    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
-        use std::io::Write;
-        let mut f =
-            std::io::BufWriter::new(std::fs::File::create(out.join(format!("solid_{k}.csv")))?);
-        let axes = &["x", "y", "z"][..self.dim];
-        let vaxes = &["vx", "vy", "vz"][..self.dim];
-        writeln!(f, "id,{},{},sigma_n", axes.join(","), vaxes.join(","))?;
-        let fmt = |v: &[f64]| {
-            v.iter()
-                .map(|x| format!("{x:e}"))
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        writeln!(f, "0,{},{},0", fmt(&self.x), fmt(&self.v))?;
-        let _ = t;
-        f.flush()
-    }
-
-    fn record_probes(&mut self, _t: f64) {}
-
-    fn write_probes(&self, _out: &Path) -> std::io::Result<()> {
-        Ok(())
     }
 }
 

@@ -11,6 +11,7 @@ use protocol::wire::{
 
 use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
 use crate::node::SolidModel;
+use protocol::session::NodeModel;
 
 /// The real solid.
 pub struct RealSolid {
@@ -112,97 +113,13 @@ fn describe(diagnostics: &[Diagnostic], step: u64) -> String {
     format!("step {step}: {}", list.join("; "))
 }
 
-impl SolidModel for RealSolid {
+impl NodeModel for RealSolid {
     fn implementation(&self) -> &'static str {
         "real"
     }
 
     fn dt_max(&self) -> (f64, String) {
         (self.solid.max_dt(self.displacement_cap), "dem".into())
-    }
-
-    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), String> {
-        self.solid.begin_step(plan.dt);
-        Ok(())
-    }
-
-    fn trial(
-        &mut self,
-        plan: &StepPlan,
-        loads: Option<&InterfaceLoads>,
-    ) -> Result<SolidState, String> {
-        let (force, torque) = match loads {
-            Some(l) => {
-                if l.force.len() != self.zero_force.len()
-                    || l.torque.len() != self.zero_torque.len()
-                {
-                    return Err(format!(
-                        "step {}: loads for {} force and {} torque values, the solid has {} and {}",
-                        plan.stamp.step,
-                        l.force.len(),
-                        l.torque.len(),
-                        self.zero_force.len(),
-                        self.zero_torque.len()
-                    ));
-                }
-                (l.force.as_slice(), l.torque.as_slice())
-            }
-            None => (self.zero_force.as_slice(), self.zero_torque.as_slice()),
-        };
-        let diameter = self.diameters();
-        let trial = self.solid.trial(force, torque);
-        Ok(SolidState {
-            stamp: plan.stamp,
-            dim: trial.dim as u32,
-            position: trial.position.clone(),
-            orientation: trial.orientation.clone(),
-            velocity: trial.velocity_half.clone(),
-            angular_velocity: trial.omega_half.clone(),
-            diameter,
-            surface: Self::surface(&trial.wet),
-        })
-    }
-
-    fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
-        let report = self.solid.commit();
-        self.links_broken += report.broken_links.len() as u64;
-        if report.diagnostics.is_empty() {
-            Ok(())
-        } else {
-            Err(describe(&report.diagnostics, plan.stamp.step))
-        }
-    }
-
-    fn state(&self) -> SolidState {
-        let dim = self.solid.dim();
-        let n = self.solid.n_particles();
-        let mut s = SolidState {
-            stamp: Stamp::default(),
-            dim: dim as u32,
-            position: Vec::with_capacity(n * dim),
-            orientation: Vec::new(),
-            velocity: Vec::with_capacity(n * dim),
-            angular_velocity: Vec::new(),
-            diameter: self.diameters(),
-            surface: Self::surface(self.solid.wet_surface()),
-        };
-        for p in 0..n {
-            let id = ParticleId(p as u32);
-            s.position
-                .extend_from_slice(&self.solid.position(id)[..dim]);
-            s.velocity
-                .extend_from_slice(&self.solid.velocity(id)[..dim]);
-            let q = self.solid.orientation(id);
-            let w = self.solid.angular_velocity(id);
-            if dim == 3 {
-                s.orientation.extend_from_slice(&q);
-                s.angular_velocity.extend_from_slice(&w);
-            } else {
-                s.orientation.push(q[0]);
-                s.angular_velocity.push(w[2]);
-            }
-        }
-        s
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
@@ -299,5 +216,91 @@ impl SolidModel for RealSolid {
             std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
         }
         Ok(())
+    }
+}
+
+impl SolidModel for RealSolid {
+    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), String> {
+        self.solid.begin_step(plan.dt);
+        Ok(())
+    }
+
+    fn trial(
+        &mut self,
+        plan: &StepPlan,
+        loads: Option<&InterfaceLoads>,
+    ) -> Result<SolidState, String> {
+        let (force, torque) = match loads {
+            Some(l) => {
+                if l.force.len() != self.zero_force.len()
+                    || l.torque.len() != self.zero_torque.len()
+                {
+                    return Err(format!(
+                        "step {}: loads for {} force and {} torque values, the solid has {} and {}",
+                        plan.stamp.step,
+                        l.force.len(),
+                        l.torque.len(),
+                        self.zero_force.len(),
+                        self.zero_torque.len()
+                    ));
+                }
+                (l.force.as_slice(), l.torque.as_slice())
+            }
+            None => (self.zero_force.as_slice(), self.zero_torque.as_slice()),
+        };
+        let diameter = self.diameters();
+        let trial = self.solid.trial(force, torque);
+        Ok(SolidState {
+            stamp: plan.stamp,
+            dim: trial.dim as u32,
+            position: trial.position.clone(),
+            orientation: trial.orientation.clone(),
+            velocity: trial.velocity_half.clone(),
+            angular_velocity: trial.omega_half.clone(),
+            diameter,
+            surface: Self::surface(&trial.wet),
+        })
+    }
+
+    fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
+        let report = self.solid.commit();
+        self.links_broken += report.broken_links.len() as u64;
+        if report.diagnostics.is_empty() {
+            Ok(())
+        } else {
+            Err(describe(&report.diagnostics, plan.stamp.step))
+        }
+    }
+
+    fn state(&self) -> SolidState {
+        let dim = self.solid.dim();
+        let n = self.solid.n_particles();
+        let mut s = SolidState {
+            stamp: Stamp::default(),
+            dim: dim as u32,
+            position: Vec::with_capacity(n * dim),
+            orientation: Vec::new(),
+            velocity: Vec::with_capacity(n * dim),
+            angular_velocity: Vec::new(),
+            diameter: self.diameters(),
+            surface: Self::surface(self.solid.wet_surface()),
+        };
+        for p in 0..n {
+            let id = ParticleId(p as u32);
+            s.position
+                .extend_from_slice(&self.solid.position(id)[..dim]);
+            s.velocity
+                .extend_from_slice(&self.solid.velocity(id)[..dim]);
+            let q = self.solid.orientation(id);
+            let w = self.solid.angular_velocity(id);
+            if dim == 3 {
+                s.orientation.extend_from_slice(&q);
+                s.angular_velocity.extend_from_slice(&w);
+            } else {
+                s.orientation.push(q[0]);
+                s.angular_velocity.push(w[2]);
+            }
+        }
+        s
     }
 }
