@@ -25,5 +25,7 @@ pub mod wire;
 pub mod bus;
 #[cfg(feature = "replay")]
 pub mod replay;
+#[cfg(all(feature = "bus", feature = "replay"))]
+pub mod serve;
 
 pub use wire::PROTOCOL_VERSION;

@@ -6,11 +6,10 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use protocol::scene::Scene;
-use protocol::transport::{Link, Transport};
+use protocol::serve::{ServeError, ServeOptions, serve};
 use protocol::wire::NodeKind;
 
-use crate::node::{self, LoopConfig, NodeError};
+use crate::node;
 
 /// The solid node of the co-simulation (normally started by `coupler-node run`).
 #[derive(Debug, Parser)]
@@ -48,12 +47,10 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("solid-node: {err:#}");
-            let code = match err.downcast_ref::<NodeError>() {
-                Some(NodeError::Numerical { .. }) => 3,
-                Some(NodeError::Link(_)) => 4,
-                _ => 2,
-            };
-            ExitCode::from(code)
+            ExitCode::from(
+                err.downcast_ref::<ServeError>()
+                    .map_or(2, ServeError::exit_code),
+            )
         }
     }
 }
@@ -62,36 +59,18 @@ fn run(args: Args) -> anyhow::Result<()> {
     if let Some(command) = args.command {
         match command {}
     }
-    let scene_path = args.scene.context("--scene is required")?;
-    let run_id = args.run_id.context("--run-id is required")?;
-    let text = std::fs::read_to_string(&scene_path)
-        .with_context(|| format!("reading scene {}", scene_path.display()))?;
-    let scene = Scene::from_toml_str(&text, &scene_path.display().to_string())?;
-    let solid = scene
-        .solid
-        .as_ref()
-        .context("the scene has no [solid] section")?;
-    let timeout = Duration::from_secs_f64(args.timeout_s);
-    let double = args.double.unwrap_or_else(|| solid.node.clone());
-    let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Solid, &[NodeKind::Coupler])
-        .with_context(|| format!("opening the bus for run {run_id}"))?;
-    if let Some(file) = double.strip_prefix("replay:") {
-        let bytes = std::fs::read(file).with_context(|| format!("reading record {file}"))?;
-        let script = protocol::replay::Script::from_mcap(&bytes, NodeKind::Solid)?;
-        protocol::replay::play(&mut bus, &script, timeout)?;
-        return Ok(());
-    }
-    let mut model = node::model_from_scene(&scene, &double).map_err(anyhow::Error::msg)?;
-    if let Some(out) = &args.out {
-        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    }
-    let cfg = LoopConfig {
-        scene_hash: scene.hash(),
-        coupled: scene.fluid.is_some(),
-        out: args.out.clone(),
+    let opts = ServeOptions {
+        scene: args.scene.context("--scene is required")?,
+        run_id: args.run_id.context("--run-id is required")?,
+        double: args.double,
+        timeout: Duration::from_secs_f64(args.timeout_s),
+        out: args.out,
     };
-    let transport: &mut dyn Transport = &mut bus;
-    let mut link = Link::new(transport, timeout);
-    node::run(model.as_mut(), &mut link, &cfg)?;
+    serve(
+        NodeKind::Solid,
+        &opts,
+        node::model_from_scene,
+        |mut model, link, cfg| node::run(model.as_mut(), link, cfg),
+    )?;
     Ok(())
 }
