@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
+use std::sync::{RwLock, RwLockReadGuard};
 use std::time::{Duration, Instant};
 
 use coupler_node::record::{self, Recorder};
@@ -29,7 +30,19 @@ fn coupler() -> Command {
     cmd
 }
 
+/// Every `coupler-node run` sweeps the leftovers of crashed runs as it starts. Tests that start
+/// runs hold this lock shared until their runs have started; the crashed-run test holds it
+/// exclusively, so that no other start sweeps its leftovers before it has counted them.
+static STARTS: RwLock<()> = RwLock::new(());
+
+fn shared_start() -> RwLockReadGuard<'static, ()> {
+    STARTS
+        .read()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let _start = shared_start();
     let output = coupler()
         .arg("run")
         .arg(scene)
@@ -231,6 +244,17 @@ fn long_doubles_scene(dir: &Path) -> PathBuf {
 
 /// Starts the coupler on a long scene and waits (bounded) until it has recorded `bytes`.
 fn start_long_run(
+    scene: &Path,
+    out: &Path,
+    bytes: u64,
+    stderr: bool,
+) -> (std::process::Child, String) {
+    let _start = shared_start();
+    spawn_long_run(scene, out, bytes, stderr)
+}
+
+/// [`start_long_run`] without taking [`STARTS`] (for the test that holds it exclusively).
+fn spawn_long_run(
     scene: &Path,
     out: &Path,
     bytes: u64,
@@ -480,6 +504,7 @@ fn a_recorded_node_replays_as_a_double_the_coupler_cannot_tell() {
     let cut = first.join("cut.mcap");
     std::fs::write(&cut, &bytes[..bytes.len() * 6 / 10]).expect("write");
     let third = out_dir("replay-double-c");
+    let start = shared_start();
     let r = coupler()
         .args([
             "run",
@@ -492,6 +517,7 @@ fn a_recorded_node_replays_as_a_double_the_coupler_cannot_tell() {
         .arg(&scene)
         .output()
         .expect("starts");
+    drop(start);
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert!(!r.status.success());
     assert!(
@@ -623,7 +649,11 @@ fn leftovers_of_a_crashed_run_are_cleaned_at_the_next_start() {
     let dir = out_dir("crashed");
     let scene = long_doubles_scene(&dir);
     let out = dir.join("out");
-    let (mut child, run_id) = start_long_run(&scene, &out, 100_000, false);
+    // No other run may start (and sweep) until this test has counted the leftovers.
+    let _exclusive = STARTS
+        .write()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let (mut child, run_id) = spawn_long_run(&scene, &out, 100_000, false);
     assert!(
         !node_pids(&run_id).is_empty(),
         "no nodes found for {run_id}"
@@ -658,8 +688,6 @@ fn leftovers_of_a_crashed_run_are_cleaned_at_the_next_start() {
         .expect("coupler starts");
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert!(r.status.success(), "{stderr}");
-    // Another test's coupler starting meanwhile may have swept them first: what matters is
-    // that they are gone once a run has started.
     assert_eq!(leftovers(), 0, "leftovers of {run_id} survived: {stderr}");
     let _ = std::fs::remove_dir_all(dir);
 }
