@@ -568,7 +568,7 @@ fn block_on_one(
 /// Removes leftovers (stale nodes, services, `/dev/shm/<prefix>*` and `/tmp/iceoryx2` files) of
 /// a run id; called by the launcher at start (for a crashed earlier run with the same id) and
 /// after all processes ended. Refuses, without removing anything, while a node of the run is
-/// alive. Returns what it removed: `node <name>` for each dead node, then the file paths.
+/// alive or in a state that cannot be read. Returns what it removed: `node <name>` for each dead node, then the file paths.
 pub fn cleanup_run(run_id: &str) -> Result<Vec<String>, TransportError> {
     let config = run_config(run_id)?;
     let mut alive = Vec::new();
@@ -582,7 +582,11 @@ pub fn cleanup_run(run_id: &str) -> Result<Vec<String>, TransportError> {
                     removed.push(format!("node {label}"));
                 }
             }
-            NodeState::Inaccessible(_) | NodeState::Undefined(_) => {}
+            // NOTE: a node whose state cannot be read may be one still being created; its
+            // run is left alone like a live one (a sweep must never break a starting run).
+            NodeState::Inaccessible(id) | NodeState::Undefined(id) => {
+                alive.push(format!("{id:?} (state unknown)"));
+            }
         }
         CallbackProgression::Continue
     })
