@@ -22,7 +22,7 @@
 use std::collections::VecDeque;
 
 use protocol::PROTOCOL_VERSION;
-use protocol::scene::{Relaxation, Scene, SchemeName};
+use protocol::scene::{RecordLevel, Relaxation, Scene, SchemeName};
 use protocol::wire::{
     Checkpoint, CheckpointRequest, ConservedTotals, Decision, FixedPointDecision, Message,
     NodeKind, Scheme, Shutdown, ShutdownReason, SolidState, Stamp, StepPlan, Welcome,
@@ -76,7 +76,10 @@ impl CouplerConfig {
             tolerance: scene.run.tolerance,
             max_iterations: scene.run.max_iterations,
             relaxation: scene.run.relaxation,
-            checkpoint_every: scene.run.checkpoint_every,
+            checkpoint_every: match scene.run.record {
+                RecordLevel::All => 1,
+                _ => scene.run.checkpoint_every,
+            },
             dt_cap: scene.run.dt_max,
             outputs: scene.output_times(),
             max_steps: scene.run.max_steps,

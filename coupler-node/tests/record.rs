@@ -273,7 +273,8 @@ fn diagnostics_level_writes_no_frames_and_none_is_refused() {
         .err()
         .expect("refused");
     assert!(matches!(err, RecordError::Disabled));
-    // All and Exchange record the same.
+    // The recorder writes the same for All and Exchange (All differs in the coupler, which
+    // then asks every node for a checkpoint at every step: tests/it/doubles.rs).
     let (all, _, _) = record_run(2, RecordLevel::All);
     let (exchange, _, _) = record_run(2, RecordLevel::Exchange);
     let strip = |r: Recording| r.messages;

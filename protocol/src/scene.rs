@@ -42,7 +42,8 @@ pub struct RunConfig {
     pub relaxation: Relaxation,
     /// Recording level (default exchange).
     pub record: RecordLevel,
-    /// Steps between node checkpoints in the record; 0 = none (default 0).
+    /// Steps between node checkpoints in the record; 0 = none (default 0; `record = "all"`
+    /// checkpoints every step).
     pub checkpoint_every: u64,
     /// Optional cap on the coupling step \[s\].
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -103,7 +104,8 @@ pub enum Relaxation {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RecordLevel {
-    /// Every message and the diagnostics.
+    /// Every exchanged message, the diagnostics, and a checkpoint of each node at every step
+    /// (so that a replay of any step starts at that step).
     All,
     /// Every exchanged message and the diagnostics (hello and welcome included).
     Exchange,

@@ -1,7 +1,7 @@
 //! The two doubles coupled in one process over the in-memory transport.
 
 use cosim_tests::{run_in_process, scene};
-use protocol::wire::NodeKind;
+use protocol::wire::{Message, NodeKind};
 
 #[test]
 fn doubles_converge_and_balance_the_interface_work() {
@@ -61,4 +61,29 @@ fn in_process_runs_are_bit_identical() {
         }
     }
     assert!(a.sink.frames.len() > 1000, "{} frames", a.sink.frames.len());
+}
+
+#[test]
+fn record_all_checkpoints_every_node_at_every_step() {
+    let mut scene = scene("backbone-doubles.toml");
+    scene.run.record = protocol::scene::RecordLevel::All;
+    scene.run.checkpoint_every = 0;
+    let run = run_in_process(&scene);
+    assert_eq!(run.error, None);
+    let steps = run.summary.steps;
+    for node in [NodeKind::Fluid, NodeKind::Solid] {
+        let checkpoints: Vec<u64> = run
+            .sink
+            .frames
+            .iter()
+            .filter(|f| f.0 == node)
+            .filter_map(|f| match protocol::codec::decode(&f.2) {
+                Ok((_, Message::Checkpoint(c))) => Some(c.stamp.step),
+                _ => None,
+            })
+            .collect();
+        // Before every step but the first (the initial state is the scene's).
+        let expected: Vec<u64> = (1..steps).collect();
+        assert_eq!(checkpoints, expected, "{node}");
+    }
 }
