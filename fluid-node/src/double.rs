@@ -9,10 +9,10 @@
 use std::path::Path;
 
 use protocol::scene::PressureField;
+use protocol::session::NodeModel;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::node::FluidModel;
-use protocol::session::NodeModel;
 
 /// The pressure double's state.
 #[derive(Clone, Debug)]

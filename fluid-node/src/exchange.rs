@@ -9,11 +9,11 @@ use std::io::Write;
 use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
+use protocol::session::NodeModel;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::fv::{FluidSolver, Trouble};
 use crate::node::FluidModel;
-use protocol::session::NodeModel;
 
 /// The real fluid.
 pub struct RealFluid {

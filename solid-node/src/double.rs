@@ -6,13 +6,13 @@
 use std::path::Path;
 
 use protocol::scene::{PrescribedConfig, PrescribedMotion};
+use protocol::session::NodeModel;
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
 };
 use serde::{Deserialize, Serialize};
 
 use crate::node::SolidModel;
-use protocol::session::NodeModel;
 
 /// The double's state.
 #[derive(Clone, Debug, Serialize, Deserialize)]

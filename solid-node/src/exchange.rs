@@ -5,13 +5,13 @@ use std::io::Write;
 use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
+use protocol::session::NodeModel;
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
 };
 
 use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
 use crate::node::SolidModel;
-use protocol::session::NodeModel;
 
 /// The real solid.
 pub struct RealSolid {

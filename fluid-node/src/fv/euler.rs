@@ -106,28 +106,55 @@ pub fn roe_average(
     wr: &Primitive,
     gamma: f64,
 ) -> RoeAverage {
-    if !(wl.rho > 0.0 && wr.rho > 0.0) {
-        return RoeAverage::default();
+    RoeSide::average(
+        &RoeSide::new(ul, wl),
+        &RoeSide::new(ur, wr),
+        gamma,
+        wl.rho > 0.0 && wr.rho > 0.0,
+    )
+}
+
+/// What one side contributes to a Roe average: `√ρ`, velocity and total enthalpy `H`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RoeSide {
+    /// `√ρ` (NaN for ρ < 0).
+    pub sqrt_rho: f64,
+    /// Velocity `(u_n, u_t1, u_t2)` [m/s].
+    pub vel: [f64; 3],
+    /// Total specific enthalpy `(E + p)/ρ` [J/kg] (not finite for ρ = 0).
+    pub h: f64,
+}
+
+impl RoeSide {
+    /// The side of state `u` with primitives `w`.
+    #[inline]
+    pub fn new(u: &State, w: &Primitive) -> RoeSide {
+        RoeSide {
+            sqrt_rho: w.rho.sqrt(),
+            vel: w.vel,
+            h: (u[4] + w.p) / w.rho,
+        }
     }
-    let sl = wl.rho.sqrt();
-    let sr = wr.rho.sqrt();
-    let inv = 1.0 / (sl + sr);
-    let hl = (ul[4] + wl.p) / wl.rho;
-    let hr = (ur[4] + wr.p) / wr.rho;
-    let vel = [
-        (sl * wl.vel[0] + sr * wr.vel[0]) * inv,
-        (sl * wl.vel[1] + sr * wr.vel[1]) * inv,
-        (sl * wl.vel[2] + sr * wr.vel[2]) * inv,
-    ];
-    let h = (sl * hl + sr * hr) * inv;
-    let q2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
-    let c2 = (gamma - 1.0) * (h - 0.5 * q2);
-    let valid = c2 > 0.0 && c2.is_finite() && h.is_finite();
-    RoeAverage {
-        vel,
-        h,
-        c: if valid { c2.sqrt() } else { 0.0 },
-        valid,
+
+    /// Roe average of sides `l` and `r`; valid only if `sides_ok` (both densities positive,
+    /// no vacuum) and the average is physical (`c² > 0`, finite). An invalid average is all
+    /// zeros. Branch-free, so that the line kernel's loop over interfaces vectorises.
+    #[inline]
+    pub fn average(l: &RoeSide, r: &RoeSide, gamma: f64, sides_ok: bool) -> RoeAverage {
+        let (sl, sr) = (l.sqrt_rho, r.sqrt_rho);
+        let inv = 1.0 / (sl + sr);
+        let vel: [f64; 3] = std::array::from_fn(|k| (sl * l.vel[k] + sr * r.vel[k]) * inv);
+        let h = (sl * l.h + sr * r.h) * inv;
+        let q2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
+        let c2 = (gamma - 1.0) * (h - 0.5 * q2);
+        let valid = sides_ok & (c2 > 0.0) & c2.is_finite() & h.is_finite();
+        let keep = |x: f64| if valid { x } else { 0.0 };
+        RoeAverage {
+            vel: vel.map(keep),
+            h: keep(h),
+            c: keep(c2.sqrt()),
+            valid,
+        }
     }
 }
 

@@ -17,8 +17,8 @@
 //! safeguard of numerics.md §1.8). What is still wrong is reported by the caller.
 
 use crate::fv::euler::{
-    NQ, Primitive, RoeAverage, State, flux_hllc, flux_hlle, flux_lax_friedrichs, physical_flux,
-    primitive, roe_eigenvector, roe_star_states_positive, roe_strengths,
+    NQ, Primitive, RoeAverage, RoeSide, State, flux_hllc, flux_hlle, flux_lax_friedrichs,
+    physical_flux, primitive, roe_eigenvector, roe_star_states_positive, roe_strengths,
 };
 use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
 
@@ -109,7 +109,7 @@ pub struct LineScratch {
     cells: CellLine,
     phys: Vec<State>,
     vacuum: Vec<bool>,
-    roe: RoeLine,
+    roe: Vec<RoeAverage>,
     bad_prefix: Vec<u32>,
     speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
@@ -120,54 +120,17 @@ pub struct LineScratch {
     right: Vec<State>,
 }
 
-/// Primitive variables of the cells of a line, with `√ρ` and the total enthalpy `H` of the
-/// Roe averages.
+/// What the cells of a line give the interfaces: primitives and their Roe-average sides.
 #[derive(Clone, Debug, Default)]
 struct CellLine {
-    rho: Vec<f64>,
-    vel: [Vec<f64>; 3],
-    p: Vec<f64>,
-    sqrt_rho: Vec<f64>,
-    h: Vec<f64>,
+    prim: Vec<Primitive>,
+    roe: Vec<RoeSide>,
 }
 
 impl CellLine {
     fn resize(&mut self, len: usize) {
-        for v in [&mut self.rho, &mut self.p, &mut self.sqrt_rho, &mut self.h] {
-            v.resize(len, 0.0);
-        }
-        for v in &mut self.vel {
-            v.resize(len, 0.0);
-        }
-    }
-
-    fn primitive(&self, i: usize) -> Primitive {
-        Primitive {
-            rho: self.rho[i],
-            vel: [self.vel[0][i], self.vel[1][i], self.vel[2][i]],
-            p: self.p[i],
-        }
-    }
-}
-
-/// Roe averages at the interfaces of a line.
-#[derive(Clone, Debug, Default)]
-struct RoeLine {
-    vel: [Vec<f64>; 3],
-    h: Vec<f64>,
-    c: Vec<f64>,
-    valid: Vec<bool>,
-}
-
-impl RoeLine {
-    fn resize(&mut self, n: usize) {
-        for v in [&mut self.h, &mut self.c] {
-            v.resize(n, 0.0);
-        }
-        for v in &mut self.vel {
-            v.resize(n, 0.0);
-        }
-        self.valid.resize(n, false);
+        self.prim.resize(len, Primitive::default());
+        self.roe.resize(len, RoeSide::default());
     }
 }
 
@@ -181,7 +144,7 @@ impl LineScratch {
         self.cells.resize(len);
         self.phys.resize(len, [0.0; NQ]);
         self.vacuum.resize(len, false);
-        self.roe.resize(len - 1);
+        self.roe.resize(len - 1, RoeAverage::default());
         self.bad_prefix.resize(len, 0);
         for sp in &mut self.speeds {
             sp.resize(len - 1);
@@ -310,30 +273,18 @@ fn n_waves(setup: &LineSetup) -> usize {
     3 + setup.n_shear
 }
 
-/// Primitive variables, `√ρ`, `H`, physical fluxes and vacuum flags of every cell of the line.
+/// Primitive variables, Roe-average sides, physical fluxes and vacuum flags of every cell of
+/// the line.
 fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
     let len = s.u.len();
-    let gamma = setup.gamma;
     let u = &s.u[..len];
-    let c = &mut s.cells;
-    let (rho, p, sqrt_rho, h) = (
-        &mut c.rho[..len],
-        &mut c.p[..len],
-        &mut c.sqrt_rho[..len],
-        &mut c.h[..len],
-    );
-    let [v0, v1, v2] = &mut c.vel;
-    let (v0, v1, v2) = (&mut v0[..len], &mut v1[..len], &mut v2[..len]);
+    let (prim, roe) = (&mut s.cells.prim[..len], &mut s.cells.roe[..len]);
     let (phys, vacuum) = (&mut s.phys[..len], &mut s.vacuum[..len]);
     for i in 0..len {
-        let w = primitive(&u[i], gamma);
-        rho[i] = w.rho;
-        [v0[i], v1[i], v2[i]] = w.vel;
-        p[i] = w.p;
-        // √ρ and H of the Roe average (NaN or infinite where ρ ≤ 0: such interfaces are
-        // marked invalid before use).
-        sqrt_rho[i] = w.rho.sqrt();
-        h[i] = (u[i][4] + w.p) / w.rho;
+        let w = primitive(&u[i], setup.gamma);
+        prim[i] = w;
+        // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
+        roe[i] = RoeSide::new(&u[i], &w);
         phys[i] = physical_flux(&u[i], &w);
         vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
     }
@@ -347,21 +298,8 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
     let gamma = setup.gamma;
     let u = &s.u[..nint + 1];
     let vacuum = &s.vacuum[..nint + 1];
-    let c = &s.cells;
-    let (rho, sq, h) = (
-        &c.rho[..nint + 1],
-        &c.sqrt_rho[..nint + 1],
-        &c.h[..nint + 1],
-    );
-    let (v0, v1, v2) = (
-        &c.vel[0][..nint + 1],
-        &c.vel[1][..nint + 1],
-        &c.vel[2][..nint + 1],
-    );
-    let r = &mut s.roe;
-    let [rv0, rv1, rv2] = &mut r.vel;
-    let (rv0, rv1, rv2) = (&mut rv0[..nint], &mut rv1[..nint], &mut rv2[..nint]);
-    let (rh, rc, valid) = (&mut r.h[..nint], &mut r.c[..nint], &mut r.valid[..nint]);
+    let (prim, side) = (&s.cells.prim[..nint + 1], &s.cells.roe[..nint + 1]);
+    let roe = &mut s.roe[..nint];
     let [s0, s1, s2] = &mut s.speeds;
     let (lam0, lam1, lam2) = (
         &mut s0.lam[..nint],
@@ -377,47 +315,16 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
         &mut w4.alpha[..nint],
     );
     for l in 0..nint {
-        // Roe average (Toro 2009, eq. 11.60), as `euler::roe_average`, without its early
-        // return so that the loop vectorises.
-        let (sl, sr) = (sq[l], sq[l + 1]);
-        let inv = 1.0 / (sl + sr);
-        let vel = [
-            (sl * v0[l] + sr * v0[l + 1]) * inv,
-            (sl * v1[l] + sr * v1[l + 1]) * inv,
-            (sl * v2[l] + sr * v2[l + 1]) * inv,
-        ];
-        let hh = (sl * h[l] + sr * h[l + 1]) * inv;
-        let q2 = vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2];
-        let c2 = (gamma - 1.0) * (hh - 0.5 * q2);
-        let ok = !vacuum[l]
-            & !vacuum[l + 1]
-            & (rho[l] > 0.0)
-            & (rho[l + 1] > 0.0)
-            & (c2 > 0.0)
-            & c2.is_finite()
-            & hh.is_finite();
-        let cc = if ok { c2.sqrt() } else { 0.0 };
-        let roe = RoeAverage {
-            vel,
-            h: hh,
-            c: cc,
-            valid: ok,
-        };
+        let sides_ok = !vacuum[l] & !vacuum[l + 1] & (prim[l].rho > 0.0) & (prim[l + 1].rho > 0.0);
+        let average = RoeSide::average(&side[l], &side[l + 1], gamma, sides_ok);
         let du: State = std::array::from_fn(|q| u[l + 1][q] - u[l][q]);
-        let alpha = roe_strengths(&roe, &du, gamma);
-        let keep = |x: f64| if ok { x } else { 0.0 };
-        [rv0[l], rv1[l], rv2[l]] = vel;
-        rh[l] = hh;
-        rc[l] = cc;
-        valid[l] = ok;
-        lam0[l] = keep(vel[0] - cc);
-        lam1[l] = keep(vel[0] + cc);
-        lam2[l] = keep(vel[0]);
-        a0[l] = keep(alpha[0]);
-        a1[l] = keep(alpha[1]);
-        a2[l] = keep(alpha[2]);
-        a3[l] = keep(alpha[3]);
-        a4[l] = keep(alpha[4]);
+        // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
+        let alpha =
+            roe_strengths(&average, &du, gamma).map(|a| if average.valid { a } else { 0.0 });
+        roe[l] = average;
+        let (un, c) = (average.vel[0], average.c);
+        [lam0[l], lam1[l], lam2[l]] = [un - c, un + c, un];
+        [a0[l], a1[l], a2[l], a3[l], a4[l]] = alpha;
     }
 }
 
@@ -451,24 +358,12 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
         let nf = n + 1;
         let f0 = ng - 1;
         let (u, phys) = (&s.u[f0..f0 + nf + 1], &s.phys[f0..f0 + nf + 1]);
-        let r = &s.roe;
-        let (rv0, rv1, rv2) = (
-            &r.vel[0][f0..f0 + nf],
-            &r.vel[1][f0..f0 + nf],
-            &r.vel[2][f0..f0 + nf],
-        );
-        let (rh, rc, valid) = (&r.h[f0..f0 + nf], &r.c[f0..f0 + nf], &r.valid[f0..f0 + nf]);
+        let roe = &s.roe[f0..f0 + nf];
         let lam: [&[f64]; 3] = std::array::from_fn(|k| &s.speeds[k].lam[f0..f0 + nf]);
         let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &s.waves[k].alpha[f0..f0 + nf]);
         let psi: [&[f64]; NQ] = std::array::from_fn(|k| &s.psi[k][..nf]);
         let (face, star_ok) = (&mut s.face[..nf], &mut s.star_ok[..nf]);
         for j in 0..nf {
-            let roe = RoeAverage {
-                vel: [rv0[j], rv1[j], rv2[j]],
-                h: rh[j],
-                c: rc[j],
-                valid: valid[j],
-            };
             let mut flux = [0.0; NQ];
             for q in 0..NQ {
                 flux[q] = 0.5 * (phys[j][q] + phys[j + 1][q]);
@@ -477,20 +372,20 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
             for k in 0..NQ {
                 a[k] = alpha[k][j];
                 let coef = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
-                let r = roe_eigenvector(&roe, k);
+                let r = roe_eigenvector(&roe[j], k);
                 for q in 0..NQ {
                     flux[q] -= coef * r[q];
                 }
             }
             face[j] = flux;
-            star_ok[j] = roe_star_states_positive(&u[j], &u[j + 1], &roe, &a);
+            star_ok[j] = roe_star_states_positive(&u[j], &u[j + 1], &roe[j], &a);
         }
     }
     // Faces beside vacuum: Lax–Friedrichs; an invalid average in the stencil or non-physical
     // star states: HLLE.
     s.bad_prefix[0] = 0;
-    for l in 0..s.roe.valid.len() {
-        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe.valid[l]);
+    for l in 0..s.roe.len() {
+        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe[l].valid);
     }
     for fi in 0..=n {
         let f = ng - 1 + fi;
@@ -531,11 +426,7 @@ fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
     } = *setup;
     // Boundary-extrapolated, half-step-evolved states of cells ng−1 ..= ng+n (Toro §14.4.2).
     for i in ng - 1..=ng + n {
-        let (wm, w0, wp) = (
-            s.cells.primitive(i - 1),
-            s.cells.primitive(i),
-            s.cells.primitive(i + 1),
-        );
+        let (wm, w0, wp) = (s.cells.prim[i - 1], s.cells.prim[i], s.cells.prim[i + 1]);
         let field = |w: &Primitive| [w.rho, w.vel[0], w.vel[1], w.vel[2], w.p];
         let (am, a0, ap) = (field(&wm), field(&w0), field(&wp));
         let mut lo = Primitive::default();

@@ -111,7 +111,8 @@ impl SpeedLine {
         }
     }
 
-    /// Fills everything but `lam` from `lam` for order `order` and `sigma = Δt/Δx` [s/m] (`inv_sigma = 1/sigma`).
+    /// Fills everything but `lam` from `lam` for order `order` and `sigma = Δt/Δx` [s/m]
+    /// (`inv_sigma = 1/sigma`).
     pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
         let n = self.lam.len();
         let lam = &self.lam[..n];
@@ -341,8 +342,9 @@ pub fn psi_line<const ORDER: u32, const LIMITED: bool>(
     }
 }
 
-/// [`psi_line`] with the order chosen at run time (3, 5 or 7).
-pub fn psi_line_dyn(
+/// [`psi_line`] with the order chosen at run time (3, 5 or 7), for the scalar tests.
+#[cfg(test)]
+pub(crate) fn psi_line_dyn(
     order: u32,
     limited: bool,
     speed: &SpeedLine,

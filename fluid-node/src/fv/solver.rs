@@ -465,9 +465,9 @@ impl FluidSolver {
     pub fn totals(&self) -> Totals {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
-        // NOTE: compensated (Neumaier) sums per block and over blocks, so that the totals are
+        // NOTE: compensated sums per block and over blocks, so that the totals are
         // exact to a few ulps and a conservation check measures the scheme, not the sum.
-        let mut partial = vec![[Neumaier::default(); NQ]; self.n_blocks];
+        let mut partial = vec![[CompensatedSum::default(); NQ]; self.n_blocks];
         self.pool.install(|| {
             partial
                 .par_iter_mut()
@@ -482,7 +482,7 @@ impl FluidSolver {
                     }
                 });
         });
-        let mut total = [Neumaier::default(); NQ];
+        let mut total = [CompensatedSum::default(); NQ];
         for acc in &partial {
             for q in 0..NQ {
                 total[q].add(acc[q].sum);
@@ -567,18 +567,18 @@ impl FluidSolver {
     }
 }
 
-/// Neumaier's compensated sum.
+/// Compensated sum: the running sum and the sum of its exact rounding errors.
 #[derive(Clone, Copy, Debug, Default)]
-struct Neumaier {
+struct CompensatedSum {
     sum: f64,
     comp: f64,
 }
 
-impl Neumaier {
+impl CompensatedSum {
     #[inline]
     fn add(&mut self, x: f64) {
-        // Knuth's branch-free TwoSum: `err` is the exact rounding error of `sum + x`, the same
-        // value Neumaier's branch computes, so the totals are unchanged bit for bit.
+        // Knuth's branch-free TwoSum: `err` is the exact rounding error of `sum + x` (the value
+        // Neumaier's branching form computes too, without the branch).
         let t = self.sum + x;
         let z = t - self.sum;
         let err = (self.sum - (t - z)) + (x - z);
