@@ -18,43 +18,13 @@
 use std::hint::black_box;
 use std::time::Instant;
 
+// The test meshes (the bench uses the same sphere as the tests).
+#[path = "../tests/cutcell_support/mod.rs"]
+mod cutcell_support;
+
 use criterion::{BenchmarkId, Criterion, Throughput};
 use fluid_node::cutcell::{CutGeometry, Surface, SweptVolumes, compute, swept_volumes};
 use fluid_node::grid::Grid;
-
-/// UV sphere (outward) of radius `r` about `c`: `n_lat` bands, `n_lon` sectors.
-fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> (Vec<f64>, Vec<u32>) {
-    let mut vertices = vec![c[0], c[1], c[2] + r];
-    for i in 1..n_lat {
-        let theta = std::f64::consts::PI * i as f64 / n_lat as f64;
-        for j in 0..n_lon {
-            let phi = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
-            vertices.extend_from_slice(&[
-                c[0] + r * theta.sin() * phi.cos(),
-                c[1] + r * theta.sin() * phi.sin(),
-                c[2] + r * theta.cos(),
-            ]);
-        }
-    }
-    vertices.extend_from_slice(&[c[0], c[1], c[2] - r]);
-    let south = (vertices.len() / 3 - 1) as u32;
-    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
-    let mut elements = Vec::new();
-    for j in 0..n_lon {
-        elements.extend_from_slice(&[0, ring(1, j), ring(1, j + 1)]);
-        for i in 1..n_lat - 1 {
-            let (a, b, cc, d) = (
-                ring(i, j),
-                ring(i + 1, j),
-                ring(i + 1, j + 1),
-                ring(i, j + 1),
-            );
-            elements.extend_from_slice(&[a, b, cc, a, cc, d]);
-        }
-        elements.extend_from_slice(&[ring(n_lat - 1, j), south, ring(n_lat - 1, j + 1)]);
-    }
-    (vertices, elements)
-}
 
 fn resolutions() -> Vec<usize> {
     let max: usize = std::env::var("CUTCELL_BENCH_MAX")
@@ -97,7 +67,9 @@ fn measured_swept(grid: &Grid, before: &Surface, after: &Surface, swept: &mut Sw
 fn sphere_for(n: usize) -> (Vec<f64>, Vec<f64>, Vec<u32>) {
     let fixed = std::env::var("CUTCELL_BENCH_MESH").is_ok_and(|m| m == "fixed");
     let (n_lat, n_lon) = if fixed { (60, 60) } else { (n / 2, n) };
-    let (vertices, elements) = sphere([0.5013, 0.4987, 0.5021], 0.3, n_lat, n_lon);
+    let cutcell_support::Mesh {
+        vertices, elements, ..
+    } = cutcell_support::sphere_mesh([0.5013, 0.4987, 0.5021], 0.3, n_lat, n_lon);
     let shift = [0.11, -0.07, 0.09].map(|d| d / n as f64);
     let moved = vertices
         .iter()

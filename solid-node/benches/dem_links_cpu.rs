@@ -5,48 +5,11 @@
 //!
 //! Run: `cargo bench -p solid-node --no-default-features --bench dem_links_cpu`.
 
+mod support;
+
 use std::time::Instant;
 
-use protocol::scene::{BodyConfig, Motion, Shape, SolidConfig};
-use solid_node::dem::{ParticleId, Solid};
-
-fn lattice(threads: usize) -> Solid {
-    let cfg = SolidConfig {
-        node: "real".into(),
-        density: Some(1000.0),
-        young: Some(1e8),
-        poisson: Some(0.3),
-        fracture: None,
-        gravity: None,
-        bodies: vec![BodyConfig {
-            shape: Shape::Box {
-                center: vec![0.0, 0.0, 0.0],
-                size: vec![4.0, 2.0, 1.0],
-            },
-            divisions: vec![40, 20, 10],
-            motion: Motion::Free,
-        }],
-        constraints: vec![],
-        prescribed: None,
-    };
-    let mut solid = Solid::from_scene(&cfg, 3, threads).expect("bench scene builds");
-    let mut seed = 0x1234_5678_9abc_def0u64;
-    for p in 0..solid.n_particles() {
-        let mut v = [0.0; 3];
-        for c in &mut v {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            *c = 0.1 * ((seed >> 11) as f64 / (1u64 << 52) as f64 - 1.0);
-        }
-        solid.set_velocity(ParticleId(p as u32), &v);
-    }
-    let dt = 0.5 * solid.max_dt(f64::INFINITY);
-    for _ in 0..3 {
-        solid.step_free(dt);
-    }
-    solid
-}
+use support::lattice;
 
 /// Process CPU time [s] (all threads), from `/proc/self/stat` fields 14 and 15 (clock ticks).
 fn cpu_seconds() -> f64 {
