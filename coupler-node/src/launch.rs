@@ -133,15 +133,6 @@ pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<Pa
 /// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
-    // NOTE: refused here, before any process starts, rather than by the fluid node at start.
-    if let (Some(f), Some(_)) = (&scene.fluid, &scene.solid)
-        && f.node == "real"
-    {
-        anyhow::bail!(
-            "{}: the real fluid coupled with a solid needs the cut-cell update of the fluid node, which is not wired yet; run the coupling with --fluid pressure, or drop [solid]",
-            opts.scene.display()
-        );
-    }
     let mut nodes = Vec::new();
     if let Some(f) = &scene.fluid {
         nodes.push((NodeKind::Fluid, f.node.clone()));

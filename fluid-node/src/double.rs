@@ -203,15 +203,16 @@ impl FluidModel for PressureDouble {
         self.dim
     }
 
-    fn set_initial_surface(&mut self, state: &SolidState) {
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
         self.previous = Some(state.clone());
+        Ok(())
     }
 
     fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
         Ok(())
     }
 
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
         let mut loads = InterfaceLoads {
             stamp: plan.stamp,
             dim: state.dim,
@@ -225,7 +226,7 @@ impl FluidModel for PressureDouble {
             &mut loads.torque,
         );
         self.last_loads = Some(loads.clone());
-        loads
+        Ok(loads)
     }
 
     fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {

@@ -1,9 +1,10 @@
-//! The finite-volume solver as a [`FluidModel`]: conversions between the solver and the wire,
-//! outputs and probes.
+//! The finite-volume solver as a [`FluidModel`]: conversions between the solver, the embedded
+//! solid ([`crate::embedded`]) and the wire, outputs and probes.
 //!
-//! Fluid-only scenes run here. A coupled run with the real fluid needs the cut-cell update of
-//! the embedded solid in the node loop, which is a later piece of work: such a scene is refused
-//! at start with that reason, not run wrong.
+//! A fluid-only scene advances the solver in `correct`. A coupled scene runs the three parts of
+//! paper 003 §3.4: `predict` (split sweeps, kept fluxes and pressures), `loads` on each trial
+//! surface, `correct` with the accepted one; this file only converts the wire's `SolidState`
+//! into a [`SolidFrame`] and back.
 
 use std::io::Write;
 use std::path::Path;
@@ -12,6 +13,7 @@ use protocol::scene::{OutputFormat, Scene};
 use protocol::session::NodeModel;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
+use crate::embedded::{Embedded, InterfaceBudget, SolidFrame};
 use crate::fv::{FluidSolver, Trouble};
 use crate::node::FluidModel;
 
@@ -22,6 +24,11 @@ pub struct RealFluid {
     formats: Vec<OutputFormat>,
     name: String,
     probes: Vec<Probe>,
+    /// Whether the scene has a solid (the embedded part is built from the first surface).
+    coupled: bool,
+    embedded: Option<Embedded>,
+    /// Budget restored from a checkpoint before the surface arrived.
+    pending_budget: Option<InterfaceBudget>,
 }
 
 struct Probe {
@@ -37,8 +44,8 @@ impl RealFluid {
             .fluid
             .as_ref()
             .ok_or("the scene has no [fluid] section")?;
-        if scene.solid.is_some() {
-            return Err("the real fluid coupled with a solid needs the cut-cell update, which is not wired yet: run it with --fluid pressure, or drop [solid]".into());
+        if scene.solid.is_some() && scene.dim() == 1 {
+            return Err("a coupled scene needs a 2-D or 3-D fluid (the embedded solid has no 1-D form)".into());
         }
         let solver = FluidSolver::from_scene(cfg, scene.run.threads as usize)?;
         let mut probes = Vec::new();
@@ -63,7 +70,29 @@ impl RealFluid {
             formats: scene.output.formats.clone(),
             name: scene.name.clone(),
             probes,
+            coupled: scene.solid.is_some(),
+            embedded: None,
+            pending_budget: None,
         })
+    }
+
+    fn embedded(&mut self, step: u64) -> Result<&mut Embedded, String> {
+        self.embedded
+            .as_mut()
+            .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))
+    }
+
+    fn check_dt(&self, plan: &StepPlan) -> Result<(), String> {
+        let allowed = self.solver.max_dt();
+        // NOTE: the coupler's step is the minimum of the proposals, so it can only exceed the
+        // CFL step through a bug or a tampered message; refuse rather than run unstable.
+        if plan.dt > allowed * (1.0 + 1e-12) {
+            return Err(format!(
+                "step {}: CFL violated: dt = {:e} exceeds the CFL step {:e}",
+                plan.stamp.step, plan.dt, allowed
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -86,12 +115,19 @@ impl NodeModel for RealFluid {
     }
 
     fn dt_max(&self) -> (f64, String) {
-        (self.solver.max_dt(), "cfl".into())
+        let cfl = self.solver.max_dt();
+        match &self.embedded {
+            Some(e) if e.one_cell_dt() < cfl => (e.one_cell_dt(), "one-cell".into()),
+            _ => (cfl, "cfl".into()),
+        }
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
-        let totals = self.solver.totals();
         let dim = self.dim();
+        let (totals, budget) = match &self.embedded {
+            Some(e) => (e.totals(&self.solver), e.budget()),
+            None => (self.solver.totals(), InterfaceBudget::default()),
+        };
         ConservedTotals {
             stamp,
             node: NodeKind::Fluid,
@@ -100,8 +136,8 @@ impl NodeModel for RealFluid {
             momentum: totals.momentum[..dim].to_vec(),
             energy: totals.energy,
             dissipated: 0.0,
-            interface_work: 0.0,
-            interface_impulse: vec![0.0; dim],
+            interface_work: budget.work_given,
+            interface_impulse: budget.impulse_given[..dim].to_vec(),
             boundary_mass_out: totals.outflow_mass,
             boundary_energy_out: totals.outflow_energy,
             links_broken: 0,
@@ -110,27 +146,56 @@ impl NodeModel for RealFluid {
     }
 
     fn checkpoint(&self) -> Vec<u8> {
-        self.solver.to_checkpoint()
+        let budget = self.embedded.as_ref().map(Embedded::budget);
+        protocol::codec::encode_blob(&(self.solver.to_checkpoint(), budget))
     }
 
     fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
-        self.solver.restore_checkpoint(bytes)
+        let (solver, budget): (Vec<u8>, Option<InterfaceBudget>) =
+            protocol::codec::decode_blob(bytes)?;
+        self.solver.restore_checkpoint(&solver)?;
+        // The surface comes next (`set_initial_surface`), which rebuilds the geometry.
+        self.pending_budget = budget;
+        if let (Some(e), Some(b)) = (&mut self.embedded, budget) {
+            e.set_budget(b);
+        }
+        Ok(())
     }
 
     fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
         let grid = self.solver.grid();
         let state = self.solver.state();
+        let alpha = self.embedded.as_ref().map(Embedded::fluid_fraction);
         if self.formats.contains(&OutputFormat::Csv) {
             let mut w =
                 std::io::BufWriter::new(std::fs::File::create(out.join(format!("fluid_{k}.csv")))?);
-            crate::output::write_fluid_csv(&mut w, grid, state, self.gamma, None)?;
+            crate::output::write_fluid_csv(&mut w, grid, state, self.gamma, alpha.as_deref())?;
             w.flush()?;
+            if let Some(e) = &self.embedded {
+                let mut w = std::io::BufWriter::new(std::fs::File::create(
+                    out.join(format!("surface_{k}.csv")),
+                )?);
+                crate::output::write_surface_csv(&mut w, e.surface())?;
+                w.flush()?;
+                let mut w = std::io::BufWriter::new(std::fs::File::create(
+                    out.join(format!("loads_{k}.csv")),
+                )?);
+                crate::output::write_loads_csv(&mut w, grid.dim, e.last_loads())?;
+                w.flush()?;
+            }
         }
         if self.formats.contains(&OutputFormat::Vtk) {
             let mut w =
                 std::io::BufWriter::new(std::fs::File::create(out.join(format!("fluid_{k}.vtk")))?);
             let title = format!("{} fluid output {k} t = {t:e}", self.name);
-            crate::output::write_fluid_vtk(&mut w, grid, state, self.gamma, None, &title)?;
+            crate::output::write_fluid_vtk(
+                &mut w,
+                grid,
+                state,
+                self.gamma,
+                alpha.as_deref(),
+                &title,
+            )?;
             w.flush()?;
         }
         Ok(())
@@ -166,35 +231,72 @@ impl FluidModel for RealFluid {
         self.solver.grid().dim
     }
 
-    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
+        if !self.coupled {
+            return Ok(());
+        }
+        let frame = SolidFrame::from_state(state)?;
+        match &mut self.embedded {
+            Some(e) => e.set_surface(frame)?,
+            None => self.embedded = Some(Embedded::new(&self.solver, frame)?),
+        }
+        if let (Some(e), Some(b)) = (&mut self.embedded, self.pending_budget.take()) {
+            e.set_budget(b);
+        }
         Ok(())
     }
 
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads {
-        // Unreachable: a coupled scene is refused in `from_scene`.
-        InterfaceLoads {
-            stamp: plan.stamp,
-            dim: state.dim,
-            force: vec![0.0; state.position.len()],
-            torque: vec![0.0; state.n_particles() * protocol::wire::n_rot(state.dim)],
+    fn predict(&mut self, plan: &StepPlan) -> Result<(), String> {
+        if !self.coupled {
+            return Ok(());
+        }
+        self.check_dt(plan)?;
+        let step = plan.stamp.step;
+        let solver = &mut self.solver;
+        let embedded = self
+            .embedded
+            .as_mut()
+            .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))?;
+        let report = embedded.predict(solver, plan.dt);
+        if report.ok() {
+            Ok(())
+        } else {
+            Err(describe(&report.troubles, step))
         }
     }
 
-    fn correct(&mut self, plan: &StepPlan, _state: Option<&SolidState>) -> Result<(), String> {
-        let allowed = self.solver.max_dt();
-        // NOTE: the coupler's step is the minimum of the proposals, so it can only exceed the
-        // CFL step through a bug or a tampered message; refuse rather than run unstable.
-        if plan.dt > allowed * (1.0 + 1e-12) {
-            return Err(format!(
-                "step {}: CFL violated: dt = {:e} exceeds the CFL step {:e}",
-                plan.stamp.step, plan.dt, allowed
-            ));
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
+        let step = plan.stamp.step;
+        let frame = SolidFrame::from_state(state)?;
+        let loads = self
+            .embedded(step)?
+            .loads(&frame)
+            .map_err(|e| format!("step {step}: {e}"))?;
+        Ok(InterfaceLoads {
+            stamp: plan.stamp,
+            dim: state.dim,
+            force: loads.force,
+            torque: loads.torque,
+        })
+    }
+
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+        let step = plan.stamp.step;
+        if let Some(state) = state {
+            let frame = SolidFrame::from_state(state)?;
+            let solver = &mut self.solver;
+            let embedded = self.embedded.as_mut().ok_or_else(|| {
+                format!("step {step}: a coupled step before the initial wet surface")
+            })?;
+            embedded.correct(solver, plan.dt, frame, step)?;
+            return Ok(());
         }
+        self.check_dt(plan)?;
         let report = self.solver.advance(plan.dt);
         if report.ok() {
             Ok(())
         } else {
-            Err(describe(&report.troubles, plan.stamp.step))
+            Err(describe(&report.troubles, step))
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod cutcell;
 #[cfg(feature = "node")]
 pub mod cutcell_cmd;
 pub mod double;
+pub mod embedded;
 pub mod exchange;
 pub mod fv;
 pub mod grid;

@@ -15,12 +15,15 @@ use protocol::wire::{
 pub trait FluidModel: NodeModel {
     /// Spatial dimension.
     fn dim(&self) -> usize;
-    /// Receives the wet surface at `t^0` (coupled runs), before the first step.
-    fn set_initial_surface(&mut self, _state: &SolidState) {}
+    /// Receives the accepted wet surface and kinematics at the start of a step (coupled runs):
+    /// `F^0` before the first step, or the checkpoint's surface after a restore.
+    fn set_initial_surface(&mut self, _state: &SolidState) -> Result<(), String> {
+        Ok(())
+    }
     /// Start of a step: fluxes over the grid ignoring the solid, and the directional pressures.
     fn predict(&mut self, plan: &StepPlan) -> Result<(), String>;
     /// Force and torque per particle on a trial solid state (eq. 23–25 of paper 003).
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> InterfaceLoads;
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String>;
     /// End of a step: the final solid state (`None` without a solid) is applied.
     fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String>;
 }
@@ -63,6 +66,9 @@ impl NodeModel for FluidSide<'_> {
             Some(_) => return Err("checkpoint holds a bad surface".into()),
             None => None,
         };
+        if let Some(s) = &self.surface {
+            self.model.set_initial_surface(s)?;
+        }
         Ok(())
     }
 
@@ -104,7 +110,10 @@ impl FluidSide<'_> {
             .expect("a surface precedes every coupled step");
         let mut iteration = 0;
         loop {
-            let mut loads = self.model.loads(plan, &trial);
+            let mut loads = self
+                .model
+                .loads(plan, &trial)
+                .map_err(|e| fail(link, Stamp { step, iteration }, e))?;
             loads.stamp = Stamp { step, iteration };
             link.send(&Message::InterfaceLoads(loads))?;
             trial = match link.recv()? {
@@ -146,7 +155,9 @@ pub fn run(
         cfg,
         |side, link| match link.recv()? {
             Message::SolidState(s) => {
-                side.model.set_initial_surface(&s);
+                side.model
+                    .set_initial_surface(&s)
+                    .map_err(|e| fail(link, s.stamp, e))?;
                 side.surface = Some(s);
                 Ok(())
             }

@@ -3,6 +3,7 @@
 
 use std::io::Write;
 
+use crate::embedded::{Loads, SolidFrame};
 use crate::fv::FluidState;
 use crate::grid::Grid;
 
@@ -29,6 +30,10 @@ pub fn write_fluid_csv(
         let x = grid.cell_center(grid.ijk(idx));
         let (rho, vel, p) = state.primitive(idx, gamma);
         let mut line = String::with_capacity(128);
+        if alpha.is_some_and(|a| a[idx] <= 0.0) {
+            // Covered by the solid: no fluid (the state there is a ghost).
+            continue;
+        }
         for xa in &x[..dim] {
             line.push_str(&format!("{xa:.9e},"));
         }
@@ -93,6 +98,54 @@ pub fn write_fluid_vtk(
     writeln!(w, "VECTORS velocity double")?;
     for (_, v, _) in &prims {
         writeln!(w, "{:.12e} {:.12e} {:.12e}", v[0], v[1], v[2])?;
+    }
+    Ok(())
+}
+
+/// Writes the wet surface as the fluid used it, one row per element: `element,particle,wet`
+/// then the coordinates of its vertices (`x0,y0,x1,y1` in 2-D, three vertices in 3-D) \[m\].
+pub fn write_surface_csv(w: &mut impl Write, surface: &SolidFrame) -> std::io::Result<()> {
+    let d = surface.dim;
+    let axes = ["x", "y", "z"];
+    let mut header = vec!["element".to_string(), "particle".into(), "wet".into()];
+    for v in 0..d {
+        for a in &axes[..d] {
+            header.push(format!("{a}{v}"));
+        }
+    }
+    writeln!(w, "{}", header.join(","))?;
+    for (e, nodes) in surface.elements.chunks_exact(d).enumerate() {
+        let mut line = format!(
+            "{e},{},{}",
+            surface.element_particle[e],
+            u8::from(surface.wet[e])
+        );
+        for &v in nodes {
+            for x in &surface.vertices[v as usize * d..(v as usize + 1) * d] {
+                line.push_str(&format!(",{x:.12e}"));
+            }
+        }
+        writeln!(w, "{line}")?;
+    }
+    Ok(())
+}
+
+/// Writes the fluid loads of the last step per particle: `particle,fx,fy[,fz],m` (2-D, torque
+/// about z) or `...,mx,my,mz` (3-D) [N, N m; 2-D per unit depth].
+pub fn write_loads_csv(w: &mut impl Write, dim: usize, loads: &Loads) -> std::io::Result<()> {
+    let header = if dim == 2 {
+        "particle,fx,fy,m"
+    } else {
+        "particle,fx,fy,fz,mx,my,mz"
+    };
+    writeln!(w, "{header}")?;
+    let nr = if dim == 2 { 1 } else { 3 };
+    for (p, f) in loads.force.chunks_exact(dim).enumerate() {
+        let mut line = p.to_string();
+        for x in f.iter().chain(&loads.torque[p * nr..(p + 1) * nr]) {
+            line.push_str(&format!(",{x:.12e}"));
+        }
+        writeln!(w, "{line}")?;
     }
     Ok(())
 }

@@ -77,5 +77,8 @@ pub mod sweep;
 mod tests;
 
 pub use line::FluxKind;
-pub use solver::{FluidSolver, StepReport, Totals, Trouble, TroubleKind, sweep_order};
+pub use solver::{
+    FluidSolver, GhostFill, SplitHooks, StepReport, Totals, Trouble, TroubleKind, sweep_order,
+};
+pub use sweep::FaceTap;
 pub use state::{BoundaryKind, FluidParams, FluidState, from_scene};

@@ -10,7 +10,7 @@ use protocol::scene::FluidConfig;
 use crate::fv::euler::{NQ, Primitive, sound_speed};
 use crate::fv::line::{FluxKind, LineScratch, state_ok};
 use crate::fv::state::{FluidParams, FluidState, from_scene};
-use crate::fv::sweep::{PencilOut, pencil_to_cells, sweep_axis};
+use crate::fv::sweep::{FaceTap, PencilOut, Pencils, pencil_to_cells, sweep_axis};
 use crate::grid::Grid;
 
 /// Cells per block of the fixed-order reductions (totals).
@@ -102,6 +102,36 @@ impl StepReport {
     pub fn ok(&self) -> bool {
         self.troubles.is_empty()
     }
+}
+
+/// A ghost state written into a cell the solid covers before a sweep: the state of a fluid cell
+/// mirrored about the wall along the sweep axis, relative to the wall (paper 003 §2.3, numerics
+/// §2.6: `ρ, p` and the tangential velocity kept, `u_axis → 2 w_axis − u_axis`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GhostFill {
+    /// The covered cell written.
+    pub cell: u32,
+    /// The fluid cell mirrored into it.
+    pub mirror_of: u32,
+    /// Wall velocity along the sweep axis [m/s].
+    pub wall_velocity: f64,
+}
+
+/// What a coupled step asks of the split sweeps besides the update (paper 003 §3.4 step 1):
+/// ghost states in the covered cells before each sweep, the directional pressures `p̄` of the
+/// cells near the wet surface and the fluxes of their faces. Only these cells and faces are
+/// kept, not the whole grid.
+#[derive(Clone, Debug, Default)]
+pub struct SplitHooks {
+    /// Per axis: the ghost states written before the sweep along it, in order.
+    pub ghosts: [Vec<GhostFill>; 3],
+    /// Cells whose `p̄` is recorded, ascending.
+    pub pressure_cells: Vec<u32>,
+    /// Output: `p̄_axis` \[Pa\] of `pressure_cells[k]` in `pressures[axis][k]`: the pressure of
+    /// the state the sweep along `axis` starts from.
+    pub pressures: [Vec<f64>; 3],
+    /// Per axis: the faces whose fluxes are kept.
+    pub taps: [FaceTap; 3],
 }
 
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
@@ -336,6 +366,30 @@ impl FluidSolver {
     /// the order [`sweep_order`] gives for the current step number. Never panics on numerical
     /// trouble: it is listed in the report and the caller stops the run.
     pub fn advance(&mut self, dt: f64) -> StepReport {
+        let mut report = self.sweeps(dt, None);
+        report.totals = self.totals();
+        report
+    }
+
+    /// The predict of a coupled step (paper 003 §3.4 step 1): the split sweeps of
+    /// [`FluidSolver::advance`] over the whole grid, with the ghost states, pressures and face
+    /// fluxes `hooks` asks for. Cells for which `covered` is true hold ghost states and are not
+    /// checked. The report's totals are left empty: the embedded update corrects the cells near
+    /// the solid afterwards, and its totals weigh cells by their fluid fraction.
+    pub fn predict(
+        &mut self,
+        dt: f64,
+        hooks: &mut SplitHooks,
+        covered: &dyn Fn(usize) -> bool,
+    ) -> StepReport {
+        self.sweeps(dt, Some((hooks, covered)))
+    }
+
+    fn sweeps(
+        &mut self,
+        dt: f64,
+        mut hooks: Option<(&mut SplitHooks, &dyn Fn(usize) -> bool)>,
+    ) -> StepReport {
         let order = sweep_order(self.grid.dim, self.step);
         let mut report = StepReport {
             step: self.step,
@@ -363,12 +417,17 @@ impl FluidSolver {
         self.dt_cache = OnceLock::new();
         for &axis in &order {
             self.record_pressures(axis);
+            if let Some((h, _)) = hooks.as_mut() {
+                self.apply_ghosts(axis, &h.ghosts[axis]);
+                self.record_pressures_at(&h.pressure_cells, &mut h.pressures[axis]);
+            }
             let grid = &self.grid;
             let params = &self.params;
             let (u, buffer) = (&self.state.u, &mut self.buffer);
             let (scratch, pencil_out) = (&self.scratch, &mut self.pencil_out);
+            let tap = hooks.as_mut().map(|(h, _)| &mut h.taps[axis]);
             self.pool.install(|| {
-                sweep_axis(grid, params, axis, dt, u, buffer, scratch, pencil_out);
+                sweep_axis(grid, params, axis, dt, u, buffer, scratch, pencil_out, tap);
             });
             if axis == 0 {
                 std::mem::swap(&mut self.state.u, &mut self.buffer);
@@ -388,7 +447,13 @@ impl FluidSolver {
                 if let Some(idx) = rep.trouble
                     && report.troubles.len() < MAX_TROUBLES
                 {
-                    report.troubles.push(self.trouble_at(idx, axis));
+                    let found = match &hooks {
+                        Some((_, covered)) => self.first_checked_trouble(axis, idx, *covered),
+                        None => Some(idx),
+                    };
+                    if let Some(idx) = found {
+                        report.troubles.push(self.trouble_at(idx, axis));
+                    }
                 }
             }
         }
@@ -398,8 +463,63 @@ impl FluidSolver {
         self.step += 1;
         self.time += dt;
         report.time = self.time;
-        report.totals = self.totals();
         report
+    }
+
+    /// The first troubled cell of the pencil through `idx` along `axis` that is not covered
+    /// (`idx` itself when it is not).
+    fn first_checked_trouble(
+        &self,
+        axis: usize,
+        idx: usize,
+        covered: &dyn Fn(usize) -> bool,
+    ) -> Option<usize> {
+        if !covered(idx) {
+            return Some(idx);
+        }
+        let pencils = Pencils::new(&self.grid, axis);
+        let base = idx - self.grid.ijk(idx)[axis] * pencils.stride;
+        let gamma = self.params.gamma;
+        (0..pencils.n)
+            .map(|m| base + m * pencils.stride)
+            .filter(|&c| !covered(c))
+            .find(|&c| {
+                let full = to_full(self.state.cell(c), self.grid.dim);
+                !state_ok(&full, gamma, self.params.vacuum_rho, self.params.vacuum_p)
+            })
+    }
+
+    /// Writes the ghost states of `fills` (see [`GhostFill`]) for a sweep along `axis`.
+    pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
+        let nvar = self.state.nvar;
+        let dim = self.grid.dim;
+        for g in fills {
+            let src = g.mirror_of as usize * nvar;
+            let mut cell = [0.0; NQ];
+            cell[..nvar].copy_from_slice(&self.state.u[src..src + nvar]);
+            let rho = cell[0];
+            let m = cell[1 + axis];
+            if rho > 0.0 {
+                let mirrored = rho * 2.0 * g.wall_velocity - m;
+                cell[1 + axis] = mirrored;
+                cell[dim + 1] += 0.5 * (mirrored * mirrored - m * m) / rho;
+            } else {
+                cell[1 + axis] = -m;
+            }
+            let dst = g.cell as usize * nvar;
+            self.state.u[dst..dst + nvar].copy_from_slice(&cell[..nvar]);
+        }
+    }
+
+    fn record_pressures_at(&self, cells: &[u32], out: &mut Vec<f64>) {
+        let nvar = self.state.nvar;
+        let dim = self.grid.dim;
+        let gamma = self.params.gamma;
+        out.clear();
+        out.extend(cells.iter().map(|&c| {
+            let c = c as usize * nvar;
+            cell_primitive(&self.state.u[c..c + nvar], dim, gamma).p
+        }));
     }
 
     /// Advances with CFL-limited steps until `t_end` \[s\] (the last step is shortened to land on
@@ -463,6 +583,18 @@ impl FluidSolver {
     /// Conserved totals, summed in a fixed order (blocks of cells, then blocks in order), so
     /// the result does not depend on the thread count.
     pub fn totals(&self) -> Totals {
+        self.totals_by(None)
+    }
+
+    /// Conserved totals of the fluid around an embedded solid: each cell weighted by its fluid
+    /// fraction `1 − Λ` (`solid_fraction` one value per cell; cells with Λ = 1 hold ghost states
+    /// and count for nothing). Same fixed-order sums as [`FluidSolver::totals`].
+    pub fn totals_with_solid(&self, solid_fraction: &[f64]) -> Totals {
+        assert_eq!(solid_fraction.len(), self.grid.n_cells(), "one Λ per cell");
+        self.totals_by(Some(solid_fraction))
+    }
+
+    fn totals_by(&self, solid_fraction: Option<&[f64]>) -> Totals {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         // NOTE: compensated sums per block and over blocks, so that the totals are
@@ -472,13 +604,30 @@ impl FluidSolver {
             partial
                 .par_iter_mut()
                 .zip(self.state.u.par_chunks(BLOCK_CELLS * nvar))
-                .for_each(|(acc, cells)| {
-                    for cell in cells.chunks_exact(nvar) {
-                        acc[0].add(cell[0]);
-                        for a in 0..dim {
-                            acc[1 + a].add(cell[1 + a]);
+                .enumerate()
+                .for_each(|(block, (acc, cells))| match solid_fraction {
+                    None => {
+                        for cell in cells.chunks_exact(nvar) {
+                            acc[0].add(cell[0]);
+                            for a in 0..dim {
+                                acc[1 + a].add(cell[1 + a]);
+                            }
+                            acc[4].add(cell[dim + 1]);
                         }
-                        acc[4].add(cell[dim + 1]);
+                    }
+                    Some(lambda) => {
+                        let lambda = &lambda[block * BLOCK_CELLS..];
+                        for (cell, l) in cells.chunks_exact(nvar).zip(lambda) {
+                            let alpha = 1.0 - l;
+                            if alpha <= 0.0 {
+                                continue;
+                            }
+                            acc[0].add(alpha * cell[0]);
+                            for a in 0..dim {
+                                acc[1 + a].add(alpha * cell[1 + a]);
+                            }
+                            acc[4].add(alpha * cell[dim + 1]);
+                        }
                     }
                 });
         });

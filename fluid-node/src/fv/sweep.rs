@@ -141,8 +141,54 @@ fn gather(
     }
 }
 
+/// Faces of one sweep axis whose fluxes a coupled step keeps (paper 003 §3.4 step 1: the fluxes
+/// of the faces near the wet surface, not of the whole grid).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FaceTap {
+    /// `positions[pencil_offsets[p]..pencil_offsets[p + 1]]` are the faces kept in pencil `p`
+    /// (`pencil_offsets.len()` = pencils + 1).
+    pub pencil_offsets: Vec<u32>,
+    /// Face positions along the pencil, `0..=n` (face `m` is the low face of cell `m`).
+    pub positions: Vec<u32>,
+    /// Output: the flux of each kept face in the physical order `(mass, p_x, p_y, p_z,
+    /// energy)`, per unit area and time; filled by [`sweep_axis`].
+    pub flux: Vec<State>,
+}
+
+impl FaceTap {
+    /// An empty tap for `count` pencils.
+    pub fn clear(&mut self, count: usize) {
+        self.pencil_offsets.clear();
+        self.pencil_offsets.resize(count + 1, 0);
+        self.positions.clear();
+        self.flux.clear();
+    }
+}
+
+/// Splits the kept fluxes into one slice per block of [`BLOCK_PENCILS`] pencils, each with the
+/// offsets of its pencils (empty without a tap), so that blocks fill them in parallel.
+type TapBlock<'a> = (&'a [u32], &'a mut [State]);
+
+fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Vec<TapBlock<'a>> {
+    let n_blocks = count.div_ceil(BLOCK_PENCILS);
+    if offsets.is_empty() {
+        return (0..n_blocks).map(|_| (&[][..], &mut [][..])).collect();
+    }
+    debug_assert_eq!(offsets.len(), count + 1);
+    let mut rest = flux;
+    let mut blocks = Vec::with_capacity(n_blocks);
+    for b in 0..n_blocks {
+        let lo = offsets[b * BLOCK_PENCILS] as usize;
+        let hi = offsets[((b + 1) * BLOCK_PENCILS).min(count)] as usize;
+        let (mine, tail) = rest.split_at_mut(hi - lo);
+        rest = tail;
+        blocks.push((&offsets[b * BLOCK_PENCILS..], mine));
+    }
+    blocks
+}
+
 /// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states pencil-major into
-/// `out` and one [`PencilOut`] per pencil.
+/// `out`, one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names.
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_axis(
     grid: &Grid,
@@ -153,6 +199,7 @@ pub fn sweep_axis(
     out: &mut [f64],
     scratch: &[Mutex<LineScratch>],
     pencil_out: &mut [PencilOut],
+    tap: Option<&mut FaceTap>,
 ) {
     let dim = grid.dim;
     let nvar = dim + 2;
@@ -177,10 +224,19 @@ pub fn sweep_axis(
         bc[1] != BoundaryKind::Periodic,
     ];
     let pencil_out = &mut pencil_out[..pencils.count];
+    let (offsets, positions, flux): (&[u32], Option<&[u32]>, &mut [State]) = match tap {
+        Some(t) => {
+            t.flux.resize(t.positions.len(), [0.0; NQ]);
+            (&t.pencil_offsets, Some(&t.positions), &mut t.flux)
+        }
+        None => (&[], None, &mut []),
+    };
+    let mut taps = tap_blocks(offsets, flux, pencils.count);
     out.par_chunks_mut(BLOCK_PENCILS * n * nvar)
         .zip(pencil_out.par_chunks_mut(BLOCK_PENCILS))
+        .zip(taps.par_iter_mut())
         .enumerate()
-        .for_each(|(block, (out_block, rep_block))| {
+        .for_each(|(block, ((out_block, rep_block), (offsets, kept)))| {
             let thread = rayon::current_thread_index().unwrap_or(0) % scratch.len();
             let mut guard = scratch[thread]
                 .lock()
@@ -195,6 +251,20 @@ pub fn sweep_axis(
                 let base = pencils.base(p);
                 for m in 0..n {
                     from_local(&line.new[m], dim, &fr, &mut dst[m * nvar..(m + 1) * nvar]);
+                }
+                if let Some(positions) = positions {
+                    let (lo, hi) = (offsets[k] as usize, offsets[k + 1] as usize);
+                    let first = offsets[0] as usize;
+                    for slot in lo..hi {
+                        let f = &line.face[positions[slot] as usize];
+                        let phys = &mut kept[slot - first];
+                        *phys = [f[0], 0.0, 0.0, 0.0, f[4]];
+                        for q in 0..3 {
+                            if let Some(a) = fr[q] {
+                                phys[1 + a] = f[1 + q];
+                            }
+                        }
+                    }
                 }
                 let trouble = stats.first_bad.map(|m| base + m as usize * pencils.stride);
                 let mut outflow = [0.0; NQ];

@@ -1,0 +1,1017 @@
+//! The fluid around an embedded, moving and deforming solid (no IO, no clock): the conservative
+//! cut-cell method of paper 003 (§2.3 eq. 12–13, §3.3 eq. 19–25, §3.4 steps 1–7) on top of the
+//! finite-volume core ([`crate::fv`]) and the exact geometry ([`crate::cutcell`]).
+//!
+//! One coupling step, from the fluid's side:
+//!
+//! 1. [`Embedded::predict`]: the split sweeps over the whole grid, ignoring the solid except for
+//!    the ghost states written into the covered cells before each sweep (mirror of the fluid
+//!    along the sweep line, relative to the wall velocity, `ng` cells deep). Kept: `U^n`, the
+//!    directional pressures `p̄_x, p̄_y, p̄_z` and the face fluxes, of the cells near the wet
+//!    surface only (the cut cells of `F^n` dilated by [`NEAR_RADIUS`] cells).
+//! 2. [`Embedded::loads`], once per fixed-point iteration: force and torque per particle from
+//!    `p̄` over the wet sub-faces of the trial surface (eq. 23–25), torques about the trial
+//!    centres of mass. Only the geometry of the trial surface is computed.
+//! 3. [`Embedded::correct`] with the accepted surface `F^{n+1}`: in every cell near the solid,
+//!    eq. (12) `(1 − Λ^{n+1}) U^{n+1} = (1 − Λ^{n+1}) U^n + Δt Φ_fluid + Δt Φ_solid + ΔU` with
+//!    the fluid fluxes weighted by `1 − λ^{n+1}` (eq. 13), the solid flux (eq. 26) with the
+//!    sub-face velocity `V_f = V^{n+1/2} + Ω^{n+1/2} × (X_f − X^{n+1})`, and the amounts swept
+//!    by the prisms of the sub-faces of `F^{n+1}` back to `F^n` (paper 000 eq. 12); then the
+//!    conservative mixing of small cells (`Λ > 1/2`), of cells the solid uncovers and of covered
+//!    cells left with content (paper 000 §3.3, recursive). Away from the solid the predicted
+//!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
+//!
+//! Properties (tested in `fluid-node/tests/embedded_*.rs`): fluid mass, momentum and energy plus
+//! what crossed the interface are conserved to round-off (the swept volumes telescope, the
+//! face fluxes are shared); a uniform pressure gives no force on any cut cell and no velocity
+//! (identity 19–21); a uniform flow around a body translating with it stays uniform (the
+//! sub-face prisms give `Δt w·ν A` exactly).
+//!
+//! Readings chosen where the papers are silent:
+//! - `p̄` of a sub-face is the pressure of the cell holding it, from the state each sweep starts
+//!   with; ghost states make it the mirrored fluid pressure in a covered cell.
+//! - Ghost states mirror along the sweep line (numerics §2.6), which is exact for walls normal
+//!   to the axis; the wall velocity is the area-averaged velocity of the sub-faces of the cut
+//!   cell beside the covered run.
+//! - Mixing target (paper 000 §3.3): among the neighbours (faces, edges and corners) with
+//!   fluid fraction ≥ 1/2, the one best aligned with the wall normal `Σ A ν` of the cell; if
+//!   there is none, the face neighbour with the largest aperture, recursively, until a large
+//!   cell is found or the walk cycles (then the smallest cell index of the cycle).
+
+use protocol::wire::{SolidState, n_rot};
+use serde::{Deserialize, Serialize};
+
+use crate::cutcell::{CutGeometry, Surface, compute, face_index};
+mod stub;
+use stub::{SubfaceSwept, subface_swept_volumes};
+use crate::fv::euler::NQ;
+use crate::fv::line::state_ok;
+use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport};
+use crate::grid::Grid;
+
+/// Cells within this Chebyshev distance of a cut cell of `F^n` keep their `U^n`, `p̄` and face
+/// fluxes: the surface may move one cell per step, and a trial of the fixed point a little more.
+pub const NEAR_RADIUS: usize = 2;
+
+/// Fluid fraction under which a cut cell is mixed with a neighbour (paper 003 §2.3: Λ > 0.5).
+pub const MIX_BELOW: f64 = 0.5;
+
+/// A cell is covered (a ghost cell) when its solid fraction is at least `1 − COVERED_TOLERANCE`.
+pub const COVERED_TOLERANCE: f64 = 1e-12;
+
+/// The solid as the fluid sees it: particle kinematics and the wet surface (owned copy of the
+/// wire's [`SolidState`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SolidFrame {
+    /// Spatial dimension, 2 or 3.
+    pub dim: usize,
+    /// Centres of mass \[m\], `dim` per particle.
+    pub position: Vec<f64>,
+    /// Velocities [m/s] (mid-step `V^{n+1/2}` of the step that produced the frame), `dim` each.
+    pub velocity: Vec<f64>,
+    /// Angular velocities [rad/s] in the global frame, 1 (2-D) or 3 (3-D) per particle.
+    pub angular_velocity: Vec<f64>,
+    /// Surface vertices \[m\], `dim` each.
+    pub vertices: Vec<f64>,
+    /// Elements, `dim` vertex indices each (normals out of the solid).
+    pub elements: Vec<u32>,
+    /// Particle of each element.
+    pub element_particle: Vec<u32>,
+    /// Whether each element touches the fluid.
+    pub wet: Vec<bool>,
+}
+
+impl SolidFrame {
+    /// Copies the parts of a wire [`SolidState`] the fluid uses, checking their lengths.
+    pub fn from_state(s: &SolidState) -> Result<SolidFrame, String> {
+        let dim = s.dim as usize;
+        let n = s.n_particles();
+        let surface = &s.surface;
+        let ne = surface.n_elements();
+        if !(dim == 2 || dim == 3)
+            || surface.dim != s.dim
+            || s.velocity.len() != n * dim
+            || s.angular_velocity.len() != n * n_rot(s.dim)
+            || surface.vertices.len() % dim != 0
+            || surface.elements.len() != ne * dim
+            || surface.wet.len() != ne
+        {
+            return Err(format!(
+                "solid state of step {} is malformed: dim {} (surface {}), {} positions, {} velocities, {} angular velocities, {} vertex values, {} element indices for {} elements, {} wet flags",
+                s.stamp.step,
+                s.dim,
+                surface.dim,
+                s.position.len(),
+                s.velocity.len(),
+                s.angular_velocity.len(),
+                surface.vertices.len(),
+                surface.elements.len(),
+                ne,
+                surface.wet.len()
+            ));
+        }
+        if let Some(&p) = surface.element_particle.iter().find(|&&p| p as usize >= n) {
+            return Err(format!(
+                "solid state of step {}: an element belongs to particle {p}, there are {n}",
+                s.stamp.step
+            ));
+        }
+        let nv = (surface.vertices.len() / dim) as u32;
+        if let Some(&v) = surface.elements.iter().find(|&&v| v >= nv) {
+            return Err(format!(
+                "solid state of step {}: an element uses vertex {v}, there are {nv}",
+                s.stamp.step
+            ));
+        }
+        Ok(SolidFrame {
+            dim,
+            position: s.position.clone(),
+            velocity: s.velocity.clone(),
+            angular_velocity: s.angular_velocity.clone(),
+            vertices: surface.vertices.clone(),
+            elements: surface.elements.clone(),
+            element_particle: surface.element_particle.clone(),
+            wet: surface.wet.clone(),
+        })
+    }
+
+    /// The surface for the geometry.
+    pub fn surface(&self) -> Surface<'_> {
+        Surface {
+            dim: self.dim,
+            vertices: &self.vertices,
+            elements: &self.elements,
+            element_particle: &self.element_particle,
+        }
+    }
+
+    /// Number of particles.
+    pub fn n_particles(&self) -> usize {
+        self.position.len() / self.dim
+    }
+
+    /// Centre of mass of particle `p` (third coordinate 0 in 2-D).
+    pub fn center(&self, p: usize) -> [f64; 3] {
+        let mut x = [0.0; 3];
+        x[..self.dim].copy_from_slice(&self.position[p * self.dim..(p + 1) * self.dim]);
+        x
+    }
+
+    /// Velocity of the point `x` moving with particle `p`: `V + Ω × (x − X)`.
+    pub fn point_velocity(&self, p: usize, x: [f64; 3]) -> [f64; 3] {
+        let d = self.dim;
+        let c = self.center(p);
+        let r = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+        let mut v = [0.0; 3];
+        v[..d].copy_from_slice(&self.velocity[p * d..(p + 1) * d]);
+        if d == 2 {
+            let w = self.angular_velocity[p];
+            v[0] -= w * r[1];
+            v[1] += w * r[0];
+        } else {
+            let w = &self.angular_velocity[3 * p..3 * p + 3];
+            v[0] += w[1] * r[2] - w[2] * r[1];
+            v[1] += w[2] * r[0] - w[0] * r[2];
+            v[2] += w[0] * r[1] - w[1] * r[0];
+        }
+        v
+    }
+}
+
+/// Force and torque per particle on one trial surface (eq. 23–25 of paper 003).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Loads {
+    /// Force [N] (2-D: per unit depth), `dim` per particle.
+    pub force: Vec<f64>,
+    /// Torque about the particle's centre of mass [N m], 1 (2-D) or 3 (3-D) per particle.
+    pub torque: Vec<f64>,
+}
+
+/// What one [`Embedded::correct`] did (diagnostics).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CorrectReport {
+    /// Cells updated by eq. (12).
+    pub cut_cells: usize,
+    /// Cells mixed into a neighbour.
+    pub mixed_cells: usize,
+    /// Of those, cells the solid uncovered in this step.
+    pub uncovered_cells: usize,
+    /// Energy the fluid received through the interface in this step \[J\].
+    pub work_received: f64,
+}
+
+/// What the interface gave the fluid since the start (node-private checkpoint part).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InterfaceBudget {
+    /// Work the fluid gave the solid \[J\] (positive when the fluid lost energy).
+    pub work_given: f64,
+    /// Momentum the fluid gave the solid [kg m/s].
+    pub impulse_given: [f64; 3],
+}
+
+/// The fluid's side of the coupling, beside a [`FluidSolver`] on the same grid.
+pub struct Embedded {
+    grid: Grid,
+    ng: usize,
+    gamma: f64,
+    vacuum: (f64, f64),
+    current: SolidFrame,
+    geom: CutGeometry,
+    trial: CutGeometry,
+    swept: SubfaceSwept,
+    /// Cells near the wet surface of `F^n`, ascending.
+    near: Vec<u32>,
+    /// `slot + 1` of each cell in `near`, 0 elsewhere (reset sparsely).
+    slot_of: Vec<u32>,
+    /// `U^n` of the near cells, `nvar` each.
+    saved: Vec<f64>,
+    /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces, by face index.
+    face_slots: [Vec<(u32, u32)>; 3],
+    hooks: SplitHooks,
+    budget: InterfaceBudget,
+    /// Wall velocity per near cell holding sub-faces of `F^n` (area-weighted), else zero.
+    wall_velocity: Vec<[f64; 3]>,
+    /// Scratch of the correct: content `(1 − Λ) U` per near cell and classification.
+    content: Vec<[f64; NQ]>,
+    kind: Vec<CellKind>,
+    /// Loads of the accepted surface of the last step (outputs).
+    last_loads: Loads,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CellKind {
+    /// Not touched by the solid: the predicted state stands.
+    Predicted,
+    /// Updated by eq. (12) and large enough.
+    Updated,
+    /// Updated by eq. (12), then mixed into a neighbour.
+    Mixed,
+}
+
+impl Embedded {
+    /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
+    pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, String> {
+        let grid = solver.grid().clone();
+        if grid.dim != solid.dim {
+            return Err(format!(
+                "the fluid is {}-D and the solid {}-D",
+                grid.dim, solid.dim
+            ));
+        }
+        let params = solver.params();
+        let mut e = Embedded {
+            ng: params.ghost_cells(),
+            gamma: params.gamma,
+            vacuum: (params.vacuum_rho, params.vacuum_p),
+            slot_of: vec![0; grid.n_cells()],
+            grid,
+            current: SolidFrame::default(),
+            geom: CutGeometry::new(),
+            trial: CutGeometry::new(),
+            swept: SubfaceSwept::new(),
+            near: Vec::new(),
+            saved: Vec::new(),
+            face_slots: Default::default(),
+            hooks: SplitHooks::default(),
+            budget: InterfaceBudget::default(),
+            wall_velocity: Vec::new(),
+            content: Vec::new(),
+            kind: Vec::new(),
+            last_loads: Loads::default(),
+        };
+        e.set_surface(solid)?;
+        Ok(e)
+    }
+
+    /// Replaces the accepted surface and kinematics (start of a run, or after a restore).
+    pub fn set_surface(&mut self, solid: SolidFrame) -> Result<(), String> {
+        if solid.dim != self.grid.dim {
+            return Err(format!(
+                "a {}-D surface for a {}-D fluid",
+                solid.dim, self.grid.dim
+            ));
+        }
+        compute(&self.grid, &solid.surface(), &mut self.geom);
+        self.current = solid;
+        Ok(())
+    }
+
+    /// The accepted surface `F^n`.
+    pub fn surface(&self) -> &SolidFrame {
+        &self.current
+    }
+
+    /// Solid fraction Λ of every cell for the accepted surface.
+    pub fn solid_fraction(&self) -> &[f64] {
+        &self.geom.solid_fraction
+    }
+
+    /// Fluid fraction `1 − Λ` of every cell (outputs).
+    pub fn fluid_fraction(&self) -> Vec<f64> {
+        self.geom.solid_fraction.iter().map(|l| 1.0 - l).collect()
+    }
+
+    /// Geometry of the accepted surface.
+    pub fn geometry(&self) -> &CutGeometry {
+        &self.geom
+    }
+
+    /// Force and torque per particle that the fluid applied over the last step (on the
+    /// accepted surface `F^{n+1}`; zero before the first step).
+    pub fn last_loads(&self) -> &Loads {
+        &self.last_loads
+    }
+
+    /// What crossed the interface since the start.
+    pub fn budget(&self) -> InterfaceBudget {
+        self.budget
+    }
+
+    /// Restores the budget (checkpoint).
+    pub fn set_budget(&mut self, budget: InterfaceBudget) {
+        self.budget = budget;
+    }
+
+    /// Largest step that keeps every surface vertex from crossing more than one cell, at the
+    /// velocities of the accepted frame (DESIGN §3 step 1) \[s\]; infinite for a solid at rest.
+    pub fn one_cell_dt(&self) -> f64 {
+        let s = &self.current;
+        let d = s.dim;
+        let mut rate: f64 = 0.0;
+        for (e, nodes) in s.elements.chunks_exact(d).enumerate() {
+            let p = s.element_particle[e] as usize;
+            for &v in nodes {
+                let mut x = [0.0; 3];
+                x[..d].copy_from_slice(&s.vertices[v as usize * d..(v as usize + 1) * d]);
+                let w = s.point_velocity(p, x);
+                for a in 0..d {
+                    rate = rate.max(w[a].abs() / self.grid.dx[a]);
+                }
+            }
+        }
+        1.0 / rate
+    }
+
+    /// Fluid totals weighted by the fluid fraction of the accepted surface.
+    pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
+        solver.totals_with_solid(&self.geom.solid_fraction)
+    }
+
+    /// Step 1 of paper 003 §3.4: the split sweeps, keeping what the correct needs.
+    pub fn predict(&mut self, solver: &mut FluidSolver, dt: f64) -> StepReport {
+        self.prepare(solver);
+        let lambda = &self.geom.solid_fraction;
+        let covered = |c: usize| lambda[c] >= 1.0 - COVERED_TOLERANCE;
+        solver.predict(dt, &mut self.hooks, &covered)
+    }
+
+    /// Near cells, their faces, the ghost fills, and `U^n` (after the first sweep's ghosts).
+    fn prepare(&mut self, solver: &mut FluidSolver) {
+        let grid = &self.grid;
+        let dim = grid.dim;
+        for &c in &self.near {
+            self.slot_of[c as usize] = 0;
+        }
+        self.near.clear();
+        let r = NEAR_RADIUS as isize;
+        let span: Vec<[isize; 3]> = offsets(dim, r);
+        for &c in &self.geom.cut_cells {
+            let ijk = grid.ijk(c as usize);
+            for d in std::iter::once(&[0isize; 3]).chain(&span) {
+                if let Some(n) = shifted(grid, ijk, *d) {
+                    let n = grid.index(n[0], n[1], n[2]);
+                    if self.slot_of[n] == 0 {
+                        self.slot_of[n] = 1;
+                        self.near.push(n as u32);
+                    }
+                }
+            }
+        }
+        self.near.sort_unstable();
+        for (k, &c) in self.near.iter().enumerate() {
+            self.slot_of[c as usize] = k as u32 + 1;
+        }
+        // Wall velocity of the near cells that hold sub-faces.
+        self.wall_velocity.clear();
+        self.wall_velocity.resize(self.near.len(), [0.0; 3]);
+        let mut area = vec![0.0; self.near.len()];
+        for s in &self.geom.subfaces {
+            let k = self.slot_of[s.cell as usize] as usize - 1;
+            let w = self.current.point_velocity(s.particle as usize, s.centroid);
+            for a in 0..3 {
+                self.wall_velocity[k][a] += s.area * w[a];
+            }
+            area[k] += s.area;
+        }
+        for (w, a) in self.wall_velocity.iter_mut().zip(&area) {
+            if *a > 0.0 {
+                for x in w.iter_mut() {
+                    *x /= a;
+                }
+            }
+        }
+        // Taps: the faces of the near cells, per axis, grouped by pencil.
+        for axis in 0..dim {
+            let stride: usize = grid.cells[..axis].iter().product();
+            let n = grid.cells[axis];
+            let count = grid.n_cells() / n;
+            let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * self.near.len());
+            for &c in &self.near {
+                let c = c as usize;
+                let m = (c / stride) % n;
+                let p = c % stride + (c / (stride * n)) * stride;
+                keys.push((p as u32, m as u32));
+                keys.push((p as u32, m as u32 + 1));
+            }
+            keys.sort_unstable();
+            keys.dedup();
+            let tap = &mut self.hooks.taps[axis];
+            tap.clear(count);
+            for &(p, m) in &keys {
+                tap.pencil_offsets[p as usize + 1] += 1;
+                tap.positions.push(m);
+            }
+            for p in 0..count {
+                tap.pencil_offsets[p + 1] += tap.pencil_offsets[p];
+            }
+            let slots = &mut self.face_slots[axis];
+            slots.clear();
+            for (slot, &(p, m)) in keys.iter().enumerate() {
+                let p = p as usize;
+                let base = p % stride + (p / stride) * stride * n;
+                let mut ijk = grid.ijk(base);
+                ijk[axis] = m as usize;
+                slots.push((face_index(grid, axis, ijk) as u32, slot as u32));
+            }
+            slots.sort_unstable();
+        }
+        // Ghost fills per axis.
+        for axis in 0..3 {
+            self.hooks.ghosts[axis].clear();
+        }
+        for axis in 0..dim {
+            self.ghost_fills(axis);
+        }
+        self.hooks.pressure_cells.clone_from(&self.near);
+        // U^n of the near cells, with the ghosts of the first sweep in the covered ones.
+        let first = crate::fv::sweep_order(dim, solver.steps())[0];
+        solver.apply_ghosts(first, &self.hooks.ghosts[first]);
+        let nvar = dim + 2;
+        let u = &solver.state().u;
+        self.saved.clear();
+        for &c in &self.near {
+            let c = c as usize * nvar;
+            self.saved.extend_from_slice(&u[c..c + nvar]);
+        }
+    }
+
+    fn ghost_fills(&mut self, axis: usize) {
+        let grid = &self.grid;
+        let lambda = &self.geom.solid_fraction;
+        let n = grid.cells[axis] as isize;
+        let ng = self.ng as isize;
+        let fills = &mut self.hooks.ghosts[axis];
+        for &c in &self.near {
+            let c = c as usize;
+            if !(lambda[c] >= 1.0 - COVERED_TOLERANCE) {
+                continue;
+            }
+            let ijk = grid.ijk(c);
+            let at = |m: isize| -> Option<usize> {
+                (0..n).contains(&m).then(|| {
+                    let mut q = ijk;
+                    q[axis] = m as usize;
+                    grid.index(q[0], q[1], q[2])
+                })
+            };
+            let is_covered = |m: isize| at(m).is_some_and(|q| lambda[q] >= 1.0 - COVERED_TOLERANCE);
+            let m0 = ijk[axis] as isize;
+            for dir in [1isize, -1] {
+                // `c` starts a covered run seen from the fluid cell at `m0 − dir`.
+                let Some(fluid) = at(m0 - dir) else { continue };
+                if is_covered(m0 - dir) {
+                    continue;
+                }
+                let mut len = 0;
+                while len < 2 * ng && is_covered(m0 + dir * len) {
+                    len += 1;
+                }
+                let closed = len < 2 * ng && at(m0 + dir * len).is_some();
+                let count = if closed {
+                    if dir == 1 { (len + 1) / 2 } else { len / 2 }
+                } else {
+                    len.min(ng)
+                }
+                .min(ng);
+                let wall = {
+                    let k = self.slot_of[fluid] as usize;
+                    let kc = self.slot_of[c] as usize;
+                    let w = if k > 0 && self.wall_velocity[k - 1] != [0.0; 3] {
+                        self.wall_velocity[k - 1]
+                    } else if kc > 0 {
+                        self.wall_velocity[kc - 1]
+                    } else {
+                        [0.0; 3]
+                    };
+                    w[axis]
+                };
+                let mut src = fluid;
+                for m in 0..count {
+                    let dst = at(m0 + dir * m).expect("inside the run");
+                    if let Some(s) = at(m0 - dir * (m + 1))
+                        && !is_covered(m0 - dir * (m + 1))
+                    {
+                        src = s;
+                    }
+                    fills.push(GhostFill {
+                        cell: dst as u32,
+                        mirror_of: src as u32,
+                        wall_velocity: wall,
+                    });
+                }
+            }
+        }
+    }
+
+    fn pressure_of(&self, cell: u32, axis: usize) -> Option<f64> {
+        let k = self.slot_of[cell as usize];
+        (k > 0).then(|| self.hooks.pressures[axis][k as usize - 1])
+    }
+
+    fn outside_near(&self, what: &str, cell: u32) -> String {
+        format!(
+            "{what} reaches cell {:?} at {:?}, more than {NEAR_RADIUS} cells from the wet surface at the start of the step (the solid moved too far in one step)",
+            self.grid.ijk(cell as usize),
+            self.grid.cell_center(self.grid.ijk(cell as usize))
+        )
+    }
+
+    /// Force and torque per particle from `p̄` over the wet sub-faces of a trial surface
+    /// (eq. 23–25 of paper 003; torques about the trial centres of mass).
+    pub fn loads(&mut self, trial: &SolidFrame) -> Result<Loads, String> {
+        let d = self.grid.dim;
+        let nr = if d == 2 { 1 } else { 3 };
+        let np = trial.n_particles();
+        compute(&self.grid, &trial.surface(), &mut self.trial);
+        let mut loads = Loads {
+            force: vec![0.0; np * d],
+            torque: vec![0.0; np * nr],
+        };
+        for s in &self.trial.subfaces {
+            if !trial.wet[s.element as usize] {
+                continue;
+            }
+            let mut f = [0.0; 3];
+            for a in 0..d {
+                let p = self
+                    .pressure_of(s.cell, a)
+                    .ok_or_else(|| self.outside_near("the trial wet surface", s.cell))?;
+                f[a] = -p * s.normal[a] * s.area;
+            }
+            let p = s.particle as usize;
+            for a in 0..d {
+                loads.force[p * d + a] += f[a];
+            }
+            let x = trial.center(p);
+            let r = [s.centroid[0] - x[0], s.centroid[1] - x[1], s.centroid[2] - x[2]];
+            if d == 2 {
+                loads.torque[p] += r[0] * f[1] - r[1] * f[0];
+            } else {
+                loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
+                loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
+                loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
+            }
+        }
+        Ok(loads)
+    }
+
+    fn face_flux(&self, axis: usize, face: usize) -> Option<&[f64; NQ]> {
+        let slots = &self.face_slots[axis];
+        let k = slots.binary_search_by_key(&(face as u32), |e| e.0).ok()?;
+        Some(&self.hooks.taps[axis].flux[slots[k].1 as usize])
+    }
+
+    /// Steps 6–7 of paper 003 §3.4 with the accepted surface and kinematics `accepted`
+    /// (`F^{n+1}`, `X^{n+1}`, `V^{n+1/2}`, `Ω^{n+1/2}`), after [`Embedded::predict`] with the
+    /// same `dt`. On success the accepted frame becomes the start of the next step.
+    pub fn correct(
+        &mut self,
+        solver: &mut FluidSolver,
+        dt: f64,
+        accepted: SolidFrame,
+        step: u64,
+    ) -> Result<CorrectReport, String> {
+        let grid = self.grid.clone();
+        let dim = grid.dim;
+        let nvar = dim + 2;
+        let volume = grid.cell_volume();
+        if accepted.elements != self.current.elements {
+            return Err(format!(
+                "step {step}: the wet surface changed its connectivity ({} to {} element indices); the swept volumes need the same elements at both ends of a step",
+                self.current.elements.len(),
+                accepted.elements.len()
+            ));
+        }
+        compute(&grid, &accepted.surface(), &mut self.trial);
+        subface_swept_volumes(
+            &grid,
+            &self.current.surface(),
+            &accepted.surface(),
+            &self.trial,
+            &mut self.swept,
+        );
+        let new_lambda = &self.trial.solid_fraction;
+        let old_lambda = &self.geom.solid_fraction;
+        // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
+        self.content.clear();
+        self.content.resize(self.near.len(), [0.0; NQ]);
+        self.kind.clear();
+        self.kind.resize(self.near.len(), CellKind::Predicted);
+        let mut report = CorrectReport::default();
+        for s in &self.trial.subfaces {
+            match self.slot_of[s.cell as usize] {
+                0 => {
+                    return Err(format!(
+                        "step {step}: {}",
+                        self.outside_near("the accepted wet surface", s.cell)
+                    ));
+                }
+                k => self.kind[k as usize - 1] = CellKind::Updated,
+            }
+        }
+        for (k, &c) in self.near.iter().enumerate() {
+            let c = c as usize;
+            let ijk = grid.ijk(c);
+            let mut touched = self.kind[k] == CellKind::Updated
+                || new_lambda[c] > 0.0
+                || old_lambda[c] >= 1.0 - COVERED_TOLERANCE;
+            let mut faces = [[0.0f64; 2]; 3];
+            for a in 0..dim {
+                let lo = face_index(&grid, a, ijk);
+                let mut up = ijk;
+                up[a] += 1;
+                let hi = face_index(&grid, a, up);
+                faces[a] = [self.trial.face_fraction[a][lo], self.trial.face_fraction[a][hi]];
+                touched |= faces[a][0] > 0.0 || faces[a][1] > 0.0;
+            }
+            if !touched {
+                continue;
+            }
+            self.kind[k] = CellKind::Updated;
+            report.cut_cells += 1;
+            let alpha = 1.0 - new_lambda[c];
+            let u0 = &self.saved[k * nvar..(k + 1) * nvar];
+            let acc = &mut self.content[k];
+            for q in 0..nvar {
+                acc[q] = alpha * u0[q];
+            }
+            for a in 0..dim {
+                let sigma = dt / grid.dx[a];
+                let lo = face_index(&grid, a, ijk);
+                let mut up = ijk;
+                up[a] += 1;
+                let hi = face_index(&grid, a, up);
+                let (Some(&fl), Some(&fr)) = (self.face_flux(a, lo), self.face_flux(a, hi)) else {
+                    return Err(format!("step {step}: face fluxes of near cell {ijk:?} were not kept (a bug)"));
+                };
+                let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
+                let acc = &mut self.content[k];
+                acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
+                for b in 0..dim {
+                    acc[1 + b] += sigma * (wl * fl[1 + b] - wr * fr[1 + b]);
+                }
+                acc[dim + 1] += sigma * (wl * fl[4] - wr * fr[4]);
+            }
+        }
+        // Solid flux (eq. 26) and swept amounts (paper 000 eq. 12), sub-face by sub-face.
+        let mut work_received = 0.0;
+        let mut impulse_received = [0.0; 3];
+        let nr = if dim == 2 { 1 } else { 3 };
+        let np = accepted.n_particles();
+        self.last_loads.force.clear();
+        self.last_loads.force.resize(np * dim, 0.0);
+        self.last_loads.torque.clear();
+        self.last_loads.torque.resize(np * nr, 0.0);
+        let mut entry = 0;
+        let entries = &self.swept.entries;
+        for (s_idx, s) in self.trial.subfaces.iter().enumerate() {
+            let k = self.slot_of[s.cell as usize] as usize - 1;
+            if self.current.wet[s.element as usize] {
+                let mut pi = [0.0; 3];
+                for a in 0..dim {
+                    let p = self.hooks.pressures[a][k];
+                    pi[a] = p * s.normal[a] * s.area;
+                }
+                let w = accepted.point_velocity(s.particle as usize, s.centroid);
+                let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
+                let acc = &mut self.content[k];
+                for a in 0..dim {
+                    acc[1 + a] += dt * pi[a] / volume;
+                    impulse_received[a] += dt * pi[a];
+                }
+                acc[dim + 1] += dt * power / volume;
+                work_received += dt * power;
+                let p = s.particle as usize;
+                let x = accepted.center(p);
+                let r = [s.centroid[0] - x[0], s.centroid[1] - x[1], s.centroid[2] - x[2]];
+                let f = [-pi[0], -pi[1], -pi[2]];
+                for a in 0..dim {
+                    self.last_loads.force[p * dim + a] += f[a];
+                }
+                if dim == 2 {
+                    self.last_loads.torque[p] += r[0] * f[1] - r[1] * f[0];
+                } else {
+                    self.last_loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
+                    self.last_loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
+                    self.last_loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
+                }
+            }
+            while entry < entries.len() && (entries[entry].subface as usize) < s_idx {
+                entry += 1;
+            }
+            while entry < entries.len() && entries[entry].subface as usize == s_idx {
+                let e = entries[entry];
+                let kp = self.slot_of[e.cell as usize];
+                if kp == 0 {
+                    return Err(format!("step {step}: {}", self.outside_near("a swept prism", e.cell)));
+                }
+                let src = (kp as usize - 1) * nvar;
+                let f = e.volume / volume;
+                for q in 0..nvar {
+                    self.content[k][q] += f * self.saved[src + q];
+                }
+                entry += 1;
+            }
+        }
+        let n_mixed = self.mix(solver, &mut report)?;
+        report.mixed_cells = n_mixed;
+        report.work_received = work_received;
+        self.budget.work_given -= work_received;
+        for a in 0..3 {
+            self.budget.impulse_given[a] -= impulse_received[a];
+        }
+        // Check what the correct wrote.
+        let (vr, vp) = self.vacuum;
+        let u = &solver.state().u;
+        for (k, &c) in self.near.iter().enumerate() {
+            let c = c as usize;
+            if self.kind[k] == CellKind::Predicted || self.trial.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE {
+                continue;
+            }
+            let mut full = [0.0; NQ];
+            full[0] = u[c * nvar];
+            for a in 0..dim {
+                full[1 + a] = u[c * nvar + 1 + a];
+            }
+            full[4] = u[c * nvar + dim + 1];
+            if !state_ok(&full, self.gamma, vr, vp) {
+                let w = crate::fv::euler::primitive(&full, self.gamma);
+                let ijk = grid.ijk(c);
+                return Err(format!(
+                    "step {step}: cut cell {ijk:?} at {:?} (fluid fraction {:e}) is non-physical after the cut-cell update: rho = {:e}, p = {:e}, velocity = {:?}",
+                    grid.cell_center(ijk),
+                    1.0 - self.trial.solid_fraction[c],
+                    w.rho,
+                    w.p,
+                    w.vel
+                ));
+            }
+        }
+        std::mem::swap(&mut self.geom, &mut self.trial);
+        self.current = accepted;
+        Ok(report)
+    }
+
+    /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
+    /// and covered-with-content cells into their targets; returns the cells mixed.
+    fn mix(&mut self, solver: &mut FluidSolver, report: &mut CorrectReport) -> Result<usize, String> {
+        let grid = &self.grid;
+        let dim = grid.dim;
+        let nvar = dim + 2;
+        let new_lambda = &self.trial.solid_fraction;
+        let old_lambda = &self.geom.solid_fraction;
+        let alpha = |c: usize| 1.0 - new_lambda[c];
+        let big = |c: usize| {
+            alpha(c) >= MIX_BELOW && old_lambda[c] < 1.0 - COVERED_TOLERANCE
+        };
+        // Sources.
+        let mut sources: Vec<usize> = Vec::new();
+        for (k, &c) in self.near.iter().enumerate() {
+            let c = c as usize;
+            if self.kind[k] != CellKind::Updated {
+                continue;
+            }
+            let a = alpha(c);
+            let uncovered = old_lambda[c] >= 1.0 - COVERED_TOLERANCE && a > COVERED_TOLERANCE;
+            if uncovered {
+                report.uncovered_cells += 1;
+            }
+            let covered = a <= COVERED_TOLERANCE;
+            if covered && self.content[k].iter().all(|x| *x == 0.0) {
+                continue;
+            }
+            if covered || a < MIX_BELOW || uncovered {
+                sources.push(k);
+            }
+        }
+        // Wall normal of each source (Σ A ν of its sub-faces at t^{n+1}).
+        let mut normal = vec![[0.0f64; 3]; self.near.len()];
+        for s in &self.trial.subfaces {
+            let k = self.slot_of[s.cell as usize] as usize - 1;
+            for a in 0..3 {
+                normal[k][a] += s.area * s.normal[a];
+            }
+        }
+        let span = offsets(dim, 1);
+        let hop = |c: usize, g: [f64; 3]| -> (usize, bool) {
+            let ijk = grid.ijk(c);
+            let mut best: Option<(f64, usize)> = None;
+            for d in &span {
+                let Some(q) = shifted(grid, ijk, *d) else { continue };
+                let q = grid.index(q[0], q[1], q[2]);
+                if !big(q) {
+                    continue;
+                }
+                let len = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) as f64).sqrt();
+                let score = (d[0] as f64 * g[0] + d[1] as f64 * g[1] + d[2] as f64 * g[2]) / len;
+                if best.is_none_or(|(b, _)| score > b) {
+                    best = Some((score, q));
+                }
+            }
+            if let Some((_, q)) = best {
+                return (q, true);
+            }
+            // No large neighbour: the face neighbour with the largest aperture.
+            let mut best: Option<(f64, usize)> = None;
+            for a in 0..dim {
+                for side in [0usize, 1] {
+                    let mut q = ijk;
+                    let mut f = ijk;
+                    if side == 0 {
+                        if q[a] == 0 {
+                            continue;
+                        }
+                        q[a] -= 1;
+                    } else {
+                        if q[a] + 1 >= grid.cells[a] {
+                            continue;
+                        }
+                        q[a] += 1;
+                        f[a] += 1;
+                    }
+                    let qi = grid.index(q[0], q[1], q[2]);
+                    if alpha(qi) <= COVERED_TOLERANCE {
+                        continue;
+                    }
+                    let aperture = 1.0 - self.trial.face_fraction[a][face_index(grid, a, f)];
+                    if best.is_none_or(|(b, _)| aperture > b) {
+                        best = Some((aperture, qi));
+                    }
+                }
+            }
+            best.map_or((c, false), |(_, q)| (q, false))
+        };
+        let direction = |k: usize| -> [f64; 3] {
+            let g = normal[k];
+            if g != [0.0; 3] {
+                return g;
+            }
+            let c = self.near[k] as usize;
+            let ijk = grid.ijk(c);
+            let mut g = [0.0; 3];
+            for d in &span {
+                if let Some(q) = shifted(grid, ijk, *d) {
+                    let w = alpha(grid.index(q[0], q[1], q[2]));
+                    for a in 0..3 {
+                        g[a] += w * d[a] as f64;
+                    }
+                }
+            }
+            g
+        };
+        // Root of each source: follow hops to a large cell, or to a cycle (its smallest cell).
+        let is_source = |c: usize| -> Option<usize> {
+            let k = self.slot_of[c];
+            (k > 0 && sources.binary_search(&(k as usize - 1)).is_ok()).then(|| k as usize - 1)
+        };
+        let mut groups: Vec<(usize, usize)> = Vec::with_capacity(sources.len());
+        for &k in &sources {
+            let mut path = vec![self.near[k] as usize];
+            let mut g = direction(k);
+            let root = loop {
+                let here = *path.last().expect("non-empty");
+                let (next, final_) = hop(here, g);
+                if final_ {
+                    break next;
+                }
+                if let Some(pos) = path.iter().position(|&p| p == next) {
+                    break *path[pos..].iter().min().expect("non-empty cycle");
+                }
+                if is_source(next).is_none() || path.len() > 64 {
+                    break next;
+                }
+                path.push(next);
+                g = direction(is_source(next).expect("checked"));
+            };
+            groups.push((root, k));
+        }
+        groups.sort_unstable();
+        let u = &mut solver.state_mut().u;
+        // Updated, unmixed cells: U = content / α.
+        for (k, &c) in self.near.iter().enumerate() {
+            let c = c as usize;
+            if self.kind[k] != CellKind::Updated || sources.binary_search(&k).is_ok() {
+                continue;
+            }
+            let a = alpha(c);
+            for q in 0..nvar {
+                u[c * nvar + q] = self.content[k][q] / a;
+            }
+        }
+        // Groups.
+        let mut i = 0;
+        let mut mixed = 0;
+        while i < groups.len() {
+            let root = groups[i].0;
+            let mut j = i;
+            let (mut sum, mut vol) = ([0.0; NQ], 0.0);
+            // The root's own content.
+            let root_k = self.slot_of[root] as usize;
+            if root_k > 0 && self.kind[root_k - 1] != CellKind::Predicted {
+                let k = root_k - 1;
+                for q in 0..nvar {
+                    sum[q] += self.content[k][q];
+                }
+            } else {
+                let a = alpha(root);
+                for q in 0..nvar {
+                    sum[q] += a * u[root * nvar + q];
+                }
+            }
+            vol += alpha(root);
+            while j < groups.len() && groups[j].0 == root {
+                let k = groups[j].1;
+                if self.near[k] as usize != root {
+                    for q in 0..nvar {
+                        sum[q] += self.content[k][q];
+                    }
+                    vol += alpha(self.near[k] as usize);
+                }
+                j += 1;
+            }
+            if !(vol > 0.0) {
+                return Err(format!(
+                    "no fluid volume to mix cell {:?} into (a closed pocket of covered cells)",
+                    grid.ijk(root)
+                ));
+            }
+            for q in 0..nvar {
+                u[root * nvar + q] = sum[q] / vol;
+            }
+            for g in &groups[i..j] {
+                let c = self.near[g.1] as usize;
+                if c != root && alpha(c) > COVERED_TOLERANCE {
+                    for q in 0..nvar {
+                        u[c * nvar + q] = sum[q] / vol;
+                    }
+                }
+                self.kind[g.1] = CellKind::Mixed;
+                mixed += 1;
+            }
+            if root_k > 0 {
+                self.kind[root_k - 1] = CellKind::Updated;
+            }
+            i = j;
+        }
+        Ok(mixed)
+    }
+}
+
+/// All offsets of the `(2r + 1)^dim − 1` neighbours within Chebyshev distance `r`.
+fn offsets(dim: usize, r: isize) -> Vec<[isize; 3]> {
+    let range = |a: usize| if a < dim { -r..=r } else { 0..=0 };
+    let mut out = Vec::new();
+    for k in range(2) {
+        for j in range(1) {
+            for i in range(0) {
+                if (i, j, k) != (0, 0, 0) {
+                    out.push([i, j, k]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `ijk + d` if inside the grid.
+fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
+    let mut out = [0; 3];
+    for a in 0..3 {
+        let v = ijk[a] as isize + d[a];
+        if v < 0 || v >= grid.cells[a] as isize {
+            return None;
+        }
+        out[a] = v as usize;
+    }
+    Some(out)
+}
