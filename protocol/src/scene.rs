@@ -410,6 +410,11 @@ pub struct SolidConfig {
     /// Constraints on the particles whose centre lies in a region.
     #[serde(default)]
     pub constraints: Vec<ConstraintConfig>,
+    /// Initial velocities of the particles whose centre lies in a region, applied in order (a
+    /// later entry overrides an earlier one; default none: every free particle starts at rest).
+    /// Left out of the resolved scene when empty, so a scene without it hashes as before.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub init: Vec<SolidInit>,
     /// Settings of the prescribed double (`solid-node --double prescribed`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prescribed: Option<PrescribedConfig>,
@@ -505,6 +510,30 @@ pub struct ConstraintConfig {
     pub region: Region,
     /// Their motion.
     pub motion: Motion,
+}
+
+/// One `[[solid.init]]` entry: the initial velocity of the particles whose centre (at t = 0)
+/// lies in `region`.
+///
+/// Entries apply in order; for a particle in several regions the later entry's given fields
+/// override the earlier ones (an entry with only `velocity` leaves an earlier `angular_velocity`
+/// in place). Only free particles take them: fixed particles and particles with a prescribed
+/// `motion = { velocity = [...] }` (of their body or of a `[[solid.constraints]]` entry) keep
+/// that motion, whatever the entries say. At least one of the two velocities must be given.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolidInit {
+    /// The particles whose centre lies in this region (same [`Region`] as `[[fluid.init]]`).
+    pub region: Region,
+    /// Velocity of the centre of mass [m/s], `dim` entries (absent: unchanged, at rest unless an
+    /// earlier entry set it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<Vec<f64>>,
+    /// Angular velocity of each particle about its own centre of mass, space frame \[rad/s\]: one
+    /// entry in 2-D (about z), three in 3-D (absent: unchanged, zero unless an earlier entry set
+    /// it). It is a spin of every particle, not a rigid rotation of the region.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<Vec<f64>>,
 }
 
 /// `solid.prescribed`: the prescribed-motion double.
@@ -1055,6 +1084,34 @@ impl Scene {
                 }
                 if let Motion::Velocity(v) = &c.motion {
                     check_len(&format!("solid.constraints[{k}].motion.velocity"), v)?;
+                }
+            }
+            for (k, init) in solid.init.iter().enumerate() {
+                let base = format!("solid.init[{k}]");
+                for (name, v) in init.region.vectors() {
+                    check_len(&format!("{base}.region.{name}"), v)?;
+                }
+                if init.velocity.is_none() && init.angular_velocity.is_none() {
+                    return Err(invalid(
+                        &base,
+                        "velocity, angular_velocity or both",
+                        "neither".into(),
+                    ));
+                }
+                if let Some(v) = &init.velocity {
+                    check_len(&format!("{base}.velocity"), v)?;
+                }
+                if let Some(w) = &init.angular_velocity {
+                    let n_rot = crate::wire::n_rot(dim as u32);
+                    if n_rot == 0 || w.len() != n_rot || !w.iter().all(|x| x.is_finite()) {
+                        return Err(invalid(
+                            &format!("{base}.angular_velocity"),
+                            &format!(
+                                "1 finite number in a 2-D scene, 3 in a 3-D scene (the scene is {dim}-D)"
+                            ),
+                            format!("{w:?}"),
+                        ));
+                    }
                 }
             }
             if let Some(p) = &solid.prescribed {

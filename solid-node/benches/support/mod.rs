@@ -22,6 +22,7 @@ pub(crate) fn lattice(threads: usize) -> Solid {
             motion: Motion::Free,
         }],
         constraints: vec![],
+        init: vec![],
         prescribed: None,
     };
     let mut solid = Solid::from_scene(&cfg, 3, threads).expect("bench scene builds");

@@ -11,6 +11,7 @@
 //!
 //! ```text
 //! Solid::from_scene(cfg, dim, threads)      lattice -> model (particles, links) -> state
+//!                                           -> [[solid.init]] velocities of free particles
 //! loop {
 //!     dt = min(solid.max_dt(cell_size), fluid dt)
 //!     solid.begin_step(dt)                  internal forces at Xⁿ (cached)

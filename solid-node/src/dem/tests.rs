@@ -52,6 +52,7 @@ fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
             motion: Motion::Free,
         }],
         constraints: vec![],
+        init: vec![],
         prescribed: None,
     }
 }

@@ -34,6 +34,7 @@ pub fn box_config(
             motion: Motion::Free,
         }],
         constraints: vec![],
+        init: vec![],
         prescribed: None,
     }
 }

@@ -9,7 +9,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use protocol::scene::{Motion, SolidConfig};
+use protocol::scene::{Motion, SolidConfig, SolidInit};
 
 use crate::dem::lattice::build_lattice;
 use crate::dem::link_force::LinkOut;
@@ -173,6 +173,12 @@ use forces::{ForceScratch, internal_forces};
 impl Solid {
     /// Builds the solid of a scene: `dim` is the scene's dimension (2 or 3), `threads` the
     /// worker threads (1: no pool; results are bit-identical for any count).
+    ///
+    /// Bodies' `motion` and then `[[solid.constraints]]` set each particle's motion; then the
+    /// `[[solid.init]]` entries, in order, give the free particles whose centre lies in their
+    /// region their initial velocity and angular velocity ([`Solid::set_velocity`],
+    /// [`Solid::set_angular_velocity`]). Fixed particles and particles with a prescribed
+    /// velocity keep their prescribed motion: an init entry never overrides a constraint.
     pub fn from_scene(cfg: &SolidConfig, dim: usize, threads: usize) -> Result<Self, String> {
         let material = Material {
             density: cfg.density.ok_or("solid.density is required")?,
@@ -225,7 +231,47 @@ impl Solid {
         } else {
             None
         };
-        Ok(Self::from_model(model, gravity, elongation_at_break, pool))
+        for (k, init) in cfg.init.iter().enumerate() {
+            let n_rot = if dim == 3 { 3 } else { 1 };
+            if let Some(v) = init.velocity.as_ref().filter(|v| v.len() != dim) {
+                return Err(format!(
+                    "solid.init[{k}].velocity: expected {dim} components, found {v:?}"
+                ));
+            }
+            if let Some(w) = init.angular_velocity.as_ref().filter(|w| w.len() != n_rot) {
+                return Err(format!(
+                    "solid.init[{k}].angular_velocity: expected {n_rot} components, found {w:?}"
+                ));
+            }
+        }
+        let mut solid = Self::from_model(model, gravity, elongation_at_break, pool);
+        solid.apply_init(&cfg.init);
+        Ok(solid)
+    }
+
+    /// Applies `[[solid.init]]` entries in order (lengths checked by the caller) and brings the
+    /// committed wet surface's element velocities up to date.
+    fn apply_init(&mut self, inits: &[SolidInit]) {
+        if inits.is_empty() {
+            return;
+        }
+        let dim = self.model.dim;
+        for init in inits {
+            for p in 0..self.n_particles() {
+                let x0 = self.model.particles[p].x0;
+                if !init.region.contains(&x0.as_slice()[..dim]) {
+                    continue;
+                }
+                let id = ParticleId(p as u32);
+                if let Some(v) = &init.velocity {
+                    self.set_velocity(id, v);
+                }
+                if let Some(w) = &init.angular_velocity {
+                    self.set_angular_velocity(id, w);
+                }
+            }
+        }
+        self.update_wet();
     }
 
     fn from_model(

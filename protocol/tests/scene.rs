@@ -1,0 +1,162 @@
+//! `[[solid.init]]` in the scene schema: an entry is read with its region and velocities, a wrong
+//! one is refused naming its key path, and a scene without it resolves and hashes as before.
+
+use protocol::scene::{Region, Scene, SceneError, SolidInit};
+
+/// A 2-D solid-only scene followed by `extra` (TOML appended at the end).
+fn scene_2d(extra: &str) -> Result<Scene, SceneError> {
+    let text = format!(
+        r#"
+name = "bar"
+[solid]
+density = 1000.0
+young = 1e6
+poisson = 0.0
+[[solid.bodies]]
+shape = {{ box = {{ center = [2.0, 0.5], size = [0.4, 1.0] }} }}
+divisions = [4, 10]
+{extra}"#
+    );
+    Scene::from_toml_str(&text, "init.toml")
+}
+
+/// The key path of an `Invalid` error, or the whole error.
+fn invalid_path(res: Result<Scene, SceneError>) -> String {
+    match res {
+        Err(SceneError::Invalid { path, .. }) => path,
+        other => panic!("expected an Invalid error, got {other:?}"),
+    }
+}
+
+#[test]
+fn solid_init_entries_are_read_in_order() {
+    let scene = scene_2d(
+        r#"
+[[solid.init]]
+region = { box = { lower = [1.8, 0.5], upper = [2.2, 1.0] } }
+velocity = [0.25, 0.0]
+[[solid.init]]
+region = "all"
+angular_velocity = [-1.5]
+"#,
+    )
+    .expect("valid scene");
+    let init = &scene.solid.as_ref().expect("solid").init;
+    assert_eq!(
+        init,
+        &vec![
+            SolidInit {
+                region: Region::Box {
+                    lower: vec![1.8, 0.5],
+                    upper: vec![2.2, 1.0],
+                },
+                velocity: Some(vec![0.25, 0.0]),
+                angular_velocity: None,
+            },
+            SolidInit {
+                region: Region::All,
+                velocity: None,
+                angular_velocity: Some(vec![-1.5]),
+            },
+        ]
+    );
+    // The resolved scene reads back to the same scene (what the coupler hands the nodes).
+    let again = Scene::from_toml_str(&scene.to_toml(), "resolved").expect("resolved parses");
+    assert_eq!(again, scene);
+    assert_eq!(again.hash(), scene.hash());
+}
+
+#[test]
+fn absent_solid_init_changes_neither_the_resolved_scene_nor_the_hash() {
+    let absent = scene_2d("").expect("valid scene");
+    let text = absent
+        .to_toml()
+        .replace("[solid]\n", "[solid]\ninit = []\n");
+    let explicit = Scene::from_toml_str(&text, "explicit").expect("init = [] parses");
+    assert!(!absent.to_toml().contains("init"), "{}", absent.to_toml());
+    assert_eq!(explicit, absent);
+    assert_eq!(explicit.hash(), absent.hash());
+    let with_init =
+        scene_2d("[[solid.init]]\nregion = \"all\"\nvelocity = [0.0, 0.0]\n").expect("valid scene");
+    assert_ne!(with_init.hash(), absent.hash(), "an init entry is physics");
+}
+
+#[test]
+fn solid_init_of_the_wrong_length_is_refused_naming_the_key() {
+    let res = scene_2d("[[solid.init]]\nregion = \"all\"\nvelocity = [0.25]\n");
+    match res {
+        Err(SceneError::Invalid {
+            file,
+            path,
+            expected,
+            found,
+        }) => {
+            assert_eq!(file, "init.toml");
+            assert_eq!(path, "solid.init[0].velocity");
+            assert_eq!(expected, "2 finite numbers (the scene is 2-D)");
+            assert_eq!(found, "[0.25]");
+        }
+        other => panic!("expected an Invalid error, got {other:?}"),
+    }
+    // The index counts entries; each vector is checked.
+    let second = "[[solid.init]]\nregion = \"all\"\nvelocity = [0.0, 0.0]\n\
+                  [[solid.init]]\nregion = \"all\"\nvelocity = [nan, 0.0]\n";
+    assert_eq!(invalid_path(scene_2d(second)), "solid.init[1].velocity");
+    let spin = "[[solid.init]]\nregion = \"all\"\nangular_velocity = [0.0, 0.0, 1.0]\n";
+    assert_eq!(
+        invalid_path(scene_2d(spin)),
+        "solid.init[0].angular_velocity"
+    );
+    let spin_inf = "[[solid.init]]\nregion = \"all\"\nangular_velocity = [inf]\n";
+    assert_eq!(
+        invalid_path(scene_2d(spin_inf)),
+        "solid.init[0].angular_velocity"
+    );
+    let region = "[[solid.init]]\nregion = { box = { lower = [0.0], upper = [1.0, 1.0] } }\n\
+                  velocity = [0.0, 0.0]\n";
+    assert_eq!(
+        invalid_path(scene_2d(region)),
+        "solid.init[0].region.box.lower"
+    );
+    let ball = "[[solid.init]]\nregion = { ball = { center = [0.0, 0.0, 0.0], radius = 1.0 } }\n\
+                velocity = [0.0, 0.0]\n";
+    assert_eq!(
+        invalid_path(scene_2d(ball)),
+        "solid.init[0].region.ball.center"
+    );
+}
+
+#[test]
+fn solid_init_without_any_velocity_is_refused() {
+    let res = scene_2d("[[solid.init]]\nregion = \"all\"\n");
+    match res {
+        Err(SceneError::Invalid {
+            path,
+            expected,
+            found,
+            ..
+        }) => {
+            assert_eq!(path, "solid.init[0]");
+            assert_eq!(expected, "velocity, angular_velocity or both");
+            assert_eq!(found, "neither");
+        }
+        other => panic!("expected an Invalid error, got {other:?}"),
+    }
+}
+
+#[test]
+fn solid_init_with_an_unknown_key_is_refused() {
+    let res = scene_2d("[[solid.init]]\nregion = \"all\"\nvelocity = [0.0, 0.0]\nspin = 1.0\n");
+    match res {
+        Err(SceneError::Parse {
+            file,
+            path,
+            message,
+        }) => {
+            assert_eq!(file, "init.toml");
+            assert_eq!(path, "solid.init[0].spin");
+            assert!(message.contains("spin"), "message {message:?}");
+        }
+        other => panic!("expected a Parse error, got {other:?}"),
+    }
+}
