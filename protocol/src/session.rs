@@ -34,8 +34,8 @@ pub trait NodeModel {
 
 /// Runs node `kind` until the coupler's shutdown (DESIGN §3 from a node's side).
 ///
-/// The loop greets, sends the initial totals, calls `open` in a coupled run (the initial
-/// wet-surface exchange), proposes a step, then answers checkpoint requests and restores, and
+/// The loop greets, calls `open` in a coupled run (the initial wet-surface exchange), sends the
+/// initial totals, proposes a step, then answers checkpoint requests and restores, and
 /// for each step plan calls `advance` (the node's side of the step, coupling iterations
 /// included), records probes, writes the planned output, sends the totals and the next
 /// proposal. Probe files are written at the end.
@@ -54,10 +54,12 @@ pub fn run_node<N: NodeModel + ?Sized>(
         implementation: node.implementation().to_string(),
         capabilities: vec!["checkpoint".into()],
     })?;
-    link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
     if cfg.coupled {
         open(node, link)?;
     }
+    // NOTE: after `open`, so the fluid's initial totals already weigh its cells by the fluid
+    // fraction of the initial wet surface.
+    link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
     let mut step = 0;
     propose(link, step, node.dt_max())?;
     loop {
