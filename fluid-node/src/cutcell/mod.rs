@@ -63,6 +63,7 @@
 pub(crate) mod clip;
 mod geometry;
 mod measure;
+mod prism;
 pub mod stl;
 mod surface;
 pub(crate) mod sweep;
