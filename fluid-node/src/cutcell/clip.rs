@@ -16,6 +16,11 @@
 //! NOTE: canonical intersections. The intersection of an edge with a plane is always interpolated
 //! from the endpoint with the smaller coordinate along the split axis, so the two elements sharing
 //! an edge (and an element and its reversed twin) compute bitwise identical cut points.
+//!
+//! Vertices may carry a payload after their three coordinates (`Polygon<N>`, `N > 3`): it is
+//! interpolated with the same parameter as the position and never tested, so a cut point's payload
+//! is, like its position, the same bits in every element sharing the edge (used to carry the
+//! preimage of each vertex under an element's motion, [`crate::cutcell::subface_swept_volumes`]).
 
 use crate::grid::Grid;
 
@@ -25,24 +30,25 @@ use crate::grid::Grid;
 /// NOTE: kept small: polygons live on the stack and are copied at every split.
 pub(crate) const MAX_VERTICES: usize = 12;
 
-/// A convex polygon with a fixed capacity (no allocation).
+/// A convex polygon with a fixed capacity (no allocation); each vertex holds its position and
+/// `N - 3` payload values.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Polygon {
+pub(crate) struct Polygon<const N: usize = 3> {
     /// Vertices [m]; only the first `n` are meaningful.
-    pub(crate) v: [[f64; 3]; MAX_VERTICES],
+    pub(crate) v: [[f64; N]; MAX_VERTICES],
     /// Number of vertices.
     pub(crate) n: usize,
 }
 
-impl Polygon {
+impl<const N: usize> Polygon<N> {
     /// The empty polygon.
-    pub(crate) const EMPTY: Polygon = Polygon {
-        v: [[0.0; 3]; MAX_VERTICES],
+    pub(crate) const EMPTY: Polygon<N> = Polygon {
+        v: [[0.0; N]; MAX_VERTICES],
         n: 0,
     };
 
     /// A polygon from its vertices (at most [`MAX_VERTICES`]).
-    pub(crate) fn from_slice(vertices: &[[f64; 3]]) -> Polygon {
+    pub(crate) fn from_slice(vertices: &[[f64; N]]) -> Polygon<N> {
         let mut poly = Polygon::EMPTY;
         for v in vertices {
             poly.push(*v);
@@ -51,12 +57,12 @@ impl Polygon {
     }
 
     /// The vertices in use.
-    pub(crate) fn vertices(&self) -> &[[f64; 3]] {
+    pub(crate) fn vertices(&self) -> &[[f64; N]] {
         &self.v[..self.n]
     }
 
     #[inline]
-    fn push(&mut self, x: [f64; 3]) {
+    fn push(&mut self, x: [f64; N]) {
         if self.n < MAX_VERTICES {
             self.v[self.n] = x;
             self.n += 1;
@@ -96,13 +102,14 @@ pub(crate) fn slab(grid: &Grid, axis: usize, x: f64) -> i32 {
 }
 
 /// Point on segment `p q` where coordinate `axis` equals `value`, interpolated from the endpoint
-/// with the smaller coordinate (canonical). Requires `p[axis]` and `q[axis]` strictly on both sides.
+/// with the smaller coordinate (canonical); the payload is interpolated alike. Requires `p[axis]`
+/// and `q[axis]` strictly on both sides.
 #[inline]
-fn cut_point(p: &[f64; 3], q: &[f64; 3], axis: usize, value: f64) -> [f64; 3] {
+fn cut_point<const N: usize>(p: &[f64; N], q: &[f64; N], axis: usize, value: f64) -> [f64; N] {
     let (lo, hi) = if p[axis] < q[axis] { (p, q) } else { (q, p) };
     let t = (value - lo[axis]) / (hi[axis] - lo[axis]);
-    let mut x = [0.0; 3];
-    for d in 0..3 {
+    let mut x = [0.0; N];
+    for d in 0..N {
         x[d] = lo[d] + t * (hi[d] - lo[d]);
     }
     x[axis] = value;
@@ -110,12 +117,12 @@ fn cut_point(p: &[f64; 3], q: &[f64; 3], axis: usize, value: f64) -> [f64; 3] {
 }
 
 /// Splits `poly` by the plane `x[axis] = value` into the parts below and above (either may be empty).
-pub(crate) fn split_polygon(
-    poly: &Polygon,
+pub(crate) fn split_polygon<const N: usize>(
+    poly: &Polygon<N>,
     axis: usize,
     value: f64,
-    below: &mut Polygon,
-    above: &mut Polygon,
+    below: &mut Polygon<N>,
+    above: &mut Polygon<N>,
 ) {
     below.n = 0;
     above.n = 0;
@@ -150,16 +157,20 @@ pub(crate) fn split_polygon(
 /// Clips a convex polygon into the extended cells of the first `grid.dim` axes, calling
 /// `emit(cell, piece)` for every piece with at least 3 vertices. `cell` holds extended slab
 /// indices (`-1..=n`); inactive axes are 0.
-pub(crate) fn clip_polygon(grid: &Grid, poly: &Polygon, emit: &mut impl FnMut([i32; 3], &Polygon)) {
+pub(crate) fn clip_polygon<const N: usize>(
+    grid: &Grid,
+    poly: &Polygon<N>,
+    emit: &mut impl FnMut([i32; 3], &Polygon<N>),
+) {
     peel(grid, 0, poly, [0; 3], emit);
 }
 
-fn peel(
+fn peel<const N: usize>(
     grid: &Grid,
     axis: usize,
-    poly: &Polygon,
+    poly: &Polygon<N>,
     mut cell: [i32; 3],
-    emit: &mut impl FnMut([i32; 3], &Polygon),
+    emit: &mut impl FnMut([i32; 3], &Polygon<N>),
 ) {
     if poly.n < 3 {
         return;
@@ -188,7 +199,7 @@ fn peel(
     peel(grid, axis + 1, &rest, cell, emit);
 }
 
-fn slab_range(grid: &Grid, axis: usize, verts: &[[f64; 3]]) -> (i32, i32) {
+fn slab_range<const N: usize>(grid: &Grid, axis: usize, verts: &[[f64; N]]) -> (i32, i32) {
     let mut x_min = verts[0][axis];
     let mut x_max = x_min;
     for x in &verts[1..] {
@@ -202,26 +213,26 @@ fn slab_range(grid: &Grid, axis: usize, verts: &[[f64; 3]]) -> (i32, i32) {
     (slab(grid, axis, x_min), slab(grid, axis, x_max))
 }
 
-/// Clips the segment `a -> b` (2-D, third coordinate 0) into extended cells, calling
-/// `emit(cell, a', b')` for each non-degenerate piece, orientation preserved.
-pub(crate) fn clip_segment(
+/// Clips the segment `a -> b` (2-D, third coordinate 0; a payload may follow) into extended cells,
+/// calling `emit(cell, a', b')` for each piece of non-zero length, orientation preserved.
+pub(crate) fn clip_segment<const N: usize>(
     grid: &Grid,
-    a: [f64; 3],
-    b: [f64; 3],
-    emit: &mut impl FnMut([i32; 3], [f64; 3], [f64; 3]),
+    a: [f64; N],
+    b: [f64; N],
+    emit: &mut impl FnMut([i32; 3], [f64; N], [f64; N]),
 ) {
     peel_segment(grid, 0, a, b, [0; 3], emit);
 }
 
-fn peel_segment(
+fn peel_segment<const N: usize>(
     grid: &Grid,
     axis: usize,
-    a: [f64; 3],
-    b: [f64; 3],
+    a: [f64; N],
+    b: [f64; N],
     mut cell: [i32; 3],
-    emit: &mut impl FnMut([i32; 3], [f64; 3], [f64; 3]),
+    emit: &mut impl FnMut([i32; 3], [f64; N], [f64; N]),
 ) {
-    if a == b {
+    if a[..3] == b[..3] {
         return;
     }
     if axis == grid.dim {

@@ -11,7 +11,10 @@
 //!    `A_a (λ_{a,+} − λ_{a,−}) = − Σ_{sub-faces in the cell} area · n_a`;
 //! 3. [`swept_volumes`]: the signed volume swept by every element between two positions, split
 //!    among the cells (paper 000 eq. 12), with `Σ swept = (Λ^{n+1} − Λ^n) V` in every cell;
-//! 4. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
+//! 4. [`subface_swept_volumes`]: the same per *sub-face* of the surface at `t^{n+1}` (the prism
+//!    of each element ∩ cell, down to its preimage at `t^n`), which for a translation gives every
+//!    sub-face exactly `Δt (w · n) area`, as the conservative update of a uniform flow needs;
+//! 5. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
 //!
 //! # Method
 //!
@@ -30,7 +33,8 @@
 //! Swept volumes: the prism of each element (its two positions plus lateral quads split along a
 //! canonical diagonal) is a closed surface, so the same clipping and x sweep give its signed volume
 //! in each cell; the prisms of a closed surface telescope, hence identity (3) to round-off for any
-//! motion (see [`swept_volumes`]).
+//! motion (see [`swept_volumes`]). The sub-face prisms are built by the same code (module
+//! `prism`), their bottoms from a second clip that carries each vertex's earlier position.
 //!
 //! # Conventions
 //!
@@ -63,7 +67,9 @@
 pub(crate) mod clip;
 mod geometry;
 mod measure;
+mod prism;
 pub mod stl;
+mod subface_swept;
 mod surface;
 pub(crate) mod sweep;
 mod swept;
@@ -73,5 +79,6 @@ mod tests;
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };
+pub use subface_swept::{SubfaceSwept, SubfaceSweptEntry, subface_swept_volumes};
 pub use surface::Surface;
 pub use swept::{SweptEntry, SweptVolumes, swept_volumes};

@@ -94,3 +94,39 @@ fn segments_keep_orientation_and_length() {
     let exact = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
     assert!((length - exact).abs() <= 1e-15);
 }
+
+#[test]
+fn payload_follows_the_position_bit_for_bit() {
+    // A payload after the position changes no position, and a cut point's payload is the same bits
+    // in the triangle and its reversed twin (what makes the sub-face preimages canonical).
+    let g = grid3();
+    let t = [[0.05, 0.07, 0.1], [0.93, 0.21, 0.4], [0.3, 0.88, 0.75]];
+    let lift = |x: [f64; 3]| [x[0], x[1], x[2], 2.0 * x[0] - 0.1, x[2] * x[1], -x[1]];
+    let mut plain = Vec::new();
+    clip_polygon(&g, &Polygon::from_slice(&t), &mut |cell, piece| {
+        plain.push((cell, piece.vertices().to_vec()));
+    });
+    let mut lifted = Vec::new();
+    let poly: Polygon<6> = Polygon::from_slice(&t.map(lift));
+    clip_polygon(&g, &poly, &mut |cell, piece| {
+        lifted.push((cell, piece.vertices().to_vec()));
+    });
+    assert_eq!(plain.len(), lifted.len());
+    for ((c, p), (cl, l)) in plain.iter().zip(&lifted) {
+        assert_eq!(c, cl);
+        let positions: Vec<[f64; 3]> = l.iter().map(|x| [x[0], x[1], x[2]]).collect();
+        assert_eq!(p, &positions);
+    }
+    let reversed: Polygon<6> = Polygon::from_slice(&[t[0], t[2], t[1]].map(lift));
+    let mut twin = Vec::new();
+    clip_polygon(&g, &reversed, &mut |_, piece| {
+        twin.extend(piece.vertices().iter().map(|x| x.map(f64::to_bits)));
+    });
+    let mut ours: Vec<[u64; 6]> = lifted
+        .iter()
+        .flat_map(|(_, l)| l.iter().map(|x| x.map(f64::to_bits)))
+        .collect();
+    ours.sort();
+    twin.sort();
+    assert_eq!(ours, twin);
+}
