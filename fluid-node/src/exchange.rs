@@ -45,7 +45,10 @@ impl RealFluid {
             .as_ref()
             .ok_or("the scene has no [fluid] section")?;
         if scene.solid.is_some() && scene.dim() == 1 {
-            return Err("a coupled scene needs a 2-D or 3-D fluid (the embedded solid has no 1-D form)".into());
+            return Err(
+                "a coupled scene needs a 2-D or 3-D fluid (the embedded solid has no 1-D form)"
+                    .into(),
+            );
         }
         let solver = FluidSolver::from_scene(cfg, scene.run.threads as usize)?;
         let mut probes = Vec::new();

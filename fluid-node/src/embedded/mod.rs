@@ -41,9 +41,9 @@
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
-use crate::cutcell::{CutGeometry, Surface, compute, face_index};
-mod stub;
-use stub::{SubfaceSwept, subface_swept_volumes};
+use crate::cutcell::{
+    CutGeometry, SubfaceSwept, Surface, compute, face_index, subface_swept_volumes,
+};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport};
@@ -573,7 +573,11 @@ impl Embedded {
                 loads.force[p * d + a] += f[a];
             }
             let x = trial.center(p);
-            let r = [s.centroid[0] - x[0], s.centroid[1] - x[1], s.centroid[2] - x[2]];
+            let r = [
+                s.centroid[0] - x[0],
+                s.centroid[1] - x[1],
+                s.centroid[2] - x[2],
+            ];
             if d == 2 {
                 loads.torque[p] += r[0] * f[1] - r[1] * f[0];
             } else {
@@ -651,7 +655,10 @@ impl Embedded {
                 let mut up = ijk;
                 up[a] += 1;
                 let hi = face_index(&grid, a, up);
-                faces[a] = [self.trial.face_fraction[a][lo], self.trial.face_fraction[a][hi]];
+                faces[a] = [
+                    self.trial.face_fraction[a][lo],
+                    self.trial.face_fraction[a][hi],
+                ];
                 touched |= faces[a][0] > 0.0 || faces[a][1] > 0.0;
             }
             if !touched {
@@ -672,7 +679,9 @@ impl Embedded {
                 up[a] += 1;
                 let hi = face_index(&grid, a, up);
                 let (Some(&fl), Some(&fr)) = (self.face_flux(a, lo), self.face_flux(a, hi)) else {
-                    return Err(format!("step {step}: face fluxes of near cell {ijk:?} were not kept (a bug)"));
+                    return Err(format!(
+                        "step {step}: face fluxes of near cell {ijk:?} were not kept (a bug)"
+                    ));
                 };
                 let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
                 let acc = &mut self.content[k];
@@ -713,7 +722,11 @@ impl Embedded {
                 work_received += dt * power;
                 let p = s.particle as usize;
                 let x = accepted.center(p);
-                let r = [s.centroid[0] - x[0], s.centroid[1] - x[1], s.centroid[2] - x[2]];
+                let r = [
+                    s.centroid[0] - x[0],
+                    s.centroid[1] - x[1],
+                    s.centroid[2] - x[2],
+                ];
                 let f = [-pi[0], -pi[1], -pi[2]];
                 for a in 0..dim {
                     self.last_loads.force[p * dim + a] += f[a];
@@ -733,7 +746,10 @@ impl Embedded {
                 let e = entries[entry];
                 let kp = self.slot_of[e.cell as usize];
                 if kp == 0 {
-                    return Err(format!("step {step}: {}", self.outside_near("a swept prism", e.cell)));
+                    return Err(format!(
+                        "step {step}: {}",
+                        self.outside_near("a swept prism", e.cell)
+                    ));
                 }
                 let src = (kp as usize - 1) * nvar;
                 let f = e.volume / volume;
@@ -755,7 +771,9 @@ impl Embedded {
         let u = &solver.state().u;
         for (k, &c) in self.near.iter().enumerate() {
             let c = c as usize;
-            if self.kind[k] == CellKind::Predicted || self.trial.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE {
+            if self.kind[k] == CellKind::Predicted
+                || self.trial.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+            {
                 continue;
             }
             let mut full = [0.0; NQ];
@@ -784,16 +802,18 @@ impl Embedded {
 
     /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
     /// and covered-with-content cells into their targets; returns the cells mixed.
-    fn mix(&mut self, solver: &mut FluidSolver, report: &mut CorrectReport) -> Result<usize, String> {
+    fn mix(
+        &mut self,
+        solver: &mut FluidSolver,
+        report: &mut CorrectReport,
+    ) -> Result<usize, String> {
         let grid = &self.grid;
         let dim = grid.dim;
         let nvar = dim + 2;
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
         let alpha = |c: usize| 1.0 - new_lambda[c];
-        let big = |c: usize| {
-            alpha(c) >= MIX_BELOW && old_lambda[c] < 1.0 - COVERED_TOLERANCE
-        };
+        let big = |c: usize| alpha(c) >= MIX_BELOW && old_lambda[c] < 1.0 - COVERED_TOLERANCE;
         // Sources.
         let mut sources: Vec<usize> = Vec::new();
         for (k, &c) in self.near.iter().enumerate() {
@@ -827,7 +847,9 @@ impl Embedded {
             let ijk = grid.ijk(c);
             let mut best: Option<(f64, usize)> = None;
             for d in &span {
-                let Some(q) = shifted(grid, ijk, *d) else { continue };
+                let Some(q) = shifted(grid, ijk, *d) else {
+                    continue;
+                };
                 let q = grid.index(q[0], q[1], q[2]);
                 if !big(q) {
                     continue;
@@ -924,6 +946,10 @@ impl Embedded {
                 continue;
             }
             let a = alpha(c);
+            if a <= COVERED_TOLERANCE {
+                // Covered, nothing to keep: the cell holds a ghost state.
+                continue;
+            }
             for q in 0..nvar {
                 u[c * nvar + q] = self.content[k][q] / a;
             }

@@ -80,5 +80,5 @@ pub use line::FluxKind;
 pub use solver::{
     FluidSolver, GhostFill, SplitHooks, StepReport, Totals, Trouble, TroubleKind, sweep_order,
 };
-pub use sweep::FaceTap;
 pub use state::{BoundaryKind, FluidParams, FluidState, from_scene};
+pub use sweep::FaceTap;
