@@ -291,7 +291,8 @@ impl FluidModel for RealFluid {
             let embedded = self.embedded.as_mut().ok_or_else(|| {
                 format!("step {step}: a coupled step before the initial wet surface")
             })?;
-            embedded.correct(solver, plan.dt, frame, step)?;
+            let explicit = plan.scheme == protocol::wire::Scheme::Explicit;
+            embedded.correct(solver, plan.dt, frame, step, explicit)?;
             return Ok(());
         }
         self.check_dt(plan)?;

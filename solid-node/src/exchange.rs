@@ -136,7 +136,7 @@ impl NodeModel for RealSolid {
             energy: e.kinetic_translation + e.kinetic_rotation + e.elastic + e.gravity,
             dissipated: e.dissipated,
             interface_work: e.external_work,
-            interface_impulse: vec![0.0; dim],
+            interface_impulse: self.solid.external_impulse()[..dim].to_vec(),
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: self.links_broken,

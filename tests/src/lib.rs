@@ -58,6 +58,11 @@ pub struct InProcess {
 /// Runs a scene with its configured implementations, each node on its own thread, over the
 /// in-memory transport.
 pub fn run_in_process(scene: &Scene) -> InProcess {
+    run_in_process_to(scene, None)
+}
+
+/// [`run_in_process`], with the nodes writing their outputs (fields, probes) into `out`.
+pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProcess {
     let mut nodes = Vec::new();
     if scene.fluid.is_some() {
         nodes.push(NodeKind::Fluid);
@@ -70,6 +75,7 @@ pub fn run_in_process(scene: &Scene) -> InProcess {
     let mut handles = Vec::new();
     for mut end in ends {
         let scene = scene.clone();
+        let out = out.map(std::path::Path::to_path_buf);
         handles.push(std::thread::spawn(move || -> Result<(), String> {
             let mut link = Link::new(&mut end, timeout);
             match link.me() {
@@ -79,7 +85,7 @@ pub fn run_in_process(scene: &Scene) -> InProcess {
                     let cfg = fluid_node::node::LoopConfig {
                         scene_hash: scene.hash(),
                         coupled: scene.solid.is_some(),
-                        out: None,
+                        out: out.clone(),
                     };
                     fluid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())
@@ -90,7 +96,7 @@ pub fn run_in_process(scene: &Scene) -> InProcess {
                     let cfg = solid_node::node::LoopConfig {
                         scene_hash: scene.hash(),
                         coupled: scene.fluid.is_some(),
-                        out: None,
+                        out,
                     };
                     solid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())

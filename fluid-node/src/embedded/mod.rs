@@ -38,6 +38,9 @@
 //!   there is none, the face neighbour with the largest aperture, recursively, until a large
 //!   cell is found or the walk cycles (then the smallest cell index of the cycle).
 
+// Index loops over the axes read like the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
@@ -92,7 +95,7 @@ impl SolidFrame {
             || surface.dim != s.dim
             || s.velocity.len() != n * dim
             || s.angular_velocity.len() != n * n_rot(s.dim)
-            || surface.vertices.len() % dim != 0
+            || !surface.vertices.len().is_multiple_of(dim)
             || surface.elements.len() != ne * dim
             || surface.wet.len() != ne
         {
@@ -159,9 +162,13 @@ impl SolidFrame {
 
     /// Velocity of the point `x` moving with particle `p`: `V + Ω × (x − X)`.
     pub fn point_velocity(&self, p: usize, x: [f64; 3]) -> [f64; 3] {
-        let d = self.dim;
         let c = self.center(p);
-        let r = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+        self.rigid_velocity(p, [x[0] - c[0], x[1] - c[1], x[2] - c[2]])
+    }
+
+    /// Velocity `V + Ω × r` of the point at `r` from the centre of particle `p`.
+    pub fn rigid_velocity(&self, p: usize, r: [f64; 3]) -> [f64; 3] {
+        let d = self.dim;
         let mut v = [0.0; 3];
         v[..d].copy_from_slice(&self.velocity[p * d..(p + 1) * d]);
         if d == 2 {
@@ -473,7 +480,7 @@ impl Embedded {
         let fills = &mut self.hooks.ghosts[axis];
         for &c in &self.near {
             let c = c as usize;
-            if !(lambda[c] >= 1.0 - COVERED_TOLERANCE) {
+            if lambda[c] < 1.0 - COVERED_TOLERANCE {
                 continue;
             }
             let ijk = grid.ijk(c);
@@ -597,13 +604,17 @@ impl Embedded {
 
     /// Steps 6–7 of paper 003 §3.4 with the accepted surface and kinematics `accepted`
     /// (`F^{n+1}`, `X^{n+1}`, `V^{n+1/2}`, `Ω^{n+1/2}`), after [`Embedded::predict`] with the
-    /// same `dt`. On success the accepted frame becomes the start of the next step.
+    /// same `dt`. `explicit`: the solid's loads came from `F^n` (one pass), so the solid flux
+    /// is taken there too (paper 000 eq. 11) and the exchange balances exactly; the price is
+    /// identity (19–21) at `t^{n+1}`, which a tangentially deforming wall then breaks (paper
+    /// 003 §4.2). On success the accepted frame becomes the start of the next step.
     pub fn correct(
         &mut self,
         solver: &mut FluidSolver,
         dt: f64,
         accepted: SolidFrame,
         step: u64,
+        explicit: bool,
     ) -> Result<CorrectReport, String> {
         let grid = self.grid.clone();
         let dim = grid.dim;
@@ -632,7 +643,12 @@ impl Embedded {
         self.kind.clear();
         self.kind.resize(self.near.len(), CellKind::Predicted);
         let mut report = CorrectReport::default();
-        for s in &self.trial.subfaces {
+        let flux_subfaces = if explicit {
+            &self.geom.subfaces[..]
+        } else {
+            &[][..]
+        };
+        for s in self.trial.subfaces.iter().chain(flux_subfaces) {
             match self.slot_of[s.cell as usize] {
                 0 => {
                     return Err(format!(
@@ -692,7 +708,9 @@ impl Embedded {
                 acc[dim + 1] += sigma * (wl * fl[4] - wr * fr[4]);
             }
         }
-        // Solid flux (eq. 26) and swept amounts (paper 000 eq. 12), sub-face by sub-face.
+        // Solid flux (eq. 26). Semi-implicit: on the wet sub-faces of F^{n+1}, torques about
+        // X^{n+1} (paper 003 step 7). Explicit: on those of F^n about X^n (paper 000 eq. 11),
+        // the surface the solid's loads came from, so that the exchange balances exactly.
         let mut work_received = 0.0;
         let mut impulse_received = [0.0; 3];
         let nr = if dim == 2 { 1 } else { 3 };
@@ -701,44 +719,54 @@ impl Embedded {
         self.last_loads.force.resize(np * dim, 0.0);
         self.last_loads.torque.clear();
         self.last_loads.torque.resize(np * nr, 0.0);
+        let (flux_geom, flux_frame) = if explicit {
+            (&self.geom, &self.current)
+        } else {
+            (&self.trial, &accepted)
+        };
+        for s in &flux_geom.subfaces {
+            if !flux_frame.wet[s.element as usize] {
+                continue;
+            }
+            let k = self.slot_of[s.cell as usize] as usize - 1;
+            let mut pi = [0.0; 3];
+            for a in 0..dim {
+                pi[a] = self.hooks.pressures[a][k] * s.normal[a] * s.area;
+            }
+            let p = s.particle as usize;
+            let x = flux_frame.center(p);
+            let r = [
+                s.centroid[0] - x[0],
+                s.centroid[1] - x[1],
+                s.centroid[2] - x[2],
+            ];
+            let w = accepted.rigid_velocity(p, r);
+            let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
+            let acc = &mut self.content[k];
+            for a in 0..dim {
+                acc[1 + a] += dt * pi[a] / volume;
+                impulse_received[a] += dt * pi[a];
+            }
+            acc[dim + 1] += dt * power / volume;
+            work_received += dt * power;
+            let f = [-pi[0], -pi[1], -pi[2]];
+            for a in 0..dim {
+                self.last_loads.force[p * dim + a] += f[a];
+            }
+            if dim == 2 {
+                self.last_loads.torque[p] += r[0] * f[1] - r[1] * f[0];
+            } else {
+                self.last_loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
+                self.last_loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
+                self.last_loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
+            }
+        }
+        // Swept amounts (paper 000 eq. 12): the prism of every sub-face of F^{n+1}, wet or not
+        // (Λ counts every element), gives its cell the content it sweeps at t^n.
         let mut entry = 0;
         let entries = &self.swept.entries;
         for (s_idx, s) in self.trial.subfaces.iter().enumerate() {
             let k = self.slot_of[s.cell as usize] as usize - 1;
-            if self.current.wet[s.element as usize] {
-                let mut pi = [0.0; 3];
-                for a in 0..dim {
-                    let p = self.hooks.pressures[a][k];
-                    pi[a] = p * s.normal[a] * s.area;
-                }
-                let w = accepted.point_velocity(s.particle as usize, s.centroid);
-                let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
-                let acc = &mut self.content[k];
-                for a in 0..dim {
-                    acc[1 + a] += dt * pi[a] / volume;
-                    impulse_received[a] += dt * pi[a];
-                }
-                acc[dim + 1] += dt * power / volume;
-                work_received += dt * power;
-                let p = s.particle as usize;
-                let x = accepted.center(p);
-                let r = [
-                    s.centroid[0] - x[0],
-                    s.centroid[1] - x[1],
-                    s.centroid[2] - x[2],
-                ];
-                let f = [-pi[0], -pi[1], -pi[2]];
-                for a in 0..dim {
-                    self.last_loads.force[p * dim + a] += f[a];
-                }
-                if dim == 2 {
-                    self.last_loads.torque[p] += r[0] * f[1] - r[1] * f[0];
-                } else {
-                    self.last_loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
-                    self.last_loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
-                    self.last_loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
-                }
-            }
             while entry < entries.len() && (entries[entry].subface as usize) < s_idx {
                 entry += 1;
             }
@@ -985,7 +1013,7 @@ impl Embedded {
                 }
                 j += 1;
             }
-            if !(vol > 0.0) {
+            if vol <= 0.0 || vol.is_nan() {
                 return Err(format!(
                     "no fluid volume to mix cell {:?} into (a closed pocket of covered cells)",
                     grid.ijk(root)

@@ -46,6 +46,8 @@ struct State {
     broken: Vec<bool>,
     dissipated: f64,
     external_work: f64,
+    /// Impulse of the external loads so far, `Σ F Δt` over all particles (fixed ones too).
+    external_impulse: [f64; 3],
     wet_revision: u64,
 }
 
@@ -311,6 +313,7 @@ impl Solid {
             broken: vec![false; n_links],
             dissipated: 0.0,
             external_work: 0.0,
+            external_impulse: [0.0; 3],
             wet_revision: 0,
         };
         let topo = build_elements(&model, elongation_at_break.is_some());
@@ -559,6 +562,12 @@ impl Solid {
     /// The wet surface at the committed state (velocities at n).
     pub fn wet_surface(&self) -> &WetSurfaceData {
         &self.wet
+    }
+
+    /// Impulse the external loads gave the particles so far, `Σ_steps Σ_p F_p Δt` (fixed
+    /// particles included: what they receive goes to their constraint).
+    pub fn external_impulse(&self) -> [f64; 3] {
+        self.state.external_impulse
     }
 
     /// Energies at the committed state.

@@ -145,6 +145,9 @@ impl Solid {
             let w = Vector3::from(pt.omega) * dt;
             external_work += Vector3::from(self.ext_force[p]).dot(&dx)
                 + Vector3::from(self.ext_torque[p]).dot(&w);
+            for a in 0..3 {
+                self.state.external_impulse[a] += self.ext_force[p][a] * dt;
+            }
             self.state.x[p] = pt.x;
             self.state.rot[p] = pt.rot;
         }
