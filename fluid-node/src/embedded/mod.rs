@@ -635,6 +635,13 @@ impl Embedded {
             &self.trial,
             &mut self.swept,
         );
+        if self.swept.n_skipped_subfaces > 0 {
+            // The swept amounts would miss volume: mass would not be conserved.
+            return Err(format!(
+                "step {step}: {} sub-faces of the wet surface have no swept prism (non-finite or inconsistent vertices)",
+                self.swept.n_skipped_subfaces
+            ));
+        }
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
         // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
@@ -828,6 +835,18 @@ impl Embedded {
         Ok(report)
     }
 
+    /// Whether the state `content / alpha` is acceptable (see [`state_ok`]).
+    fn physical(&self, content: &[f64; NQ], alpha: f64) -> bool {
+        let dim = self.grid.dim;
+        let mut full = [0.0; NQ];
+        full[0] = content[0] / alpha;
+        for a in 0..dim {
+            full[1 + a] = content[1 + a] / alpha;
+        }
+        full[4] = content[dim + 1] / alpha;
+        state_ok(&full, self.gamma, self.vacuum.0, self.vacuum.1)
+    }
+
     /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
     /// and covered-with-content cells into their targets; returns the cells mixed.
     fn mix(
@@ -858,7 +877,10 @@ impl Embedded {
             if covered && self.content[k].iter().all(|x| *x == 0.0) {
                 continue;
             }
-            if covered || a < MIX_BELOW || uncovered {
+            // NOTE: a large cut cell whose update is not physical is mixed too: eq. (12) sums
+            // the split sweeps' fluxes unsplit, so a cell of fluid fraction near 1/2 at a corner
+            // sees up to twice the Courant number of the sweeps. Mixing keeps conservation.
+            if covered || a < MIX_BELOW || uncovered || !self.physical(&self.content[k], a) {
                 sources.push(k);
             }
         }
@@ -871,6 +893,12 @@ impl Embedded {
             }
         }
         let span = offsets(dim, 1);
+        let is_source = |c: usize| -> Option<usize> {
+            let k = self.slot_of[c];
+            (k > 0 && sources.binary_search(&(k as usize - 1)).is_ok()).then(|| k as usize - 1)
+        };
+        // A target takes the content of the cells mixed into it, so it must not be mixed itself.
+        let target = |c: usize| big(c) && is_source(c).is_none();
         let hop = |c: usize, g: [f64; 3]| -> (usize, bool) {
             let ijk = grid.ijk(c);
             let mut best: Option<(f64, usize)> = None;
@@ -879,7 +907,7 @@ impl Embedded {
                     continue;
                 };
                 let q = grid.index(q[0], q[1], q[2]);
-                if !big(q) {
+                if !target(q) {
                     continue;
                 }
                 let len = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) as f64).sqrt();
@@ -940,10 +968,6 @@ impl Embedded {
             g
         };
         // Root of each source: follow hops to a large cell, or to a cycle (its smallest cell).
-        let is_source = |c: usize| -> Option<usize> {
-            let k = self.slot_of[c];
-            (k > 0 && sources.binary_search(&(k as usize - 1)).is_ok()).then(|| k as usize - 1)
-        };
         let mut groups: Vec<(usize, usize)> = Vec::with_capacity(sources.len());
         for &k in &sources {
             let mut path = vec![self.near[k] as usize];
