@@ -103,6 +103,20 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
         })
         .context("the record holds no hello of that node")?;
     let implementation = opts.implementation.clone().unwrap_or(recorded_impl);
+    // NOTE: a step past the record's end would compare only the steps before it and report
+    // `identical` for a step that never ran.
+    let last_step = frames
+        .iter()
+        .filter(|(dir, _, _)| *dir == Dir::FromNode)
+        .map(|(_, step, _)| *step)
+        .max()
+        .unwrap_or(0);
+    anyhow::ensure!(
+        opts.step <= last_step,
+        "step {} is past the end of the record: its last step of the {} node is {last_step}",
+        opts.step,
+        opts.node
+    );
     // Nearest checkpoint at or before the step.
     let checkpoint = frames
         .iter()

@@ -712,9 +712,12 @@ impl Scene {
 
     /// A stable 64-bit hash (FNV-1a) of the resolved scene, sent in hello messages. Which
     /// implementation runs a side (`fluid.node`, `solid.node`) is not part of it: a double or a
-    /// replay stands in for a node of the same scene.
+    /// replay stands in for a node of the same scene. Nor is `run.threads`: results do not depend
+    /// on it.
     pub fn hash(&self) -> u64 {
         let mut physics = self.clone();
+        // NOTE: results do not depend on the thread count, so neither does the hash.
+        physics.run.threads = RunConfig::default().threads;
         if let Some(f) = physics.fluid.as_mut() {
             f.node = default_node_impl();
         }

@@ -691,3 +691,155 @@ fn leftovers_of_a_crashed_run_are_cleaned_at_the_next_start() {
     assert_eq!(leftovers(), 0, "leftovers of {run_id} survived: {stderr}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A small coupled scene: a shock on a free deformable block, the real fluid and the real solid.
+const COUPLED: &str = r#"
+name = "coupled-small"
+[run]
+t_end = 0.2
+scheme = "semi-implicit"
+record = "exchange"
+checkpoint_every = 20
+threads = THREADS
+[fluid]
+lower = [0.0, 0.0]
+upper = [2.0, 1.0]
+cells = [60, 30]
+boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
+[[fluid.init]]
+region = "all"
+rho = 1.4
+p = 1.0
+[[fluid.init]]
+region = { box = { lower = [0.0, 0.0], upper = [0.5, 1.0] } }
+rho = 5.6
+p = 10.0
+[solid]
+density = 100.0
+young = 7000.0
+poisson = 0.0
+[[solid.bodies]]
+shape = { box = { center = [0.9, 0.45], size = [0.3, 0.3] } }
+divisions = [4, 4]
+[solid.prescribed]
+box = { center = [0.9, 0.45], size = [0.3, 0.3] }
+motion = { velocity = [0.5, 0.0] }
+[fluid.pressure]
+value = 1.0
+gradient = [-1.0, 0.0]
+[output]
+every = 0.1
+"#;
+
+fn coupled_scene(dir: &Path, threads: u32) -> PathBuf {
+    std::fs::create_dir_all(dir).expect("dir");
+    let path = dir.join(format!("coupled-{threads}.toml"));
+    std::fs::write(&path, COUPLED.replace("THREADS", &threads.to_string())).expect("scene");
+    path
+}
+
+#[test]
+fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count() {
+    let dir = out_dir("coupled-det");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    run_scene(&coupled_scene(&dir, 1), &a, &[]);
+    run_scene(&coupled_scene(&dir, 2), &b, &[]);
+    let s = summary(&a);
+    assert_eq!(s["status"], "completed", "{s}");
+    assert_eq!(s["nodes"]["fluid"], "real");
+    assert_eq!(s["nodes"]["solid"], "real");
+    assert!(s["mass_rel_err"].as_f64().expect("mass") <= 1e-12, "{s}");
+    assert!(s["coupling_iterations"]["max"].as_u64().expect("max") < 7, "{s}");
+    let (fa, fb) = (
+        frames_by_topic(&a.join("exchange.mcap")),
+        frames_by_topic(&b.join("exchange.mcap")),
+    );
+    assert!(fa.len() >= 6, "{} topics", fa.len());
+    assert!(fa == fb, "1 and 2 threads recorded different payload bytes");
+    // The bus carries exactly what the in-process run exchanges, on every channel.
+    let text = std::fs::read_to_string(coupled_scene(&dir, 1)).expect("scene");
+    let scene = protocol::scene::Scene::from_toml_str(&text, "coupled").expect("scene");
+    let mem = cosim_tests::run_in_process(&scene);
+    assert_eq!(mem.error, None);
+    for (from, to, topic) in [
+        (NodeKind::Solid, NodeKind::Coupler, "solid-to-coupler"),
+        (NodeKind::Fluid, NodeKind::Coupler, "fluid-to-coupler"),
+    ] {
+        let mem_frames: Vec<&Vec<u8>> = mem
+            .sink
+            .frames
+            .iter()
+            .filter(|f| f.0 == from && f.1 == to)
+            .map(|f| &f.2)
+            .filter(|f| {
+                codec::decode_header(f)
+                    .is_ok_and(|h| h.kind != protocol::wire::MessageKind::Checkpoint)
+            })
+            .collect();
+        let bus = &fa.iter().find(|(t, _)| t == topic).expect("topic").1;
+        assert_eq!(mem_frames.len(), bus.len(), "{topic}");
+        assert!(
+            mem_frames.iter().zip(bus).all(|(m, b)| *m == b),
+            "{topic}: bus and memory differ"
+        );
+    }
+    // The coupled outputs: fluid cells with their fluid fraction, the wet surface, the loads.
+    let fluid = std::fs::read_to_string(a.join("fluid_1.csv")).expect("fluid_1.csv");
+    assert!(fluid.starts_with("x,y,rho,u,v,p,alpha\n"));
+    let alphas: Vec<f64> = fluid
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().expect("alpha").parse().expect("number"))
+        .collect();
+    assert!(alphas.iter().all(|a| *a > 0.0 && *a <= 1.0));
+    assert!(alphas.len() < 60 * 30, "covered cells are left out");
+    assert!(alphas.iter().any(|a| *a < 1.0), "cut cells are listed");
+    let surface = std::fs::read_to_string(a.join("surface_1.csv")).expect("surface_1.csv");
+    assert!(surface.starts_with("element,particle,wet,x0,y0,x1,y1\n"));
+    let loads = std::fs::read_to_string(a.join("loads_1.csv")).expect("loads_1.csv");
+    assert_eq!(loads.lines().count(), 1 + 16, "{loads}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_coupled_step_replays_identically() {
+    let dir = out_dir("coupled-replay");
+    let out = dir.join("run");
+    run_scene(&coupled_scene(&dir, 1), &out, &[]);
+    let file = out.join("exchange.mcap");
+    for (step, node) in [("30", "fluid"), ("30", "solid"), ("45", "fluid")] {
+        let r = coupler()
+            .args(["replay", "--step", step, "--node", node])
+            .arg(&file)
+            .output()
+            .expect("replay starts");
+        assert_eq!(
+            String::from_utf8_lossy(&r.stdout).trim(),
+            "identical",
+            "{node} step {step}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        assert!(r.status.success());
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn doubles_stand_in_for_either_node_beside_the_real_other() {
+    let dir = out_dir("coupled-doubles");
+    let scene = coupled_scene(&dir, 1);
+    // A box moving at 0.5 m/s through the real gas (the prescribed solid).
+    let moving = dir.join("moving");
+    run_scene(&scene, &moving, &["--solid", "prescribed"]);
+    let s = summary(&moving);
+    assert_eq!(s["status"], "completed", "{s}");
+    assert_eq!(s["nodes"]["solid"], "prescribed");
+    assert!(s["mass_rel_err"].as_f64().expect("mass") <= 1e-12, "{s}");
+    // The real solid in a given pressure field (the pressure double).
+    let pressed = dir.join("pressed");
+    run_scene(&scene, &pressed, &["--fluid", "pressure"]);
+    let s = summary(&pressed);
+    assert_eq!(s["status"], "completed", "{s}");
+    assert_eq!(s["nodes"]["fluid"], "pressure");
+    let _ = std::fs::remove_dir_all(dir);
+}
