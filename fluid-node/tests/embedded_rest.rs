@@ -47,3 +47,32 @@ fn gas_at_rest_stays_at_rest_around_a_fixed_tilted_polygon_2d() {
     let m = embedded.totals(&solver).mass;
     assert!((m - m0).abs() <= 1e-14 * m0, "mass {m0} -> {m}");
 }
+
+#[test]
+fn a_body_flush_against_the_domain_wall_leaves_the_gas_at_rest() {
+    // Its lower face lies in the wall y = 0: no fluid beyond it, the wall acts there.
+    let mut solver = solver(BOX_2D);
+    let body = polygon_2d(
+        &[[0.3, 0.0], [0.6, 0.0], [0.6, 0.3], [0.3, 0.3]],
+        [0.0, 0.0],
+        0.0,
+    );
+    let mut embedded = Embedded::new(&solver, body.clone()).unwrap();
+    for n in 0..10 {
+        let dt = solver.max_dt();
+        let loads = step(&mut solver, &mut embedded, dt, body.clone(), n);
+        // The wall face is left out: the net force is the pressure on the other three faces.
+        let expected = 1.0 * 0.3;
+        assert!(
+            (loads.force[1] + expected).abs() <= 1e-13,
+            "{:?}",
+            loads.force
+        );
+        assert!(loads.force[0].abs() <= 1e-13, "{:?}", loads.force);
+    }
+    let (du, dp) = deviation(&solver, &embedded, 1.0, [0.0; 3]);
+    assert!(
+        du <= 1e-12 && dp <= 1e-12,
+        "max |u| = {du:e}, max |p - p0| = {dp:e}"
+    );
+}

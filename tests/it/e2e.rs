@@ -749,7 +749,10 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     assert_eq!(s["nodes"]["fluid"], "real");
     assert_eq!(s["nodes"]["solid"], "real");
     assert!(s["mass_rel_err"].as_f64().expect("mass") <= 1e-12, "{s}");
-    assert!(s["coupling_iterations"]["max"].as_u64().expect("max") < 7, "{s}");
+    assert!(
+        s["coupling_iterations"]["max"].as_u64().expect("max") < 7,
+        "{s}"
+    );
     let (fa, fb) = (
         frames_by_topic(&a.join("exchange.mcap")),
         frames_by_topic(&b.join("exchange.mcap")),
@@ -789,7 +792,13 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     let alphas: Vec<f64> = fluid
         .lines()
         .skip(1)
-        .map(|l| l.rsplit(',').next().expect("alpha").parse().expect("number"))
+        .map(|l| {
+            l.rsplit(',')
+                .next()
+                .expect("alpha")
+                .parse()
+                .expect("number")
+        })
         .collect();
     assert!(alphas.iter().all(|a| *a > 0.0 && *a <= 1.0));
     assert!(alphas.len() < 60 * 30, "covered cells are left out");
