@@ -76,3 +76,48 @@ fn a_body_flush_against_the_domain_wall_leaves_the_gas_at_rest() {
         "max |u| = {du:e}, max |p - p0| = {dp:e}"
     );
 }
+
+#[test]
+fn gas_at_rest_stays_at_rest_around_a_fixed_tilted_box_3d() {
+    let mut solver = solver(
+        r#"
+        name = "rest-3d"
+        [fluid]
+        flux = { scheme = "osmp", order = 5 }
+        lower = [0.0, 0.0, 0.0]
+        upper = [1.0, 1.0, 1.0]
+        cells = [20, 20, 20]
+        boundary = { x = ["wall", "wall"], y = ["wall", "wall"], z = ["wall", "wall"] }
+        [[fluid.init]]
+        region = "all"
+        rho = 1.4
+        p = 1.0
+    "#,
+    );
+    let body = box_3d(
+        [0.47, 0.52, 0.5],
+        [0.17, 0.12, 0.14],
+        rotation([0.36, 0.48, 0.8], 0.6),
+        [0.0; 3],
+    );
+    let mut embedded = Embedded::new(&solver, body.clone()).unwrap();
+    let m0 = embedded.totals(&solver).mass;
+    for n in 0..10 {
+        let dt = solver.max_dt();
+        let loads = step(&mut solver, &mut embedded, dt, body.clone(), n);
+        let f = loads
+            .force
+            .iter()
+            .chain(&loads.torque)
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(f <= 1e-14, "step {n}: net force or torque {f:e}");
+    }
+    let (du, dp) = deviation(&solver, &embedded, 1.0, [0.0; 3]);
+    println!("3-D fixed: max |u| = {du:e}, max |p - 1| = {dp:e}");
+    assert!(
+        du <= 1e-12 && dp <= 1e-12,
+        "max |u| = {du:e}, max |p - p0| = {dp:e}"
+    );
+    let m = embedded.totals(&solver).mass;
+    assert!((m - m0).abs() <= 1e-14 * m0, "mass {m0} -> {m}");
+}

@@ -89,6 +89,7 @@ fn solver_cores_do_no_io() {
     for core in [
         "fluid-node/src/fv",
         "fluid-node/src/cutcell",
+        "fluid-node/src/embedded",
         "solid-node/src/dem",
     ] {
         rust_files(&root.join(core), &mut files);
