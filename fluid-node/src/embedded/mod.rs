@@ -148,6 +148,37 @@ impl SolidFrame {
         }
     }
 
+    /// The vertex positions of this frame on the connectivity of `next` (same elements, vertices
+    /// renumbered, e.g. split where links broke): vertex `v` of `next` gets the position this
+    /// frame's element had at the same corner.
+    pub fn on_connectivity(&self, next: &SolidFrame) -> Result<Vec<f64>, String> {
+        let d = self.dim;
+        if next.elements.len() != self.elements.len()
+            || next.element_particle != self.element_particle
+        {
+            return Err(format!(
+                "the wet surface changed its elements ({} to {} indices): the swept volumes need the same elements at both ends of a step",
+                self.elements.len(),
+                next.elements.len()
+            ));
+        }
+        let mut out = vec![f64::NAN; next.vertices.len()];
+        for (&new, &old) in next.elements.iter().zip(&self.elements) {
+            let (new, old) = (new as usize * d, old as usize * d);
+            let src = &self.vertices[old..old + d];
+            let dst = &mut out[new..new + d];
+            if dst[0].is_nan() {
+                dst.copy_from_slice(src);
+            } else if dst != src {
+                return Err(format!(
+                    "vertex {} of the new wet surface comes from two different vertices of the old one",
+                    new / d
+                ));
+            }
+        }
+        Ok(out)
+    }
+
     /// Number of particles.
     pub fn n_particles(&self) -> usize {
         self.position.len() / self.dim
@@ -623,17 +654,28 @@ impl Embedded {
         let dim = grid.dim;
         let nvar = dim + 2;
         let volume = grid.cell_volume();
-        if accepted.elements != self.current.elements {
-            return Err(format!(
-                "step {step}: the wet surface changed its connectivity ({} to {} element indices); the swept volumes need the same elements at both ends of a step",
-                self.current.elements.len(),
-                accepted.elements.len()
-            ));
-        }
+        // NOTE: when links break, shared vertices split and the elements are renumbered onto the
+        // new vertices; each element keeps its identity, so `F^n` is re-expressed on the new
+        // connectivity (a split vertex starts where the shared one was) for the prisms.
+        let remapped;
+        let before = if accepted.elements == self.current.elements {
+            self.current.surface()
+        } else {
+            remapped = self
+                .current
+                .on_connectivity(&accepted)
+                .map_err(|e| format!("step {step}: {e}"))?;
+            Surface {
+                dim,
+                vertices: &remapped,
+                elements: &accepted.elements,
+                element_particle: &accepted.element_particle,
+            }
+        };
         compute(&grid, &accepted.surface(), &mut self.trial);
         subface_swept_volumes(
             &grid,
-            &self.current.surface(),
+            &before,
             &accepted.surface(),
             &self.trial,
             &mut self.swept,
