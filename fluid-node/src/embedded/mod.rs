@@ -1191,3 +1191,40 @@ fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
     }
     Some(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(vertices: Vec<f64>, elements: Vec<u32>) -> SolidFrame {
+        let ne = elements.len() / 2;
+        SolidFrame {
+            dim: 2,
+            position: vec![0.5, 0.5, 1.5, 0.5],
+            velocity: vec![0.0; 4],
+            angular_velocity: vec![0.0; 2],
+            vertices,
+            elements,
+            element_particle: vec![0, 0, 1, 1][..ne].to_vec(),
+            wet: vec![true; ne],
+        }
+    }
+
+    #[test]
+    fn a_split_vertex_starts_where_the_shared_one_was() {
+        // Two segments sharing vertex 1 at t^n; at t^{n+1} the second starts at a new vertex 2.
+        let before = frame(vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.0], vec![0, 1, 1, 2]);
+        let after = frame(
+            vec![0.0, 0.1, 1.0, 0.1, 2.0, 0.1, 1.0, 0.2],
+            vec![0, 1, 3, 2],
+        );
+        let remapped = before.on_connectivity(&after).unwrap();
+        assert_eq!(remapped, [0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 1.0, 0.0]);
+        // One new vertex cannot come from two old ones.
+        let merged = frame(vec![0.0, 0.0, 1.0, 0.0, 2.0, 0.0], vec![0, 1, 0, 2]);
+        assert!(before.on_connectivity(&merged).is_err());
+        // Other elements: refused.
+        let fewer = frame(vec![0.0, 0.0, 1.0, 0.0], vec![0, 1]);
+        assert!(before.on_connectivity(&fewer).is_err());
+    }
+}
