@@ -219,7 +219,7 @@ impl SolidFrame {
 /// Force and torque per particle on one trial surface (eq. 23–25 of paper 003).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Loads {
-    /// Force [N] (2-D: per unit depth), `dim` per particle.
+    /// Force \[N\] (2-D: per unit depth), `dim` per particle.
     pub force: Vec<f64>,
     /// Torque about the particle's centre of mass [N m], 1 (2-D) or 3 (3-D) per particle.
     pub torque: Vec<f64>,
