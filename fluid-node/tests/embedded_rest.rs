@@ -121,3 +121,35 @@ fn gas_at_rest_stays_at_rest_around_a_fixed_tilted_box_3d() {
     let m = embedded.totals(&solver).mass;
     assert!((m - m0).abs() <= 1e-14 * m0, "mass {m0} -> {m}");
 }
+
+#[test]
+fn the_fluid_keeps_the_surface_from_crossing_more_than_one_cell_per_step() {
+    let solver = solver(BOX_2D);
+    let dx = 1.0 / 40.0;
+    // Translation: the fastest axis sets the step.
+    let body = polygon_2d(
+        &[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]],
+        [2.0, -0.5],
+        0.0,
+    );
+    let embedded = Embedded::new(&solver, body).unwrap();
+    assert!((embedded.one_cell_dt() - dx / 2.0).abs() <= 1e-15);
+    // Rotation about the centre (0.5, 0.5): the corners move at ω·0.1 along each axis.
+    let body = polygon_2d(
+        &[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]],
+        [0.0, 0.0],
+        3.0,
+    );
+    let embedded = Embedded::new(&solver, body).unwrap();
+    assert!((embedded.one_cell_dt() - dx / (3.0 * 0.1)).abs() <= 1e-13);
+    // At rest: no limit.
+    let body = polygon_2d(
+        &[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]],
+        [0.0, 0.0],
+        0.0,
+    );
+    assert_eq!(
+        Embedded::new(&solver, body).unwrap().one_cell_dt(),
+        f64::INFINITY
+    );
+}
