@@ -2,7 +2,7 @@
 //! and inspection, and the launcher that starts and supervises the nodes.
 //!
 //! - [`scheme`]: the handshake as a sans-IO state machine; [`dt`]: time-step agreement;
-//!   [`ledger`]: the conservation balance.
+//!   [`ledger`]: the conservation balance; [`iqn`]: the IQN-ILS acceleration of the fixed point.
 //! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
 //! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs).
 //! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`]: reading it back.
@@ -14,6 +14,7 @@ pub mod cli;
 pub mod driver;
 pub mod dt;
 pub mod inspect;
+pub mod iqn;
 pub mod launch;
 pub mod ledger;
 pub mod record;

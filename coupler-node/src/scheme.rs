@@ -22,13 +22,14 @@
 use std::collections::VecDeque;
 
 use protocol::PROTOCOL_VERSION;
-use protocol::scene::{RecordLevel, Relaxation, Scene, SchemeName};
+use protocol::scene::{Predictor, RecordLevel, Relaxation, Scene, SchemeName};
 use protocol::wire::{
     Checkpoint, CheckpointRequest, ConservedTotals, Decision, FixedPointDecision, Message,
     NodeKind, Scheme, Shutdown, ShutdownReason, SolidState, Stamp, StepPlan, Welcome,
 };
 
 use crate::dt;
+use crate::iqn::IqnIls;
 use crate::ledger::{Ledger, LedgerEntry};
 
 /// What the coupler needs from the scene.
@@ -46,6 +47,14 @@ pub struct CouplerConfig {
     pub max_iterations: u32,
     /// Relaxation of the solid trial states.
     pub relaxation: Relaxation,
+    /// First relaxation factor of Aitken and IQN-ILS.
+    pub relaxation_initial: f64,
+    /// IQN-ILS: earlier steps whose columns are reused.
+    pub iqn_reuse: u32,
+    /// IQN-ILS: QR2 filter limit.
+    pub iqn_filter: f64,
+    /// Predictor of the second input of each step.
+    pub predictor: Predictor,
     /// Steps between checkpoints (0: none).
     pub checkpoint_every: u64,
     /// Scene cap on the step \[s\].
@@ -76,6 +85,10 @@ impl CouplerConfig {
             tolerance: scene.run.tolerance,
             max_iterations: scene.run.max_iterations,
             relaxation: scene.run.relaxation,
+            relaxation_initial: scene.run.relaxation_initial,
+            iqn_reuse: scene.run.iqn_reuse,
+            iqn_filter: scene.run.iqn_filter,
+            predictor: scene.run.predictor,
             checkpoint_every: match scene.run.record {
                 RecordLevel::All => 1,
                 _ => scene.run.checkpoint_every,
@@ -140,6 +153,13 @@ pub struct StepReport {
     pub residuals: Vec<f64>,
     /// Relaxation factors used after each non-final trial (Aitken), empty otherwise.
     pub relaxation: Vec<f64>,
+    /// IQN-ILS: columns the quasi-Newton update used after each non-final trial (0: the
+    /// constant first relaxation or the predictor), empty otherwise.
+    pub columns: Vec<u32>,
+    /// IQN-ILS: columns the QR2 filter dropped in this step.
+    pub columns_dropped: u32,
+    /// The predictor gave the input of iteration 1.
+    pub predicted: bool,
     /// Output index written at the end of the step.
     pub output: Option<u32>,
     /// The balance.
@@ -271,6 +291,15 @@ pub struct Coupler {
     residuals: Vec<f64>,
     omegas: Vec<f64>,
     aitken: Option<(Vec<f64>, f64)>,
+    iqn: Option<IqnIls>,
+    columns: Vec<u32>,
+    predicted: bool,
+    /// Accepted solid state at `t^{n−1}` and the step that led from it to `t^n` (predictor).
+    previous: Option<(SolidState, f64)>,
+    /// This step's first trial, flattened (predictor).
+    first_trial: Option<Vec<f64>>,
+    /// Last step's accepted state minus its first trial, flattened (predictor).
+    correction: Option<Vec<f64>>,
     ledger: Ledger,
     initial_totals: Vec<ConservedTotals>,
     iteration_total: u64,
@@ -280,6 +309,8 @@ pub struct Coupler {
 impl Coupler {
     /// A coupler waiting for the nodes' hellos.
     pub fn new(cfg: CouplerConfig) -> Coupler {
+        let iqn = (cfg.relaxation == Relaxation::IqnIls)
+            .then(|| IqnIls::new(cfg.iqn_reuse, cfg.iqn_filter, cfg.relaxation_initial));
         Coupler {
             phase: Phase::Greeting {
                 hello: Vec::new(),
@@ -297,6 +328,12 @@ impl Coupler {
             residuals: Vec::new(),
             omegas: Vec::new(),
             aitken: None,
+            iqn,
+            columns: Vec::new(),
+            predicted: false,
+            previous: None,
+            first_trial: None,
+            correction: None,
             ledger: Ledger::default(),
             initial_totals: Vec::new(),
             iteration_total: 0,
@@ -699,6 +736,11 @@ impl Coupler {
         self.residuals.clear();
         self.omegas.clear();
         self.aitken = None;
+        self.columns.clear();
+        self.predicted = false;
+        if let Some(iqn) = self.iqn.as_mut() {
+            iqn.start_step();
+        }
         self.input = self.accepted.clone();
         self.phase = if self.cfg.fluid && self.cfg.solid {
             Phase::Loads(0)
@@ -772,6 +814,13 @@ impl Coupler {
             Message::FixedPointDecision(decision),
         ));
         if accept {
+            let dt = self.plan.as_ref().map_or(0.0, |p| p.0);
+            self.previous = self.accepted.take().map(|a| (a, dt));
+            let acc = flatten(&trial);
+            self.correction = Some(match self.first_trial.take() {
+                Some(f) if f.len() == acc.len() => acc.iter().zip(&f).map(|(a, b)| a - b).collect(),
+                _ => vec![0.0; acc.len()],
+            });
             self.accepted = Some(trial);
             self.input = None;
             self.phase = Phase::Totals(Vec::new());
@@ -782,41 +831,99 @@ impl Coupler {
         Ok(())
     }
 
-    /// The input of the next iteration: the trial itself, or Aitken's relaxation of it.
+    /// The input of the next iteration: the trial itself, its relaxation (Aitken, IQN-ILS), or
+    /// after iteration 0 the predictor's (`linear`: extrapolated accepted states; `correction`:
+    /// this trial plus the last step's converged correction).
     fn relax(&mut self, trial: &SolidState) -> SolidState {
-        if self.cfg.relaxation == Relaxation::None {
-            return trial.clone();
-        }
         let input = self
             .input
             .as_ref()
             .expect("an input state precedes every trial");
         let x = flatten(input);
         let gx = flatten(trial);
-        let r: Vec<f64> = gx.iter().zip(&x).map(|(g, x)| g - x).collect();
-        // NOTE: Aitken's Δ² (Küttler & Wall 2008): ω_k = −ω_{k−1} r_{k−1}·(r_k − r_{k−1}) / |r_k −
-        // r_{k−1}|², starting from ω_0 = 0.5 and kept in [0.05, 2] so a stagnating pair of
-        // residuals cannot stall or throw the iteration.
-        let omega = match &self.aitken {
-            None => 0.5,
-            Some((r_prev, w_prev)) => {
-                let (mut num, mut den) = (0.0, 0.0);
-                for (rk, rp) in r.iter().zip(r_prev) {
-                    let d = rk - rp;
-                    num += rp * d;
-                    den += d * d;
-                }
-                if den > 0.0 {
-                    (-w_prev * num / den).clamp(0.05, 2.0)
-                } else {
-                    *w_prev
-                }
-            }
+        if trial.stamp.iteration == 0 {
+            self.first_trial = Some(gx.clone());
+        }
+        let predicted = match self.cfg.predictor {
+            _ if trial.stamp.iteration > 0 => None,
+            Predictor::None => None,
+            Predictor::Linear => self.predict(gx.len()),
+            Predictor::Correction => self
+                .correction
+                .as_ref()
+                .filter(|c| c.len() == gx.len())
+                .map(|c| gx.iter().zip(c).map(|(g, c)| g + c).collect()),
         };
-        self.omegas.push(omega);
-        let relaxed: Vec<f64> = x.iter().zip(&r).map(|(x, r)| x + omega * r).collect();
-        self.aitken = Some((r, omega));
-        unflatten(trial, &relaxed)
+        self.predicted |= predicted.is_some();
+        match self.cfg.relaxation {
+            Relaxation::None => match predicted {
+                Some(p) => unflatten(trial, &p),
+                None => trial.clone(),
+            },
+            Relaxation::Aitken => {
+                if let Some(p) = predicted {
+                    // NOTE: Aitken's recursion assumes x_k − x_{k−1} = ω_{k−1} r_{k−1}; a
+                    // predicted input breaks it, so the recursion restarts after it.
+                    self.aitken = None;
+                    return unflatten(trial, &p);
+                }
+                let r: Vec<f64> = gx.iter().zip(&x).map(|(g, x)| g - x).collect();
+                // NOTE: Aitken's Δ² (Küttler & Wall 2008): ω_k = −ω_{k−1} r_{k−1}·(r_k − r_{k−1})
+                // / |r_k − r_{k−1}|², starting from ω_0 = `run.relaxation_initial` and kept in
+                // [0.05, 2] so a stagnating pair of residuals cannot stall or throw the iteration.
+                let omega = match &self.aitken {
+                    None => self.cfg.relaxation_initial,
+                    Some((r_prev, w_prev)) => {
+                        let (mut num, mut den) = (0.0, 0.0);
+                        for (rk, rp) in r.iter().zip(r_prev) {
+                            let d = rk - rp;
+                            num += rp * d;
+                            den += d * d;
+                        }
+                        if den > 0.0 {
+                            (-w_prev * num / den).clamp(0.05, 2.0)
+                        } else {
+                            *w_prev
+                        }
+                    }
+                };
+                self.omegas.push(omega);
+                let relaxed: Vec<f64> = x.iter().zip(&r).map(|(x, r)| x + omega * r).collect();
+                self.aitken = Some((r, omega));
+                unflatten(trial, &relaxed)
+            }
+            Relaxation::IqnIls => {
+                let r = unknowns_residual(input, trial);
+                let iqn = self.iqn.as_mut().expect("IQN-ILS has its model");
+                if let Some(p) = predicted {
+                    iqn.observe(&r, &gx);
+                    self.columns.push(0);
+                    return unflatten(trial, &p);
+                }
+                let (next, used) = iqn.next(&r, &x, &gx);
+                self.columns.push(used);
+                unflatten(trial, &next)
+            }
+        }
+    }
+
+    /// Linear extrapolation `X^n + dt^n / dt^{n−1} (X^n − X^{n−1})` of the accepted states,
+    /// flattened, when two are known with the shapes of this trial.
+    fn predict(&self, len: usize) -> Option<Vec<f64>> {
+        let (prev, dt_prev) = self.previous.as_ref()?;
+        let now = flatten(self.accepted.as_ref()?);
+        let prev = flatten(prev);
+        let dt = self.plan.as_ref()?.0;
+        if now.len() != len || prev.len() != len || !dt_prev.is_finite() || *dt_prev <= 0.0 {
+            return None;
+        }
+        let ratio = dt / dt_prev;
+        Some(
+            now.iter()
+                .zip(&prev)
+                .map(|(a, b)| a + ratio * (a - b))
+                .collect(),
+        )
     }
 
     fn finish_step(
@@ -843,6 +950,9 @@ impl Coupler {
             iterations,
             residuals: std::mem::take(&mut self.residuals),
             relaxation: std::mem::take(&mut self.omegas),
+            columns: std::mem::take(&mut self.columns),
+            columns_dropped: self.iqn.as_ref().map_or(0, IqnIls::dropped),
+            predicted: self.predicted,
             output,
             ledger: entry.clone(),
         }));
@@ -963,6 +1073,28 @@ pub fn criterion_22(a: &SolidState, b: &SolidState) -> f64 {
         max_dq = max_dq.max(a.diameter[i].max(b.diameter[i]) * dq);
     }
     max_dx + max_dq
+}
+
+/// The unknowns of IQN-ILS, as a residual `trial − input`: the positions, and the orientations
+/// weighted by the particle diameter as in criterion (22) (2-D: angle; 3-D: quaternion, with the
+/// sign that brings the trial nearest the input).
+fn unknowns_residual(input: &SolidState, trial: &SolidState) -> Vec<f64> {
+    let mut r: Vec<f64> = trial
+        .position
+        .iter()
+        .zip(&input.position)
+        .map(|(t, x)| t - x)
+        .collect();
+    let ori = trial.orientation.len() / trial.n_particles().max(1);
+    for i in 0..trial.n_particles() {
+        let h = trial.diameter[i].max(input.diameter[i]);
+        let a = &input.orientation[ori * i..ori * (i + 1)];
+        let b = &trial.orientation[ori * i..ori * (i + 1)];
+        let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+        let sign = if ori == 4 && dot < 0.0 { -1.0 } else { 1.0 };
+        r.extend(a.iter().zip(b).map(|(x, y)| h * (sign * y - x)));
+    }
+    r
 }
 
 fn flatten(s: &SolidState) -> Vec<f64> {

@@ -40,6 +40,18 @@ pub struct RunConfig {
     pub max_iterations: u32,
     /// Relaxation of the solid positions in the fixed point (default none).
     pub relaxation: Relaxation,
+    /// Constant relaxation factor of the first iteration of Aitken and IQN-ILS, when no
+    /// earlier information is available (default 0.5).
+    pub relaxation_initial: f64,
+    /// IQN-ILS: steps whose secant columns are kept besides the current step's; 0 = only this
+    /// step's (default 4).
+    pub iqn_reuse: u32,
+    /// IQN-ILS: QR2 filter limit; a column whose part orthogonal to the newer columns is
+    /// shorter than this fraction of its own length is dropped (default 1e-2).
+    pub iqn_filter: f64,
+    /// Predictor of the second input of each step from the accepted states of the last two
+    /// steps (default none).
+    pub predictor: Predictor,
     /// Recording level (default exchange).
     pub record: RecordLevel,
     /// Steps between node checkpoints in the record; 0 = none (default 0; `record = "all"`
@@ -69,6 +81,10 @@ impl Default for RunConfig {
             tolerance: 1e-12,
             max_iterations: 50,
             relaxation: Relaxation::None,
+            relaxation_initial: 0.5,
+            iqn_reuse: 4,
+            iqn_filter: 1e-2,
+            predictor: Predictor::None,
             record: RecordLevel::Exchange,
             checkpoint_every: 0,
             dt_max: None,
@@ -98,6 +114,22 @@ pub enum Relaxation {
     None,
     /// Aitken's dynamic relaxation of the solid positions.
     Aitken,
+    /// Interface quasi-Newton with an inverse Jacobian from a least-squares model (Degroote et
+    /// al. 2009), on the positions and orientations of the particles.
+    IqnIls,
+}
+
+/// `run.predictor`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Predictor {
+    /// Iteration 1 starts from the relaxation of iteration 0.
+    None,
+    /// Iteration 1 starts from the linear extrapolation of the last two accepted states.
+    Linear,
+    /// Iteration 1 starts from iteration 0's trial plus the last step's correction (its
+    /// accepted state minus its first trial).
+    Correction,
 }
 
 /// `run.record`.
@@ -798,6 +830,27 @@ impl Scene {
         }
         if run.max_iterations == 0 {
             return Err(invalid("run.max_iterations", "at least 1", "0".into()));
+        }
+        if !(run.relaxation_initial > 0.0 && run.relaxation_initial <= 1.0) {
+            return Err(invalid(
+                "run.relaxation_initial",
+                "a number in (0, 1]",
+                format!("{}", run.relaxation_initial),
+            ));
+        }
+        if !(run.iqn_filter > 0.0 && run.iqn_filter < 1.0) {
+            return Err(invalid(
+                "run.iqn_filter",
+                "a number in (0, 1)",
+                format!("{}", run.iqn_filter),
+            ));
+        }
+        if run.iqn_reuse > 64 {
+            return Err(invalid(
+                "run.iqn_reuse",
+                "0 to 64",
+                run.iqn_reuse.to_string(),
+            ));
         }
         if let Some(dt) = run.dt_max {
             positive("run.dt_max", dt)?;
