@@ -222,6 +222,45 @@ fn replay_is_identical_and_names_an_altered_value() {
     let _ = std::fs::remove_dir_all(out);
 }
 
+#[test]
+fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes() {
+    // The accelerated input is what the coupler sends, so the recorded coupler-to-node messages
+    // hold everything the columns (and the predictor) decided: a node replayed against them
+    // iterates exactly as in the run.
+    let out = out_dir("replay-iqn");
+    std::fs::create_dir_all(&out).expect("dir");
+    let text = std::fs::read_to_string(workspace().join("scenes/backbone-doubles.toml"))
+        .expect("scene")
+        .replace(
+            "relaxation = \"none\"",
+            "relaxation = \"iqn-ils\"\npredictor = \"correction\"",
+        );
+    assert!(text.contains("iqn-ils"));
+    let scene = out.join("iqn.toml");
+    std::fs::write(&scene, text).expect("write scene");
+    run_scene(&scene, &out.join("run"), &[]);
+    let s = summary(&out.join("run"));
+    assert!(s["steps"].as_u64().expect("steps") > 126, "{s}");
+    let mean = s["coupling_iterations"]["mean"].as_f64().expect("mean");
+    assert!(mean < 4.1, "{s}");
+    let file = out.join("run/exchange.mcap");
+    for node in ["solid", "fluid"] {
+        let r = coupler()
+            .args(["replay", "--step", "126", "--node", node])
+            .arg(&file)
+            .output()
+            .expect("replay starts");
+        assert_eq!(
+            String::from_utf8_lossy(&r.stdout).trim(),
+            "identical",
+            "{node}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        assert!(r.status.success());
+    }
+    let _ = std::fs::remove_dir_all(out);
+}
+
 /// Process ids of the nodes of a run (`--` so pgrep does not read the pattern as an option).
 fn node_pids(run_id: &str) -> String {
     let out = Command::new("pgrep")
