@@ -208,6 +208,25 @@ pub fn drive(
         Err(err) => {
             let reason = err.to_string();
             let stamp = Stamp::step(coupler.step());
+            if let DriverError::Coupler(crate::scheme::CouplerError::NotConverged {
+                step,
+                t,
+                iterations,
+                residuals,
+                ..
+            }) = &err
+            {
+                // The failed step's diagnostics, so the record shows its residual history too.
+                let json = serde_json::to_vec(&serde_json::json!({
+                    "step": step,
+                    "t": t,
+                    "iterations": iterations,
+                    "residuals": residuals,
+                    "converged": false,
+                }))
+                .expect("diagnostics serialize");
+                let _ = sink.diagnostics(*step, wall_ns(), &json);
+            }
             for node in [NodeKind::Fluid, NodeKind::Solid] {
                 let present = match node {
                     NodeKind::Fluid => coupler.config().fluid,

@@ -124,3 +124,24 @@ fn iteration_table_of_the_doubles() {
         }
     }
 }
+
+#[test]
+fn exceeding_max_iterations_stops_with_the_residual_history_in_the_record() {
+    let mut scene = scene("backbone-doubles.toml");
+    scene.run.max_iterations = 3;
+    let run = run_in_process(&scene);
+    let error = run.error.expect("3 trials are too few");
+    assert!(
+        error.contains("fixed point not converged at step 0") && error.contains("residual history"),
+        "{error}"
+    );
+    let last: serde_json::Value =
+        serde_json::from_slice(run.sink.diagnostics.last().expect("diagnostics")).expect("json");
+    assert_eq!(last["converged"], false, "{last}");
+    assert_eq!(last["step"], 0);
+    assert_eq!(
+        last["residuals"].as_array().map(Vec::len),
+        Some(3),
+        "{last}"
+    );
+}
