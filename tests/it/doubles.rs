@@ -1,7 +1,7 @@
 //! The two doubles coupled in one process over the in-memory transport.
 
 use cosim_tests::{run_in_process, scene};
-use protocol::scene::{Predictor, Relaxation};
+use protocol::scene::Relaxation;
 use protocol::wire::{Message, NodeKind};
 
 #[test]
@@ -104,25 +104,6 @@ fn iqn_ils_needs_fewer_iterations_than_aitken_on_the_doubles() {
     // Measured: Aitken 6.42, IQN-ILS 4.05 (4 or 5 trials a step, the same for iqn_reuse 1 to 16).
     assert!(iqn < aitken, "IQN-ILS {iqn} vs Aitken {aitken}");
     assert!(iqn < 4.1, "IQN-ILS mean {iqn}");
-}
-
-/// Mean iterations of each relaxation with and without the predictor (`--ignored --nocapture`).
-#[test]
-#[ignore = "a measurement, printed"]
-fn iteration_table_of_the_doubles() {
-    let mut scene = scene("backbone-doubles.toml");
-    for predictor in [Predictor::None, Predictor::Linear, Predictor::Correction] {
-        for relaxation in [Relaxation::None, Relaxation::Aitken, Relaxation::IqnIls] {
-            scene.run.relaxation = relaxation;
-            scene.run.predictor = predictor;
-            let run = run_in_process(&scene);
-            let it = &run.summary.coupling_iterations;
-            println!(
-                "{relaxation:?} {predictor:?}: mean {:.2} max {} ({:?})",
-                it.mean, it.max, run.error
-            );
-        }
-    }
 }
 
 #[test]
