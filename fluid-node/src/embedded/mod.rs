@@ -38,6 +38,10 @@
 //!   there is none, the face neighbour with the largest aperture, recursively, until a large
 //!   cell is found or the walk cycles (then the smallest cell index of the cycle).
 
+// NOTE: per-axis loops index several arrays at once (as in `fv`), and `!(x > 0.0)`-style tests
+// are meant to be true for NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
@@ -92,7 +96,7 @@ impl SolidFrame {
             || surface.dim != s.dim
             || s.velocity.len() != n * dim
             || s.angular_velocity.len() != n * n_rot(s.dim)
-            || surface.vertices.len() % dim != 0
+            || !surface.vertices.len().is_multiple_of(dim)
             || surface.elements.len() != ne * dim
             || surface.wet.len() != ne
         {

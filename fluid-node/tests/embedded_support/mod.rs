@@ -1,7 +1,7 @@
 //! Shared pieces of the embedded-solid tests: scenes, rigid bodies as wet surfaces, and one
 //! coupled step of a solid whose motion is prescribed.
 
-#![allow(dead_code)]
+#![allow(dead_code, unreachable_pub, clippy::needless_range_loop)]
 
 use fluid_node::embedded::{Embedded, SolidFrame};
 use fluid_node::fv::FluidSolver;
