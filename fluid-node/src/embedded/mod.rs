@@ -42,6 +42,8 @@
 // are meant to be true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+mod memory;
+
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
@@ -52,6 +54,8 @@ use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport};
 use crate::grid::Grid;
+
+pub use memory::EmbeddedMemory;
 
 /// Cells within this Chebyshev distance of a cut cell of `F^n` keep their `U^n`, `p̄` and face
 /// fluxes: the surface may move one cell per step, and a trial of the fixed point a little more.
