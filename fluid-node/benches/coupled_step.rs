@@ -28,12 +28,14 @@
 //! The predict overhead is a small difference of two large times; on a shared machine count
 //! instructions instead (STYLE §8): with `COUPLED_BENCH_ONLY=dim,n` the binary runs `WARMUP`
 //! steps (default 1) and one measured step on that grid, each part in its own `measured_*`
-//! function:
+//! function. The sweeps run on each solver's pool thread, which `--toggle-collect` does not
+//! follow, so collect everything per thread and subtract a run with one step less:
 //!
 //! ```text
-//! COUPLED_BENCH_ONLY=3,64 valgrind --tool=callgrind --collect-atstart=no \
-//!     --toggle-collect='*measured_*' target/release/deps/coupled_step-HASH
-//! callgrind_annotate --inclusive=yes callgrind.out.PID | grep measured_
+//! COUPLED_BENCH_ONLY=3,64 WARMUP=1 valgrind --tool=callgrind --separate-threads=yes \
+//!     --callgrind-out-file=w1.out target/release/deps/coupled_step-HASH   # and WARMUP=2: w2.out
+//! callgrind_annotate --inclusive=yes w2.out-01 | grep measured_   # main thread: minus w1.out-01
+//! callgrind_annotate --inclusive=yes w2.out-02 | grep sweep_axis  # coupled pool (-03: the twin)
 //! ```
 
 use std::hint::black_box;
