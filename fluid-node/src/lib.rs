@@ -21,6 +21,7 @@ pub mod embedded;
 pub mod exchange;
 pub mod fv;
 pub mod grid;
+mod memory;
 pub mod node;
 pub mod output;
 pub mod report;

@@ -7,6 +7,7 @@ use crate::cutcell::measure::{
 use crate::cutcell::surface::Surface;
 use crate::cutcell::sweep::{Record, SweepSink, sort_records_by_rows, sweep_rows};
 use crate::grid::Grid;
+use crate::memory::vec_bytes;
 
 /// Tolerance under which the running face fraction entering an uncut cell is snapped to 0 or 1.
 pub const SNAP_TOLERANCE: f64 = 1e-9;
@@ -126,6 +127,29 @@ impl CutGeometry {
     pub fn subface_polygon(&self, s: &SubFace) -> &[[f64; 3]] {
         let first = s.first_vertex as usize;
         &self.subface_vertices[first..first + s.n_vertices as usize]
+    }
+
+    /// Heap bytes of the dense outputs: Λ per cell and λ per face of each axis (capacities).
+    pub fn dense_bytes(&self) -> usize {
+        vec_bytes(&self.solid_fraction) + self.face_fraction.iter().map(vec_bytes).sum::<usize>()
+    }
+
+    /// Heap bytes of all buffers (capacities): [`CutGeometry::dense_bytes`] plus the sub-faces,
+    /// cut-cell list and clipping scratch, which grow with the surface.
+    pub fn memory_bytes(&self) -> usize {
+        self.dense_bytes()
+            + vec_bytes(&self.subfaces)
+            + vec_bytes(&self.subface_vertices)
+            + vec_bytes(&self.cut_cells)
+            + vec_bytes(&self.pieces)
+            + vec_bytes(&self.records)
+            + vec_bytes(&self.written_cells)
+            + self.written_faces.iter().map(vec_bytes).sum::<usize>()
+            + vec_bytes(&self.covered_runs)
+            + vec_bytes(&self.scratch)
+            + vec_bytes(&self.counts)
+            + vec_bytes(&self.piece_subface)
+            + vec_bytes(&self.subface_scratch)
     }
 
     fn reset(&mut self, grid: &Grid) {

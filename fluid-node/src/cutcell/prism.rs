@@ -17,12 +17,20 @@ use crate::cutcell::measure::{
 };
 use crate::cutcell::sweep::{Record, SweepSink, sort_records, sweep_rows};
 use crate::grid::Grid;
+use crate::memory::vec_bytes;
 
 /// Buffers of one prism (pieces and sweep records), reused between prisms.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct PrismScratch {
     pieces: Vec<Piece>,
     records: Vec<Record>,
+}
+
+impl PrismScratch {
+    /// Heap bytes of the buffers (capacities).
+    pub(crate) fn memory_bytes(&self) -> usize {
+        vec_bytes(&self.pieces) + vec_bytes(&self.records)
+    }
 }
 
 /// Calls `emit(cell, volume)` with the signed volume, in m³ (2-D: m²), of the prism from `bottom`

@@ -31,6 +31,7 @@ use crate::cutcell::measure::triangle_normal;
 use crate::cutcell::prism::{PrismScratch, prism_volumes};
 use crate::cutcell::surface::Surface;
 use crate::grid::Grid;
+use crate::memory::vec_bytes;
 
 /// Signed volume of the prism of one sub-face (of the surface at `t^{n+1}`) inside one cell.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +69,11 @@ impl SubfaceSwept {
     /// Total signed swept volume in the domain, in m³ (2-D: m²).
     pub fn total(&self) -> f64 {
         self.entries.iter().map(|e| e.volume).sum()
+    }
+
+    /// Heap bytes of all buffers (capacities).
+    pub fn memory_bytes(&self) -> usize {
+        vec_bytes(&self.entries) + vec_bytes(&self.preimages) + self.prism.memory_bytes()
     }
 
     /// Adds the swept volume of every entry to `acc[cell]` (`acc.len()` = number of cells).

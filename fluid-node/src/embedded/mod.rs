@@ -41,6 +41,8 @@
 // Index loops over the axes read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+mod memory;
+
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
@@ -51,6 +53,8 @@ use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport};
 use crate::grid::Grid;
+
+pub use memory::EmbeddedMemory;
 
 /// Cells within this Chebyshev distance of a cut cell of `F^n` keep their `U^n`, `p̄` and face
 /// fluxes: the surface may move one cell per step, and a trial of the fixed point a little more.

@@ -12,6 +12,7 @@ use crate::fv::line::{FluxKind, LineScratch, state_ok};
 use crate::fv::state::{FluidParams, FluidState, from_scene};
 use crate::fv::sweep::{FaceTap, PencilOut, Pencils, pencil_to_cells, sweep_axis};
 use crate::grid::Grid;
+use crate::memory::vec_bytes;
 
 /// Cells per block of the fixed-order reductions (totals).
 const BLOCK_CELLS: usize = 4096;
@@ -315,6 +316,18 @@ impl FluidSolver {
             self.grid.dim
         );
         self.pbar.get(axis).map(Vec::as_slice)
+    }
+
+    /// Heap bytes of the per-cell and per-pencil buffers (capacities): the state, the sweep
+    /// buffer, the directional pressures when kept, and the pencil reports. Not counted: the
+    /// contents of the per-thread line scratch (O(cells of one line) each) and the thread pool.
+    pub fn memory_bytes(&self) -> usize {
+        vec_bytes(&self.state.u)
+            + vec_bytes(&self.buffer)
+            + vec_bytes(&self.pbar)
+            + self.pbar.iter().map(vec_bytes).sum::<usize>()
+            + vec_bytes(&self.pencil_out)
+            + vec_bytes(&self.scratch)
     }
 
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that

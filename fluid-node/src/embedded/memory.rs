@@ -1,0 +1,81 @@
+//! [`EmbeddedMemory`]: the heap bytes an [`Embedded`] holds, by part (buffer capacities).
+
+use crate::embedded::{Embedded, Loads, SolidFrame};
+use crate::fv::FaceTap;
+use crate::memory::vec_bytes;
+
+/// Heap bytes held by an [`Embedded`], by part (capacities, so what was allocated, not what the
+/// last step used).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EmbeddedMemory {
+    /// Dense outputs of the accepted and the trial geometry: Λ per cell, λ per face and axis.
+    pub dense_geometry: usize,
+    /// The per-cell slot of the near cells (`u32` per cell).
+    pub slot_of: usize,
+    /// Near-surface data: the near cells, their saved `U^n`, `p̄` and wall velocities, the kept
+    /// face fluxes with their slots and per-pencil offsets, the ghost fills and the scratch of
+    /// the correct.
+    pub near_surface: usize,
+    /// Surface-sized geometry: sub-faces, cut-cell lists, clipping scratch and swept entries of
+    /// both geometries, the accepted frame and the last loads.
+    pub sparse_geometry: usize,
+}
+
+impl EmbeddedMemory {
+    /// All parts together.
+    pub fn total(&self) -> usize {
+        self.dense_geometry + self.slot_of + self.near_surface + self.sparse_geometry
+    }
+}
+
+impl Embedded {
+    /// Heap bytes held, by part (see [`EmbeddedMemory`]).
+    pub fn memory(&self) -> EmbeddedMemory {
+        let dense_geometry = self.geom.dense_bytes() + self.trial.dense_bytes();
+        let h = &self.hooks;
+        let near_surface = vec_bytes(&self.near)
+            + vec_bytes(&self.saved)
+            + self.face_slots.iter().map(vec_bytes).sum::<usize>()
+            + h.ghosts.iter().map(vec_bytes).sum::<usize>()
+            + vec_bytes(&h.pressure_cells)
+            + h.pressures.iter().map(vec_bytes).sum::<usize>()
+            + h.taps.iter().map(tap_bytes).sum::<usize>()
+            + vec_bytes(&self.wall_velocity)
+            + vec_bytes(&self.content)
+            + vec_bytes(&self.kind);
+        let sparse_geometry = self.geom.memory_bytes() + self.trial.memory_bytes() - dense_geometry
+            + self.swept.memory_bytes()
+            + frame_bytes(&self.current)
+            + loads_bytes(&self.last_loads);
+        EmbeddedMemory {
+            dense_geometry,
+            slot_of: vec_bytes(&self.slot_of),
+            near_surface,
+            sparse_geometry,
+        }
+    }
+
+    /// Cells near the wet surface of the last predict (cut cells of `F^n` dilated by
+    /// [`NEAR_RADIUS`](crate::embedded::NEAR_RADIUS) cells), ascending.
+    pub fn near_cells(&self) -> &[u32] {
+        &self.near
+    }
+}
+
+fn tap_bytes(tap: &FaceTap) -> usize {
+    vec_bytes(&tap.pencil_offsets) + vec_bytes(&tap.positions) + vec_bytes(&tap.flux)
+}
+
+fn frame_bytes(f: &SolidFrame) -> usize {
+    vec_bytes(&f.position)
+        + vec_bytes(&f.velocity)
+        + vec_bytes(&f.angular_velocity)
+        + vec_bytes(&f.vertices)
+        + vec_bytes(&f.elements)
+        + vec_bytes(&f.element_particle)
+        + vec_bytes(&f.wet)
+}
+
+fn loads_bytes(l: &Loads) -> usize {
+    vec_bytes(&l.force) + vec_bytes(&l.torque)
+}
