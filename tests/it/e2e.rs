@@ -60,6 +60,22 @@ fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     output
 }
 
+/// `coupler-node replay FILE --step STEP --node NODE` prints `identical` and succeeds.
+fn assert_replays_identically(file: &Path, step: &str, node: &str) {
+    let r = coupler()
+        .args(["replay", "--step", step, "--node", node])
+        .arg(file)
+        .output()
+        .expect("replay starts");
+    assert_eq!(
+        String::from_utf8_lossy(&r.stdout).trim(),
+        "identical",
+        "{node} step {step}: {}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert!(r.status.success());
+}
+
 fn summary(out: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
     serde_json::from_str(&text).expect("summary is JSON")
@@ -144,18 +160,7 @@ fn replay_is_identical_and_names_an_altered_value() {
     run_scene(&scene, &out, &[]);
     let file = out.join("exchange.mcap");
     for node in ["solid", "fluid"] {
-        let r = coupler()
-            .args(["replay", "--step", "126", "--node", node])
-            .arg(&file)
-            .output()
-            .expect("replay starts");
-        assert_eq!(
-            String::from_utf8_lossy(&r.stdout).trim(),
-            "identical",
-            "{node}: {}",
-            String::from_utf8_lossy(&r.stderr)
-        );
-        assert!(r.status.success());
+        assert_replays_identically(&file, "126", node);
     }
     // Change one recorded number: the solid's trial position at step 125, iteration 0.
     let rec = record::read_recording(&std::fs::read(&file).expect("record")).expect("readable");
@@ -245,18 +250,7 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes() {
     assert!(mean < 4.1, "{s}");
     let file = out.join("run/exchange.mcap");
     for node in ["solid", "fluid"] {
-        let r = coupler()
-            .args(["replay", "--step", "126", "--node", node])
-            .arg(&file)
-            .output()
-            .expect("replay starts");
-        assert_eq!(
-            String::from_utf8_lossy(&r.stdout).trim(),
-            "identical",
-            "{node}: {}",
-            String::from_utf8_lossy(&r.stderr)
-        );
-        assert!(r.status.success());
+        assert_replays_identically(&file, "126", node);
     }
     let _ = std::fs::remove_dir_all(out);
 }
@@ -856,18 +850,7 @@ fn a_coupled_step_replays_identically() {
     run_scene(&coupled_scene(&dir, 1), &out, &[]);
     let file = out.join("exchange.mcap");
     for (step, node) in [("30", "fluid"), ("30", "solid"), ("45", "fluid")] {
-        let r = coupler()
-            .args(["replay", "--step", step, "--node", node])
-            .arg(&file)
-            .output()
-            .expect("replay starts");
-        assert_eq!(
-            String::from_utf8_lossy(&r.stdout).trim(),
-            "identical",
-            "{node} step {step}: {}",
-            String::from_utf8_lossy(&r.stderr)
-        );
-        assert!(r.status.success());
+        assert_replays_identically(&file, step, node);
     }
     let _ = std::fs::remove_dir_all(dir);
 }
