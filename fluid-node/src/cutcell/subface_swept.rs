@@ -114,19 +114,7 @@ pub fn subface_swept_volumes(
     after_geometry: &CutGeometry,
     out: &mut SubfaceSwept,
 ) {
-    assert!(
-        before.dim == grid.dim && after.dim == grid.dim,
-        "surface dimensions ({}, {}) differ from the grid's {}",
-        before.dim,
-        after.dim,
-        grid.dim
-    );
-    before.check();
-    after.check();
-    assert!(
-        before.elements == after.elements,
-        "swept volumes need the same connectivity at both times"
-    );
+    crate::cutcell::swept::check_pair(grid, before, after);
     out.entries.clear();
     out.n_skipped_subfaces = 0;
     out.n_pieces = lift_preimages(grid, before, after, after_geometry, &mut out.preimages);

@@ -59,11 +59,9 @@ impl SweptVolumes {
     }
 }
 
-/// Computes the volume swept by every element of `before` moving to `after` (same connectivity,
-/// vertices moved), split among the cells of `grid`, into `out`.
-///
-/// Pure; no allocation once the buffers have grown. Cost O(pieces of the prisms).
-pub fn swept_volumes(grid: &Grid, before: &Surface, after: &Surface, out: &mut SweptVolumes) {
+/// Asserts that two positions of a surface fit the grid and share their connectivity (a bug
+/// in the caller otherwise).
+pub(crate) fn check_pair(grid: &Grid, before: &Surface, after: &Surface) {
     assert!(
         before.dim == grid.dim && after.dim == grid.dim,
         "surface dimensions ({}, {}) differ from the grid's {}",
@@ -77,6 +75,14 @@ pub fn swept_volumes(grid: &Grid, before: &Surface, after: &Surface, out: &mut S
         before.elements == after.elements,
         "swept volumes need the same connectivity at both times"
     );
+}
+
+/// Computes the volume swept by every element of `before` moving to `after` (same connectivity,
+/// vertices moved), split among the cells of `grid`, into `out`.
+///
+/// Pure; no allocation once the buffers have grown. Cost O(pieces of the prisms).
+pub fn swept_volumes(grid: &Grid, before: &Surface, after: &Surface, out: &mut SweptVolumes) {
+    check_pair(grid, before, after);
     out.entries.clear();
     out.n_skipped_elements = 0;
     out.n_pieces = 0;

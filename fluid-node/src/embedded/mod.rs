@@ -603,7 +603,7 @@ impl Embedded {
             torque: vec![0.0; np * nr],
         };
         for s in &self.trial.subfaces {
-            if !trial.wet[s.element as usize] || on_domain_face(&self.grid, s) {
+            if !trial.wet[s.element as usize] || domain_face(&self.grid, s).is_some() {
                 continue;
             }
             let mut f = [0.0; 3];
@@ -623,13 +623,7 @@ impl Embedded {
                 s.centroid[1] - x[1],
                 s.centroid[2] - x[2],
             ];
-            if d == 2 {
-                loads.torque[p] += r[0] * f[1] - r[1] * f[0];
-            } else {
-                loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
-                loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
-                loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
-            }
+            add_moment(&mut loads.torque, d, p, r, f);
         }
         Ok(loads)
     }
@@ -703,17 +697,7 @@ impl Embedded {
         let face_area: Vec<f64> = (0..dim).map(|a| volume / grid.dx[a]).collect();
         let mut flush: Vec<(usize, usize, f64)> = Vec::new();
         for s in &self.trial.subfaces {
-            if on_domain_face(&grid, s) {
-                let a = (0..dim)
-                    .find(|&a| {
-                        s.normal[a] != 0.0
-                            && (s.centroid[a] - grid.lower[a])
-                                .abs()
-                                .min((s.centroid[a] - grid.upper[a]).abs())
-                                <= 1e-12 * grid.dx[a]
-                    })
-                    .expect("on a domain face");
-                let side = usize::from(s.normal[a] > 0.0);
+            if let Some((a, side)) = domain_face(&grid, s) {
                 match flush.last_mut() {
                     Some(f) if f.0 == s.cell as usize && f.1 == 2 * a + side => f.2 += s.area,
                     _ => flush.push((s.cell as usize, 2 * a + side, s.area)),
@@ -810,7 +794,7 @@ impl Embedded {
             (&self.trial, &accepted)
         };
         for s in &flux_geom.subfaces {
-            if !flux_frame.wet[s.element as usize] || on_domain_face(&grid, s) {
+            if !flux_frame.wet[s.element as usize] || domain_face(&grid, s).is_some() {
                 continue;
             }
             let k = self.slot_of[s.cell as usize] as usize - 1;
@@ -838,13 +822,7 @@ impl Embedded {
             for a in 0..dim {
                 self.last_loads.force[p * dim + a] += f[a];
             }
-            if dim == 2 {
-                self.last_loads.torque[p] += r[0] * f[1] - r[1] * f[0];
-            } else {
-                self.last_loads.torque[3 * p] += r[1] * f[2] - r[2] * f[1];
-                self.last_loads.torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
-                self.last_loads.torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
-            }
+            add_moment(&mut self.last_loads.torque, dim, p, r, f);
         }
         // Swept amounts (paper 000 eq. 12): the prism of every sub-face of F^{n+1}, wet or not
         // (Λ counts every element), gives its cell the content it sweeps at t^n.
@@ -889,12 +867,7 @@ impl Embedded {
             {
                 continue;
             }
-            let mut full = [0.0; NQ];
-            full[0] = u[c * nvar];
-            for a in 0..dim {
-                full[1 + a] = u[c * nvar + 1 + a];
-            }
-            full[4] = u[c * nvar + dim + 1];
+            let full = full_state(&u[c * nvar..(c + 1) * nvar], dim, 1.0);
             if !state_ok(&full, self.gamma, vr, vp) {
                 let w = crate::fv::euler::primitive(&full, self.gamma);
                 let ijk = grid.ijk(c);
@@ -915,13 +888,7 @@ impl Embedded {
 
     /// Whether the state `content / alpha` is acceptable (see [`state_ok`]).
     fn physical(&self, content: &[f64; NQ], alpha: f64) -> bool {
-        let dim = self.grid.dim;
-        let mut full = [0.0; NQ];
-        full[0] = content[0] / alpha;
-        for a in 0..dim {
-            full[1 + a] = content[1 + a] / alpha;
-        }
-        full[4] = content[dim + 1] / alpha;
+        let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
         state_ok(&full, self.gamma, self.vacuum.0, self.vacuum.1)
     }
 
@@ -1155,16 +1122,44 @@ impl Embedded {
     }
 }
 
-/// Whether a sub-face lies in a face of the domain with its normal out of the domain: a solid
-/// face flush against the domain boundary, with no fluid beyond it (the boundary condition
-/// acts there instead; the tie rule of [`crate::cutcell`] puts such a face on the low side into
-/// the covered cells above it).
-fn on_domain_face(grid: &Grid, s: &crate::cutcell::SubFace) -> bool {
-    (0..grid.dim).any(|a| {
+/// The domain face `(axis, side)` (side 0 low, 1 high) a sub-face lies in with its normal out
+/// of the domain: a solid face flush against the domain boundary, with no fluid beyond it (the
+/// boundary condition acts there instead; the tie rule of [`crate::cutcell`] puts such a face
+/// on the low side into the covered cells above it).
+fn domain_face(grid: &Grid, s: &crate::cutcell::SubFace) -> Option<(usize, usize)> {
+    (0..grid.dim).find_map(|a| {
         let tol = 1e-12 * grid.dx[a];
-        (s.normal[a] < 0.0 && (s.centroid[a] - grid.lower[a]).abs() <= tol)
-            || (s.normal[a] > 0.0 && (s.centroid[a] - grid.upper[a]).abs() <= tol)
+        if s.normal[a] < 0.0 && (s.centroid[a] - grid.lower[a]).abs() <= tol {
+            Some((a, 0))
+        } else if s.normal[a] > 0.0 && (s.centroid[a] - grid.upper[a]).abs() <= tol {
+            Some((a, 1))
+        } else {
+            None
+        }
     })
+}
+
+/// Adds the moment `r × f` of a force about a particle's centre to `torque` (2-D: the z
+/// component, one per particle; 3-D: three per particle).
+fn add_moment(torque: &mut [f64], dim: usize, p: usize, r: [f64; 3], f: [f64; 3]) {
+    if dim == 2 {
+        torque[p] += r[0] * f[1] - r[1] * f[0];
+    } else {
+        torque[3 * p] += r[1] * f[2] - r[2] * f[1];
+        torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
+        torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
+    }
+}
+
+/// A storage cell (`dim + 2` values) divided by `scale`, as a 5-component state.
+fn full_state(cell: &[f64], dim: usize, scale: f64) -> [f64; NQ] {
+    let mut full = [0.0; NQ];
+    full[0] = cell[0] / scale;
+    for a in 0..dim {
+        full[1 + a] = cell[1 + a] / scale;
+    }
+    full[4] = cell[dim + 1] / scale;
+    full
 }
 
 /// All offsets of the `(2r + 1)^dim − 1` neighbours within Chebyshev distance `r`.
