@@ -42,14 +42,16 @@ pub enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Re-run one node on the recorded inputs up to step N and compare its outputs.
+    /// Re-run one node (or the coupler) on the recorded inputs up to step N and compare its
+    /// outputs.
     Replay {
         /// The record.
         file: PathBuf,
         /// Last step to replay.
         #[arg(long)]
         step: u64,
-        /// Which node: `fluid` or `solid`.
+        /// Which node: `fluid`, `solid`, or `coupler` (its state machine on the recorded node
+        /// messages, from its checkpoint).
         #[arg(long)]
         node: String,
         /// Implementation to run (default: the one recorded in its hello).
@@ -142,7 +144,8 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             let node = match node.as_str() {
                 "fluid" => NodeKind::Fluid,
                 "solid" => NodeKind::Solid,
-                other => anyhow::bail!("--node {other:?}: expected fluid or solid"),
+                "coupler" => NodeKind::Coupler,
+                other => anyhow::bail!("--node {other:?}: expected fluid, solid or coupler"),
             };
             let outcome = crate::replay::replay(&crate::replay::ReplayOptions {
                 file,

@@ -361,6 +361,12 @@ fn drive_inner(
                     transport.send(to, &out)?;
                 }
                 Action::Checkpoint(_) => {}
+                Action::CouplerCheckpoint(c) => {
+                    let step = c.stamp.step;
+                    codec::encode_into(NodeKind::Coupler, &Message::Checkpoint(c), &mut out);
+                    sink.checkpoint(NodeKind::Coupler, step, wall_ns(), &out)
+                        .map_err(DriverError::Record)?;
+                }
                 Action::StepDone(report) => {
                     let json = serde_json::to_vec(&Diagnostics {
                         step: report.step,

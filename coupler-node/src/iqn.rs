@@ -23,12 +23,23 @@
 use std::collections::VecDeque;
 
 use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
 
 /// One secant pair.
 #[derive(Clone, Debug)]
 struct Column {
     dr: DVector<f64>,
     dxt: DVector<f64>,
+}
+
+/// The columns IQN-ILS keeps across steps: `(ΔR, ΔX̃)` pairs of the earlier steps (newest step
+/// first) and of the step just finished.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IqnColumns {
+    /// Earlier steps' columns, newest step first, each step's oldest first.
+    pub old: Vec<Vec<(Vec<f64>, Vec<f64>)>>,
+    /// The last step's columns, oldest first (they join `old` when the next step starts).
+    pub now: Vec<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The IQN-ILS state kept across iterations and steps.
@@ -74,6 +85,37 @@ impl IqnIls {
     /// Columns dropped by the filter since the step began.
     pub fn dropped(&self) -> u32 {
         self.dropped
+    }
+
+    /// The secant columns kept across steps, as plain vectors (the coupler's checkpoint; taken
+    /// between steps, when nothing else is pending).
+    pub fn columns(&self) -> IqnColumns {
+        let plain = |cols: &[Column]| -> Vec<(Vec<f64>, Vec<f64>)> {
+            cols.iter()
+                .map(|c| (c.dr.as_slice().to_vec(), c.dxt.as_slice().to_vec()))
+                .collect()
+        };
+        IqnColumns {
+            old: self.old.iter().map(|cols| plain(cols)).collect(),
+            now: plain(&self.now),
+        }
+    }
+
+    /// Puts back the columns of [`IqnIls::columns`]; the next step iterates as the original
+    /// run's did.
+    pub fn restore(&mut self, columns: &IqnColumns) {
+        let model = |cols: &[(Vec<f64>, Vec<f64>)]| -> Vec<Column> {
+            cols.iter()
+                .map(|(dr, dxt)| Column {
+                    dr: DVector::from_column_slice(dr),
+                    dxt: DVector::from_column_slice(dxt),
+                })
+                .collect()
+        };
+        self.old = columns.old.iter().map(|cols| model(cols)).collect();
+        self.now = model(&columns.now);
+        self.last = None;
+        self.dropped = 0;
     }
 
     /// Takes trial `k` without computing an input (its input came from elsewhere, e.g. a

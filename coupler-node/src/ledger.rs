@@ -8,10 +8,10 @@
 //! - interface: the work the fluid gives equals the work the solid receives.
 
 use protocol::wire::{ConservedTotals, NodeKind};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One step's balance.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct LedgerEntry {
     /// Step just completed.
     pub step: u64,
@@ -41,7 +41,7 @@ pub struct LedgerEntry {
 }
 
 /// Running ledger.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Ledger {
     initial_mass: Option<f64>,
     initial_energy: Option<f64>,

@@ -5,12 +5,14 @@
 //!   [`ledger`]: the conservation balance; [`iqn`]: the IQN-ILS acceleration of the fixed point.
 //! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
 //! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs).
-//! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`]: reading it back.
+//! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`], [`coupler_replay`]: reading
+//!   it back.
 //! - [`cli`]: the command line.
 
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod coupler_replay;
 pub mod driver;
 pub mod dt;
 pub mod inspect;

@@ -9,9 +9,10 @@
 //! | `fluid-to-coupler`, `coupler-to-fluid`, `solid-to-coupler`, `coupler-to-solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
 //! | `checkpoint/fluid`, `checkpoint/solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
 //! | `diagnostics` | `json` | `cosim.Diagnostics`, `jsonschema` ([`DIAGNOSTICS_SCHEMA`]) |
+//! | `checkpoint/coupler` | `bincode` | `protocol::wire::Message`, `bincode-serde` (a `Checkpoint` whose bytes are a `CouplerCheckpoint`) |
 //!
 //! Frames are the bytes of `protocol::codec` (24-byte header + bincode payload), so a reader
-//! decodes them with `protocol::codec::decode`. Channel ids are fixed (1 to 7 in the order of the
+//! decodes them with `protocol::codec::decode`. Channel ids are fixed (1 to 8 in the order of the
 //! table; only `diagnostics` at level `Diagnostics`), sequence numbers count per channel from 0,
 //! `log_time` is the coupling step and `publish_time` the wall clock in ns since the UNIX epoch
 //! given by the caller. Everything but `publish_time` is a function of the recorded run.
@@ -248,6 +249,7 @@ impl<W: Write + Seek> Recorder<W> {
             ]),
         })?;
         let mut channels = BTreeMap::new();
+        let mut frame_schema = None;
         if level != RecordLevel::Diagnostics {
             let schema = writer.add_schema(
                 FRAME_SCHEMA_NAME,
@@ -279,6 +281,7 @@ impl<W: Write + Seek> Recorder<W> {
                 let id = writer.add_channel(schema, topic, FRAME_MESSAGE_ENCODING, &meta)?;
                 channels.insert(topic, (id, 0));
             }
+            frame_schema = Some(schema);
         }
         let schema = writer.add_schema(
             "cosim.Diagnostics",
@@ -287,6 +290,16 @@ impl<W: Write + Seek> Recorder<W> {
         )?;
         let id = writer.add_channel(schema, DIAGNOSTICS_TOPIC, "json", &BTreeMap::new())?;
         channels.insert(DIAGNOSTICS_TOPIC, (id, 0));
+        if let Some(frames) = frame_schema {
+            // After `diagnostics`, so the ids of the older channels stay as they were.
+            let topic = checkpoint_topic(NodeKind::Coupler).expect("the coupler's topic");
+            let meta = BTreeMap::from([
+                ("node".to_string(), NodeKind::Coupler.name().to_string()),
+                ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+            ]);
+            let id = writer.add_channel(frames, topic, FRAME_MESSAGE_ENCODING, &meta)?;
+            channels.insert(topic, (id, 0));
+        }
         Ok(Recorder {
             writer,
             level,
@@ -499,12 +512,12 @@ pub fn frame_topic(from: NodeKind, to: NodeKind) -> Option<&'static str> {
     }
 }
 
-/// Topic of a node's checkpoints, `None` for the coupler.
+/// Topic of a node's (or the coupler's own) checkpoints.
 pub fn checkpoint_topic(node: NodeKind) -> Option<&'static str> {
     match node {
         NodeKind::Fluid => Some("checkpoint/fluid"),
         NodeKind::Solid => Some("checkpoint/solid"),
-        NodeKind::Coupler => None,
+        NodeKind::Coupler => Some("checkpoint/coupler"),
     }
 }
 

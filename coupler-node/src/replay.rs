@@ -1,5 +1,6 @@
 //! `coupler-node replay FILE --step N --node fluid|solid`: re-run one node on the recorded
-//! inputs and compare every message it sends with the record.
+//! inputs and compare every message it sends with the record (`--node coupler`: the coupler's
+//! state machine, see [`crate::coupler_replay`]).
 //!
 //! The node's binary (real or double) is started on the recorded scene. The replay plays the
 //! coupler: it sends the recorded coupler → node frames and compares each node → coupler frame
@@ -89,6 +90,11 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
         .get("scene")
         .and_then(|m| m.get("toml"))
         .context("the record holds no scene metadata")?;
+    if opts.node == NodeKind::Coupler {
+        let scene = protocol::scene::Scene::from_toml_str(scene_toml, "the record's scene")
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        return crate::coupler_replay::replay(&rec, &scene, opts.step);
+    }
     let frames = script(&rec, opts.node);
     anyhow::ensure!(
         !frames.is_empty(),
@@ -197,7 +203,7 @@ fn drive(
             Dir::ToNode => bus.send(node, frame)?,
             Dir::FromNode => {
                 let got = recv(bus)?;
-                if let Some(diff) = compare(node, frame, &got) {
+                if let Some(diff) = compare(&format!("{node}-to-coupler"), frame, &got) {
                     return Ok(Outcome::Differs(diff));
                 }
                 compared += 1;
@@ -238,7 +244,7 @@ fn drive(
             }
             Dir::FromNode => {
                 let got = recv(bus)?;
-                if let Some(diff) = compare(node, frame, &got) {
+                if let Some(diff) = compare(&format!("{node}-to-coupler"), frame, &got) {
                     return Ok(Outcome::Differs(diff));
                 }
                 compared += 1;
@@ -254,12 +260,11 @@ fn drive(
     })
 }
 
-/// `None` when equal; otherwise where the first difference is.
-fn compare(node: NodeKind, recorded: &[u8], replayed: &[u8]) -> Option<String> {
+/// `None` when equal; otherwise where the first difference is (`channel` names the frames).
+pub(crate) fn compare(channel: &str, recorded: &[u8], replayed: &[u8]) -> Option<String> {
     if recorded == replayed {
         return None;
     }
-    let channel = format!("{node}-to-coupler");
     let (rh, rm) = match codec::decode(recorded) {
         Ok(x) => x,
         Err(e) => {

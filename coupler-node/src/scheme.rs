@@ -21,6 +21,8 @@
 
 use std::collections::VecDeque;
 
+use serde::{Deserialize, Serialize};
+
 use protocol::PROTOCOL_VERSION;
 use protocol::scene::{Predictor, RecordLevel, Relaxation, Scene, SchemeName};
 use protocol::wire::{
@@ -29,7 +31,7 @@ use protocol::wire::{
 };
 
 use crate::dt;
-use crate::iqn::IqnIls;
+use crate::iqn::{IqnColumns, IqnIls};
 use crate::ledger::{Ledger, LedgerEntry};
 
 /// What the coupler needs from the scene.
@@ -53,7 +55,7 @@ pub struct CouplerConfig {
     pub iqn_reuse: u32,
     /// IQN-ILS: QR2 filter limit.
     pub iqn_filter: f64,
-    /// Predictor of the second input of each step.
+    /// Predictor of a semi-implicit step's first inputs.
     pub predictor: Predictor,
     /// Steps between checkpoints (0: none).
     pub checkpoint_every: u64,
@@ -123,6 +125,9 @@ pub enum Action {
     StepDone(StepReport),
     /// A node's checkpoint arrived: record it.
     Checkpoint(Checkpoint),
+    /// The coupler's own checkpoint (node `coupler`, bytes: a [`CouplerCheckpoint`]), taken
+    /// when it asks the nodes for theirs: record it.
+    CouplerCheckpoint(Checkpoint),
     /// The run is over (the shutdown messages were emitted just before).
     Finished(Finish),
 }
@@ -275,6 +280,31 @@ enum Phase {
     Done,
 }
 
+/// What the coupler carries from one step to the next, taken when it asks the nodes for their
+/// checkpoints (the step's plan agreed, the requests sent): the accepted states the predictors
+/// extrapolate, IQN-ILS's secant columns, the ledger. Restored with the nodes' checkpoints, the
+/// coupler iterates the next steps exactly as the original run did. Aitken's factor restarts
+/// from `run.relaxation_initial` every step, so it carries nothing.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CouplerCheckpoint {
+    /// The step whose plan is agreed.
+    pub step: u64,
+    /// Its start time \[s\].
+    pub t: f64,
+    next_output: usize,
+    plan: Option<(f64, Option<u32>, String)>,
+    accepted: Option<SolidState>,
+    previous: Option<(SolidState, f64)>,
+    first_trial: Option<Vec<f64>>,
+    correction: Option<Vec<f64>>,
+    /// IQN-ILS's columns (absent with another relaxation).
+    pub iqn: Option<IqnColumns>,
+    ledger: Ledger,
+    iteration_total: u64,
+    iteration_max: u32,
+    queue: Vec<(NodeKind, Message)>,
+}
+
 /// The coupler's state.
 #[derive(Debug)]
 pub struct Coupler {
@@ -339,6 +369,56 @@ impl Coupler {
             iteration_total: 0,
             iteration_max: 0,
         }
+    }
+
+    /// The coupler's state between steps (see [`CouplerCheckpoint`]).
+    pub fn checkpoint(&self) -> CouplerCheckpoint {
+        CouplerCheckpoint {
+            step: self.step,
+            t: self.t,
+            next_output: self.next_output,
+            plan: self.plan.clone(),
+            accepted: self.accepted.clone(),
+            previous: self.previous.clone(),
+            first_trial: self.first_trial.clone(),
+            correction: self.correction.clone(),
+            iqn: self.iqn.as_ref().map(IqnIls::columns),
+            ledger: self.ledger.clone(),
+            iteration_total: self.iteration_total,
+            iteration_max: self.iteration_max,
+            queue: self.queue.iter().cloned().collect(),
+        }
+    }
+
+    /// A coupler resumed from `checkpoint`, waiting for the nodes' checkpoints of its step as
+    /// the original was when it took it.
+    pub fn restore(cfg: CouplerConfig, checkpoint: &CouplerCheckpoint) -> Result<Coupler, String> {
+        let mut c = Coupler::new(cfg);
+        match (c.iqn.as_mut(), &checkpoint.iqn) {
+            (Some(iqn), Some(columns)) => iqn.restore(columns),
+            (None, None) => {}
+            _ => {
+                return Err(
+                    "the checkpoint's relaxation is not the scene's (IQN-ILS columns present in one only)"
+                        .into(),
+                );
+            }
+        }
+        let cp = checkpoint.clone();
+        c.step = cp.step;
+        c.t = cp.t;
+        c.next_output = cp.next_output;
+        c.plan = cp.plan;
+        c.accepted = cp.accepted;
+        c.previous = cp.previous;
+        c.first_trial = cp.first_trial;
+        c.correction = cp.correction;
+        c.ledger = cp.ledger;
+        c.iteration_total = cp.iteration_total;
+        c.iteration_max = cp.iteration_max;
+        c.queue = cp.queue.into();
+        c.phase = Phase::Checkpoints(Vec::new());
+        Ok(c)
     }
 
     /// The configuration.
@@ -694,6 +774,11 @@ impl Coupler {
                             ));
                         }
                         self.phase = Phase::Checkpoints(Vec::new());
+                        actions.push(Action::CouplerCheckpoint(Checkpoint {
+                            stamp: Stamp::step(self.step),
+                            node: NodeKind::Coupler,
+                            bytes: protocol::codec::encode_blob(&self.checkpoint()),
+                        }));
                     } else {
                         self.start_step(actions);
                     }
@@ -723,25 +808,44 @@ impl Coupler {
 
     fn start_step(&mut self, actions: &mut Vec<Action>) {
         let (dt, output, _) = self.plan.clone().expect("a plan precedes the step");
+        // The linear predictor replaces `F^n` as iteration 0's input of a semi-implicit step
+        // once two accepted states are known.
+        let predicted = match (self.cfg.scheme, self.cfg.predictor, &self.accepted) {
+            (Scheme::SemiImplicit, Predictor::Linear, Some(accepted)) => {
+                self.predict(flatten(accepted).len()).map(|p| {
+                    let mut s = unflatten(accepted, &p);
+                    s.stamp = Stamp::step(self.step);
+                    s
+                })
+            }
+            _ => None,
+        };
         let plan = StepPlan {
             stamp: Stamp::step(self.step),
             t: self.t,
             dt,
             scheme: self.cfg.scheme,
             output,
+            predicted: predicted.is_some(),
         };
         for node in self.cfg.nodes() {
             actions.push(Action::Send(node, Message::StepPlan(plan.clone())));
+        }
+        if let Some(p) = &predicted {
+            actions.push(Action::Send(
+                NodeKind::Fluid,
+                Message::SolidState(p.clone()),
+            ));
         }
         self.residuals.clear();
         self.omegas.clear();
         self.aitken = None;
         self.columns.clear();
-        self.predicted = false;
+        self.predicted = predicted.is_some();
         if let Some(iqn) = self.iqn.as_mut() {
             iqn.start_step();
         }
-        self.input = self.accepted.clone();
+        self.input = predicted.or_else(|| self.accepted.clone());
         self.phase = if self.cfg.fluid && self.cfg.solid {
             Phase::Loads(0)
         } else {
@@ -815,6 +919,11 @@ impl Coupler {
         ));
         if accept {
             let dt = self.plan.as_ref().map_or(0.0, |p| p.0);
+            if let (Some(iqn), Some(input)) = (self.iqn.as_mut(), self.input.as_ref()) {
+                // The accepted trial's secant column is as good as any: keep it for the next
+                // steps, which would otherwise reuse nothing from a step accepted at once.
+                iqn.observe(&unknowns_residual(input, &trial, dt), &flatten(&trial));
+            }
             self.previous = self.accepted.take().map(|a| (a, dt));
             let acc = flatten(&trial);
             self.correction = Some(match self.first_trial.take() {
@@ -832,8 +941,8 @@ impl Coupler {
     }
 
     /// The input of the next iteration: the trial itself, its relaxation (Aitken, IQN-ILS), or
-    /// after iteration 0 the predictor's (`linear`: extrapolated accepted states; `correction`:
-    /// this trial plus the last step's converged correction).
+    /// after iteration 0 the `correction` predictor's (this trial plus the last step's converged
+    /// correction). The `linear` predictor acts before iteration 0 ([`Coupler::start_step`]).
     fn relax(&mut self, trial: &SolidState) -> SolidState {
         let input = self
             .input
@@ -846,13 +955,12 @@ impl Coupler {
         }
         let predicted = match self.cfg.predictor {
             _ if trial.stamp.iteration > 0 => None,
-            Predictor::None => None,
-            Predictor::Linear => self.predict(gx.len()),
+            Predictor::None | Predictor::Linear => None,
             Predictor::Correction => self
                 .correction
                 .as_ref()
                 .filter(|c| c.len() == gx.len())
-                .map(|c| gx.iter().zip(c).map(|(g, c)| g + c).collect()),
+                .map(|c| gx.iter().zip(c).map(|(g, c)| g + c).collect::<Vec<f64>>()),
         };
         self.predicted |= predicted.is_some();
         match self.cfg.relaxation {
@@ -893,7 +1001,8 @@ impl Coupler {
                 unflatten(trial, &relaxed)
             }
             Relaxation::IqnIls => {
-                let r = unknowns_residual(input, trial);
+                let dt = self.plan.as_ref().map_or(0.0, |p| p.0);
+                let r = unknowns_residual(input, trial, dt);
                 let iqn = self.iqn.as_mut().expect("IQN-ILS has its model");
                 if let Some(p) = predicted {
                     iqn.observe(&r, &gx);
@@ -1078,7 +1187,7 @@ pub fn criterion_22(a: &SolidState, b: &SolidState) -> f64 {
 /// The unknowns of IQN-ILS, as a residual `trial − input`: the positions, and the orientations
 /// weighted by the particle diameter as in criterion (22) (2-D: angle; 3-D: quaternion, with the
 /// sign that brings the trial nearest the input).
-fn unknowns_residual(input: &SolidState, trial: &SolidState) -> Vec<f64> {
+fn unknowns_residual(input: &SolidState, trial: &SolidState, dt: f64) -> Vec<f64> {
     let mut r: Vec<f64> = trial
         .position
         .iter()
@@ -1093,6 +1202,21 @@ fn unknowns_residual(input: &SolidState, trial: &SolidState) -> Vec<f64> {
         let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
         let sign = if ori == 4 && dot < 0.0 { -1.0 } else { 1.0 };
         r.extend(a.iter().zip(b).map(|(x, y)| h * (sign * y - x)));
+    }
+    // Velocities times dt: a fluid whose loads read the velocity (an impedance) sees them.
+    r.extend(
+        trial
+            .velocity
+            .iter()
+            .zip(&input.velocity)
+            .map(|(t, x)| dt * (t - x)),
+    );
+    let rot = trial.angular_velocity.len() / trial.n_particles().max(1);
+    for i in 0..trial.n_particles() {
+        let h = trial.diameter[i].max(input.diameter[i]);
+        let a = &input.angular_velocity[rot * i..rot * (i + 1)];
+        let b = &trial.angular_velocity[rot * i..rot * (i + 1)];
+        r.extend(a.iter().zip(b).map(|(x, y)| h * dt * (y - x)));
     }
     r
 }

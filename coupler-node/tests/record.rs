@@ -60,6 +60,7 @@ fn record_step<W: Write + Seek>(
         dt: 1e-3,
         scheme: Scheme::SemiImplicit,
         output: None,
+        predicted: false,
     });
     frames.push((
         NodeKind::Coupler,
@@ -226,7 +227,10 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
         } else {
             assert_eq!(channel.message_encoding, "bincode");
             assert_eq!(schema.name, "protocol::wire::Message");
-            assert!(String::from_utf8_lossy(&schema.data).contains("protocol version 1"));
+            assert!(
+                String::from_utf8_lossy(&schema.data)
+                    .contains(&format!("protocol version {PROTOCOL_VERSION}"))
+            );
         }
     }
     let streamed = mcap::MessageStream::new(&bytes).unwrap().count();

@@ -87,7 +87,8 @@ impl NodeModel for FluidSide<'_> {
 
 impl FluidSide<'_> {
     /// The fluid's side of one step: predict, then (coupled) loads on each trial surface until
-    /// the coupler accepts one, then correct.
+    /// the coupler accepts one, then correct. Iteration 0's surface is the accepted `F^n`, or
+    /// the predicted state the coupler sends after a plan that says so.
     fn advance(
         &mut self,
         link: &mut Link<'_>,
@@ -104,10 +105,18 @@ impl FluidSide<'_> {
                 .correct(plan, None)
                 .map_err(|e| fail(link, plan.stamp, e));
         }
-        let mut trial = self
+        let accepted = self
             .surface
             .take()
             .expect("a surface precedes every coupled step");
+        let mut trial = if plan.predicted {
+            match link.recv()? {
+                Message::SolidState(s) => s,
+                other => return Err(unexpected(&other, "the predicted SolidState")),
+            }
+        } else {
+            accepted
+        };
         let mut iteration = 0;
         loop {
             let mut loads = self

@@ -49,8 +49,7 @@ pub struct RunConfig {
     /// IQN-ILS: QR2 filter limit; a column whose part orthogonal to the newer columns is
     /// shorter than this fraction of its own length is dropped (default 1e-2).
     pub iqn_filter: f64,
-    /// Predictor of the second input of each step from the accepted states of the last two
-    /// steps (default none).
+    /// Predictor of a semi-implicit step's first inputs (default none).
     pub predictor: Predictor,
     /// Recording level (default exchange).
     pub record: RecordLevel,
@@ -123,9 +122,11 @@ pub enum Relaxation {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Predictor {
-    /// Iteration 1 starts from the relaxation of iteration 0.
+    /// Iteration 0 runs on the accepted surface `F^n`, iteration 1 on the relaxation of its
+    /// trial.
     None,
-    /// Iteration 1 starts from the linear extrapolation of the last two accepted states.
+    /// Iteration 0 runs on the linear extrapolation of the last two accepted states (sent to
+    /// the fluid right after the step plan) instead of on `F^n`.
     Linear,
     /// Iteration 1 starts from iteration 0's trial plus the last step's correction (its
     /// accepted state minus its first trial).

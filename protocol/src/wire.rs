@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -149,6 +149,10 @@ pub struct StepPlan {
     pub scheme: Scheme,
     /// `Some(k)`: the step ends exactly at the k-th output time; the nodes write output `k`.
     pub output: Option<u32>,
+    /// Semi-implicit with `run.predictor = "linear"`: right after this plan the coupler sends
+    /// the fluid a predicted `SolidState` (this step, iteration 0), and the fluid computes the
+    /// iteration-0 loads on it instead of on the accepted surface `F^n`.
+    pub predicted: bool,
 }
 
 /// Pressure loads the fluid applies to the solid, one entry per particle.

@@ -46,6 +46,7 @@ fn every_message() -> Vec<Message> {
             dt: 1e-4,
             scheme: Scheme::SemiImplicit,
             output: Some(3),
+            predicted: true,
         }),
         Message::InterfaceLoads(InterfaceLoads {
             stamp,

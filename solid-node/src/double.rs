@@ -327,6 +327,7 @@ mod tests {
             dt,
             scheme: Scheme::Explicit,
             output: None,
+            predicted: false,
         }
     }
 

@@ -116,6 +116,7 @@ fn doubles_over_the_bus_are_recorded_and_deterministic() {
     assert_eq!(
         topics,
         [
+            "checkpoint/coupler",
             "checkpoint/fluid",
             "checkpoint/solid",
             "coupler-to-fluid",
@@ -194,6 +195,9 @@ fn replay_is_identical_and_names_an_altered_value() {
             "checkpoint/solid" => {
                 recorder.record_checkpoint(NodeKind::Solid, m.log_time, m.publish_time, &data)
             }
+            "checkpoint/coupler" => {
+                recorder.record_checkpoint(NodeKind::Coupler, m.log_time, m.publish_time, &data)
+            }
             _ => {
                 let (from, to) = topic.split_once("-to-").expect("a frame topic");
                 let kind = |n: &str| match n {
@@ -228,17 +232,18 @@ fn replay_is_identical_and_names_an_altered_value() {
 }
 
 #[test]
-fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes() {
+fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes_and_the_coupler() {
     // The accelerated input is what the coupler sends, so the recorded coupler-to-node messages
-    // hold everything the columns (and the predictor) decided: a node replayed against them
-    // iterates exactly as in the run.
+    // hold everything the columns and the predictor decided (the linear predictor's iteration-0
+    // state travels after each plan): a node replayed against them iterates exactly as in the
+    // run.
     let out = out_dir("replay-iqn");
     std::fs::create_dir_all(&out).expect("dir");
     let text = std::fs::read_to_string(workspace().join("scenes/backbone-doubles.toml"))
         .expect("scene")
         .replace(
             "relaxation = \"none\"",
-            "relaxation = \"iqn-ils\"\npredictor = \"correction\"",
+            "relaxation = \"iqn-ils\"\npredictor = \"linear\"",
         );
     assert!(text.contains("iqn-ils"));
     let scene = out.join("iqn.toml");
@@ -247,10 +252,46 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes() {
     let s = summary(&out.join("run"));
     assert!(s["steps"].as_u64().expect("steps") > 126, "{s}");
     let mean = s["coupling_iterations"]["mean"].as_f64().expect("mean");
-    assert!(mean < 4.1, "{s}");
+    assert!(mean <= 3.0, "{s}");
     let file = out.join("run/exchange.mcap");
     for node in ["solid", "fluid"] {
         assert_replays_identically(&file, "126", node);
+    }
+    // The coupler itself, resumed from its checkpoint of step 120 (columns, accepted states),
+    // sends the very frames of the run; without the columns it iterates otherwise.
+    assert_replays_identically(&file, "126", "coupler");
+    let mut rec = record::read_recording(&std::fs::read(&file).expect("record")).expect("read");
+    let scene_toml = rec.metadata["scene"]["toml"].clone();
+    let scene = protocol::scene::Scene::from_toml_str(&scene_toml, "recorded").expect("scene");
+    let outcome = coupler_node::coupler_replay::replay(&rec, &scene, 126).expect("replay");
+    assert!(
+        matches!(
+            outcome,
+            coupler_node::replay::Outcome::Identical { from_step: 120, .. }
+        ),
+        "{outcome:?}"
+    );
+    let own = rec
+        .messages
+        .iter_mut()
+        .rfind(|m| m.topic == "checkpoint/coupler" && m.log_time == 120)
+        .expect("a coupler checkpoint at step 120");
+    let Ok((_, Message::Checkpoint(mut c))) = codec::decode(&own.data) else {
+        panic!("the coupler checkpoint is a Checkpoint frame");
+    };
+    let mut state: coupler_node::scheme::CouplerCheckpoint =
+        codec::decode_blob(&c.bytes).expect("coupler state");
+    let columns = state.iqn.as_mut().expect("IQN-ILS columns");
+    assert!(!columns.old.is_empty() || !columns.now.is_empty());
+    columns.old.clear();
+    columns.now.clear();
+    c.bytes = codec::encode_blob(&state);
+    own.data = codec::encode(NodeKind::Coupler, &Message::Checkpoint(c));
+    match coupler_node::coupler_replay::replay(&rec, &scene, 126).expect("replay") {
+        coupler_node::replay::Outcome::Differs(diff) => {
+            assert!(diff.contains("coupler-to-"), "{diff}");
+        }
+        other => panic!("a coupler without its columns iterated identically: {other:?}"),
     }
     let _ = std::fs::remove_dir_all(out);
 }

@@ -7,7 +7,7 @@ Opens the file, reads every message, and checks that
   - every channel is a known topic with the expected message encoding and schema
     (bus and checkpoint channels: "bincode", schema "protocol::wire::Message"/"bincode-serde";
     "diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object),
-  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 1,
+  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 2,
   - every diagnostics message parses as a JSON object with an integer "step" equal to log_time,
   - sequence numbers count up from 0 per channel, and the metadata "scene" and "run" exist,
   - the file has a summary whose message count matches (unless --truncated: then the file is
@@ -30,9 +30,10 @@ FRAME_TOPICS = {
     "coupler-to-solid",
     "checkpoint/fluid",
     "checkpoint/solid",
+    "checkpoint/coupler",
 }
 DIAGNOSTICS = "diagnostics"
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 
 
 class CheckError(Exception):
