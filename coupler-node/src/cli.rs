@@ -41,6 +41,13 @@ pub enum Command {
         /// No progress line.
         #[arg(long)]
         quiet: bool,
+        /// Resume from the checkpoints this record holds at `--step` (a run of the same scene;
+        /// its steps from there are those of the recorded run, bit for bit).
+        #[arg(long, requires = "step")]
+        restart: Option<PathBuf>,
+        /// The step to restart at (one with checkpoints: a multiple of `run.checkpoint_every`).
+        #[arg(long, requires = "restart")]
+        step: Option<u64>,
     },
     /// Re-run one node (or the coupler) on the recorded inputs up to step N and compare its
     /// outputs.
@@ -98,6 +105,8 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             solid,
             timeout_s,
             quiet,
+            restart,
+            step,
         } => {
             let out = match out {
                 Some(out) => out,
@@ -118,6 +127,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 progress: !quiet,
                 fluid_bin: None,
                 solid_bin: None,
+                restart: restart.zip(step),
             })?;
             eprintln!(
                 "{}: {} in {} steps, t = {:.6e} s, wall {:.2} s, iterations mean {:.2} max {}, mass err {:.2e}, energy err {:.2e}; outputs in {}",

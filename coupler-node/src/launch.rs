@@ -39,6 +39,8 @@ pub struct RunOptions {
     pub fluid_bin: Option<PathBuf>,
     /// Explicit solid binary.
     pub solid_bin: Option<PathBuf>,
+    /// Resume from the checkpoints of this record at this step.
+    pub restart: Option<(PathBuf, u64)>,
 }
 
 /// Reads and validates a scene, applying implementation overrides; returns it with its path.
@@ -133,6 +135,10 @@ pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<Pa
 /// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    let resume = match &opts.restart {
+        Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
+        None => None,
+    };
     let mut nodes = Vec::new();
     if let Some(f) = &scene.fluid {
         nodes.push((NodeKind::Fluid, f.node.clone()));
@@ -195,7 +201,11 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
         Some(s) => s,
         None => &mut no_record,
     };
-    let mut coupler = Coupler::new(CouplerConfig::from_scene(&scene));
+    let cfg = CouplerConfig::from_scene(&scene);
+    let mut coupler = match resume {
+        Some(resume) => Coupler::resuming(cfg, resume).map_err(|e| anyhow::anyhow!(e))?,
+        None => Coupler::new(cfg),
+    };
     let cfg = DriverConfig {
         timeout: opts.timeout,
         progress: opts.progress,

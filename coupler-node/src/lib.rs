@@ -4,7 +4,8 @@
 //! - [`scheme`]: the handshake as a sans-IO state machine; [`dt`]: time-step agreement;
 //!   [`ledger`]: the conservation balance; [`iqn`]: the IQN-ILS acceleration of the fixed point.
 //! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
-//! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs).
+//! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs);
+//!   [`restart`]: a run resumed from a record's checkpoints.
 //! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`], [`coupler_replay`]: reading
 //!   it back.
 //! - [`cli`]: the command line.
@@ -21,5 +22,6 @@ pub mod launch;
 pub mod ledger;
 pub mod record;
 pub mod replay;
+pub mod restart;
 pub mod scheme;
 pub mod sink;

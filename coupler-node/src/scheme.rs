@@ -334,6 +334,19 @@ pub struct Coupler {
     initial_totals: Vec<ConservedTotals>,
     iteration_total: u64,
     iteration_max: u32,
+    /// A restart waiting for the greeting to end.
+    resume: Option<Resume>,
+    /// Proposals for steps before this one are dropped (a restart's, from before the restore).
+    stale_before: u64,
+}
+
+/// What a restarted run resumes from: the coupler's checkpoint and the nodes' of the same step.
+#[derive(Clone, Debug)]
+pub struct Resume {
+    /// The coupler's.
+    pub coupler: CouplerCheckpoint,
+    /// One per node of the scene, fluid first.
+    pub nodes: Vec<Checkpoint>,
 }
 
 impl Coupler {
@@ -368,6 +381,8 @@ impl Coupler {
             initial_totals: Vec::new(),
             iteration_total: 0,
             iteration_max: 0,
+            resume: None,
+            stale_before: 0,
         }
     }
 
@@ -394,7 +409,35 @@ impl Coupler {
     /// the original was when it took it.
     pub fn restore(cfg: CouplerConfig, checkpoint: &CouplerCheckpoint) -> Result<Coupler, String> {
         let mut c = Coupler::new(cfg);
-        match (c.iqn.as_mut(), &checkpoint.iqn) {
+        c.apply(checkpoint)?;
+        c.plan = checkpoint.plan.clone();
+        c.queue = checkpoint.queue.iter().cloned().collect();
+        c.phase = Phase::Checkpoints(Vec::new());
+        Ok(c)
+    }
+
+    /// A coupler that restarts a run at the step of `resume`: it greets fresh nodes, sends each
+    /// its checkpoint (a node restores and proposes for that step), takes back its own state
+    /// and goes on from there as the original run did. Proposals the nodes make for step 0
+    /// before they are restored are dropped.
+    pub fn resuming(cfg: CouplerConfig, resume: Resume) -> Result<Coupler, String> {
+        // Checked now rather than after the greeting.
+        Coupler::new(cfg.clone()).apply(&resume.coupler)?;
+        let mut c = Coupler::new(cfg);
+        let nodes: Vec<NodeKind> = resume.nodes.iter().map(|n| n.node).collect();
+        if nodes != c.cfg.nodes() {
+            return Err(format!(
+                "the restart has checkpoints of {nodes:?}, the scene runs {:?}",
+                c.cfg.nodes()
+            ));
+        }
+        c.resume = Some(resume);
+        Ok(c)
+    }
+
+    /// Takes the state of a checkpoint (not the plan, the queue or the phase).
+    fn apply(&mut self, checkpoint: &CouplerCheckpoint) -> Result<(), String> {
+        match (self.iqn.as_mut(), &checkpoint.iqn) {
             (Some(iqn), Some(columns)) => iqn.restore(columns),
             (None, None) => {}
             _ => {
@@ -405,20 +448,17 @@ impl Coupler {
             }
         }
         let cp = checkpoint.clone();
-        c.step = cp.step;
-        c.t = cp.t;
-        c.next_output = cp.next_output;
-        c.plan = cp.plan;
-        c.accepted = cp.accepted;
-        c.previous = cp.previous;
-        c.first_trial = cp.first_trial;
-        c.correction = cp.correction;
-        c.ledger = cp.ledger;
-        c.iteration_total = cp.iteration_total;
-        c.iteration_max = cp.iteration_max;
-        c.queue = cp.queue.into();
-        c.phase = Phase::Checkpoints(Vec::new());
-        Ok(c)
+        self.step = cp.step;
+        self.t = cp.t;
+        self.next_output = cp.next_output;
+        self.accepted = cp.accepted;
+        self.previous = cp.previous;
+        self.first_trial = cp.first_trial;
+        self.correction = cp.correction;
+        self.ledger = cp.ledger;
+        self.iteration_total = cp.iteration_total;
+        self.iteration_max = cp.iteration_max;
+        Ok(())
     }
 
     /// The configuration.
@@ -518,6 +558,8 @@ impl Coupler {
                     },
                 });
             }
+            // A restarted node's proposal from before its restore.
+            msg if stale(&msg, self.stale_before) => {}
             msg => self.queue.push_back((from, msg)),
         }
         // Handle queued messages in arrival order, as long as the current phase takes them.
@@ -741,9 +783,19 @@ impl Coupler {
             match std::mem::replace(&mut self.phase, Phase::Done) {
                 Phase::Greeting { .. } => {
                     let initial = std::mem::take(&mut self.initial_totals);
-                    let fluid = initial.iter().find(|t| t.node == NodeKind::Fluid);
-                    let solid = initial.iter().find(|t| t.node == NodeKind::Solid);
-                    self.ledger.update(0, fluid, solid);
+                    if let Some(resume) = self.resume.take() {
+                        for c in resume.nodes {
+                            actions.push(Action::Send(c.node, Message::Checkpoint(c)));
+                        }
+                        self.apply(&resume.coupler)
+                            .expect("checked by Coupler::resuming");
+                        self.stale_before = self.step;
+                        self.queue.retain(|(_, m)| !stale(m, self.stale_before));
+                    } else {
+                        let fluid = initial.iter().find(|t| t.node == NodeKind::Fluid);
+                        let solid = initial.iter().find(|t| t.node == NodeKind::Solid);
+                        self.ledger.update(0, fluid, solid);
+                    }
                     self.phase = Phase::Proposals(Vec::new());
                 }
                 Phase::Proposals(got) => {
@@ -1104,6 +1156,11 @@ impl Coupler {
         }
         Ok(())
     }
+}
+
+/// A step proposal older than the step a restarted run resumes at.
+fn stale(msg: &Message, before: u64) -> bool {
+    matches!(msg, Message::DtProposal(p) if p.stamp.step < before)
 }
 
 fn check_state(s: &SolidState) -> Result<(), String> {

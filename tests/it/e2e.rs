@@ -260,6 +260,9 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes_and_the_coupler() {
     // The coupler itself, resumed from its checkpoint of step 120 (columns, accepted states),
     // sends the very frames of the run; without the columns it iterates otherwise.
     assert_replays_identically(&file, "126", "coupler");
+    // A restart from step 60 goes on as the run did: the columns and the predictor's states
+    // travel in the coupler's checkpoint.
+    assert_restart_continues_identically(&out.join("run"), 60, &out.join("restart"));
     let mut rec = record::read_recording(&std::fs::read(&file).expect("record")).expect("read");
     let scene_toml = rec.metadata["scene"]["toml"].clone();
     let scene = protocol::scene::Scene::from_toml_str(&scene_toml, "recorded").expect("scene");
@@ -890,9 +893,117 @@ fn a_coupled_step_replays_identically() {
     let out = dir.join("run");
     run_scene(&coupled_scene(&dir, 1), &out, &[]);
     let file = out.join("exchange.mcap");
-    for (step, node) in [("30", "fluid"), ("30", "solid"), ("45", "fluid")] {
+    for (step, node) in [
+        ("30", "fluid"),
+        ("30", "solid"),
+        ("45", "fluid"),
+        ("45", "coupler"),
+    ] {
         assert_replays_identically(&file, step, node);
     }
+    assert_restart_continues_identically(&out, 40, &dir.join("restart"));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// `run --restart RUN/exchange.mcap --step STEP` of the run in `run` writes into `out` a record
+/// whose frames from `step` on are the original's, byte for byte, on every channel (but the
+/// checkpoints it sends the nodes to restore them), and ends with the same balance.
+fn assert_restart_continues_identically(run: &Path, step: u64, out: &Path) {
+    let file = run.join("exchange.mcap");
+    run_scene(
+        &run.join("scene.toml"),
+        out,
+        &[
+            "--restart",
+            &file.to_string_lossy(),
+            "--step",
+            &step.to_string(),
+        ],
+    );
+    let from = |path: &Path, skip_restores: bool| -> Vec<(String, Vec<u8>)> {
+        let rec = record::read_recording(&std::fs::read(path).expect("record")).expect("read");
+        rec.messages
+            .into_iter()
+            .filter(|m| m.log_time >= step && m.topic != "diagnostics")
+            .filter(|m| {
+                !(skip_restores
+                    && m.topic.starts_with("coupler-to-")
+                    && codec::decode_header(&m.data)
+                        .is_ok_and(|h| h.kind == protocol::wire::MessageKind::Checkpoint))
+            })
+            .map(|m| (m.topic, m.data))
+            .collect()
+    };
+    let by_topic = |frames: Vec<(String, Vec<u8>)>| {
+        let mut t: std::collections::BTreeMap<String, Vec<Vec<u8>>> = Default::default();
+        for (topic, data) in frames {
+            t.entry(topic).or_default().push(data);
+        }
+        t
+    };
+    let original = by_topic(from(&file, false));
+    let restarted = by_topic(from(&out.join("exchange.mcap"), true));
+    assert!(original.len() >= 7, "{:?}", original.keys());
+    for (topic, frames) in &original {
+        let again = restarted.get(topic).map_or(0, Vec::len);
+        assert_eq!(frames.len(), again, "{topic}: frames from step {step}");
+        assert!(
+            Some(frames) == restarted.get(topic),
+            "{topic}: the restarted run's frames differ from the original's"
+        );
+    }
+    let (a, b) = (summary(run), summary(out));
+    for key in [
+        "status",
+        "steps",
+        "t_end",
+        "coupling_iterations",
+        "mass_rel_err",
+        "energy_rel_err",
+        "energy_err_vs_exchange",
+    ] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+}
+
+#[test]
+fn a_restart_refuses_another_scene_and_a_step_without_checkpoints() {
+    let dir = out_dir("restart-refusals");
+    let run = dir.join("run");
+    run_scene(&workspace().join("scenes/backbone-doubles.toml"), &run, &[]);
+    let file = run.join("exchange.mcap").to_string_lossy().into_owned();
+    let restart = |scene: &Path, step: &str| {
+        let r = coupler()
+            .arg("run")
+            .arg(scene)
+            .arg("--out")
+            .arg(dir.join("restart"))
+            .args(["--quiet", "--restart", &file, "--step", step])
+            .output()
+            .expect("coupler starts");
+        assert!(!r.status.success());
+        String::from_utf8_lossy(&r.stderr).into_owned()
+    };
+    // checkpoint_every = 20: steps 20, 40, ... have checkpoints, 30 has none.
+    let err = restart(&run.join("scene.toml"), "30");
+    assert!(
+        err.contains("no checkpoint/coupler at that step") && err.contains("[20, 40, 60"),
+        "{err}"
+    );
+    let other = dir.join("other.toml");
+    let text =
+        std::fs::read_to_string(workspace().join("scenes/backbone-doubles.toml")).expect("scene");
+    assert!(text.contains("tolerance = 1e-12"));
+    std::fs::write(
+        &other,
+        text.replace("tolerance = 1e-12", "tolerance = 1e-10"),
+    )
+    .expect("write");
+    let err = restart(&other, "40");
+    assert!(
+        err.contains("the scene differs from the recorded one"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 
