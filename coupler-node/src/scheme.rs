@@ -31,8 +31,14 @@ use protocol::wire::{
 };
 
 use crate::dt;
-use crate::iqn::{IqnColumns, IqnIls};
 use crate::ledger::{Ledger, LedgerEntry};
+
+mod accel;
+mod criterion;
+
+use accel::Acceleration;
+pub use accel::AccelerationState;
+pub use criterion::criterion_22;
 
 /// What the coupler needs from the scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -293,12 +299,8 @@ pub struct CouplerCheckpoint {
     pub t: f64,
     next_output: usize,
     plan: Option<(f64, Option<u32>, String)>,
-    accepted: Option<SolidState>,
-    previous: Option<(SolidState, f64)>,
-    first_trial: Option<Vec<f64>>,
-    correction: Option<Vec<f64>>,
-    /// IQN-ILS's columns (absent with another relaxation).
-    pub iqn: Option<IqnColumns>,
+    /// The accepted states and IQN-ILS's columns.
+    pub acceleration: AccelerationState,
     ledger: Ledger,
     iteration_total: u64,
     iteration_max: u32,
@@ -315,21 +317,10 @@ pub struct Coupler {
     t: f64,
     next_output: usize,
     plan: Option<(f64, Option<u32>, String)>,
-    /// Accepted solid state at `t^n` (and relaxed input of the current iteration).
-    accepted: Option<SolidState>,
+    /// Input of the current iteration (the accepted `F^n`, a prediction, a relaxed trial).
     input: Option<SolidState>,
     residuals: Vec<f64>,
-    omegas: Vec<f64>,
-    aitken: Option<(Vec<f64>, f64)>,
-    iqn: Option<IqnIls>,
-    columns: Vec<u32>,
-    predicted: bool,
-    /// Accepted solid state at `t^{n−1}` and the step that led from it to `t^n` (predictor).
-    previous: Option<(SolidState, f64)>,
-    /// This step's first trial, flattened (predictor).
-    first_trial: Option<Vec<f64>>,
-    /// Last step's accepted state minus its first trial, flattened (predictor).
-    correction: Option<Vec<f64>>,
+    acceleration: Acceleration,
     ledger: Ledger,
     initial_totals: Vec<ConservedTotals>,
     iteration_total: u64,
@@ -352,9 +343,8 @@ pub struct Resume {
 impl Coupler {
     /// A coupler waiting for the nodes' hellos.
     pub fn new(cfg: CouplerConfig) -> Coupler {
-        let iqn = (cfg.relaxation == Relaxation::IqnIls)
-            .then(|| IqnIls::new(cfg.iqn_reuse, cfg.iqn_filter, cfg.relaxation_initial));
         Coupler {
+            acceleration: Acceleration::new(&cfg),
             phase: Phase::Greeting {
                 hello: Vec::new(),
                 totals: Vec::new(),
@@ -366,17 +356,8 @@ impl Coupler {
             t: 0.0,
             next_output: 0,
             plan: None,
-            accepted: None,
             input: None,
             residuals: Vec::new(),
-            omegas: Vec::new(),
-            aitken: None,
-            iqn,
-            columns: Vec::new(),
-            predicted: false,
-            previous: None,
-            first_trial: None,
-            correction: None,
             ledger: Ledger::default(),
             initial_totals: Vec::new(),
             iteration_total: 0,
@@ -393,11 +374,7 @@ impl Coupler {
             t: self.t,
             next_output: self.next_output,
             plan: self.plan.clone(),
-            accepted: self.accepted.clone(),
-            previous: self.previous.clone(),
-            first_trial: self.first_trial.clone(),
-            correction: self.correction.clone(),
-            iqn: self.iqn.as_ref().map(IqnIls::columns),
+            acceleration: self.acceleration.state(),
             ledger: self.ledger.clone(),
             iteration_total: self.iteration_total,
             iteration_max: self.iteration_max,
@@ -437,27 +414,13 @@ impl Coupler {
 
     /// Takes the state of a checkpoint (not the plan, the queue or the phase).
     fn apply(&mut self, checkpoint: &CouplerCheckpoint) -> Result<(), String> {
-        match (self.iqn.as_mut(), &checkpoint.iqn) {
-            (Some(iqn), Some(columns)) => iqn.restore(columns),
-            (None, None) => {}
-            _ => {
-                return Err(
-                    "the checkpoint's relaxation is not the scene's (IQN-ILS columns present in one only)"
-                        .into(),
-                );
-            }
-        }
-        let cp = checkpoint.clone();
-        self.step = cp.step;
-        self.t = cp.t;
-        self.next_output = cp.next_output;
-        self.accepted = cp.accepted;
-        self.previous = cp.previous;
-        self.first_trial = cp.first_trial;
-        self.correction = cp.correction;
-        self.ledger = cp.ledger;
-        self.iteration_total = cp.iteration_total;
-        self.iteration_max = cp.iteration_max;
+        self.acceleration.restore(&checkpoint.acceleration)?;
+        self.step = checkpoint.step;
+        self.t = checkpoint.t;
+        self.next_output = checkpoint.next_output;
+        self.ledger = checkpoint.ledger.clone();
+        self.iteration_total = checkpoint.iteration_total;
+        self.iteration_max = checkpoint.iteration_max;
         Ok(())
     }
 
@@ -716,7 +679,7 @@ impl Coupler {
                     NodeKind::Fluid,
                     Message::SolidState(state.clone()),
                 ));
-                self.accepted = Some(state);
+                self.acceleration.set_initial(state);
             }
             Message::DtProposal(p) => {
                 if p.dt_max.is_nan() || p.dt_max <= 0.0 {
@@ -860,44 +823,28 @@ impl Coupler {
 
     fn start_step(&mut self, actions: &mut Vec<Action>) {
         let (dt, output, _) = self.plan.clone().expect("a plan precedes the step");
-        // The linear predictor replaces `F^n` as iteration 0's input of a semi-implicit step
-        // once two accepted states are known.
-        let predicted = match (self.cfg.scheme, self.cfg.predictor, &self.accepted) {
-            (Scheme::SemiImplicit, Predictor::Linear, Some(accepted)) => {
-                self.predict(flatten(accepted).len()).map(|p| {
-                    let mut s = unflatten(accepted, &p);
-                    s.stamp = Stamp::step(self.step);
-                    s
-                })
-            }
-            _ => None,
-        };
+        let iterated = self.cfg.scheme == Scheme::SemiImplicit;
+        let first = self.acceleration.start_step(self.step, dt, iterated);
+        let predicted = first.as_ref().is_some_and(|(_, p)| *p);
         let plan = StepPlan {
             stamp: Stamp::step(self.step),
             t: self.t,
             dt,
             scheme: self.cfg.scheme,
             output,
-            predicted: predicted.is_some(),
+            predicted,
         };
         for node in self.cfg.nodes() {
             actions.push(Action::Send(node, Message::StepPlan(plan.clone())));
         }
-        if let Some(p) = &predicted {
+        if let Some((state, true)) = &first {
             actions.push(Action::Send(
                 NodeKind::Fluid,
-                Message::SolidState(p.clone()),
+                Message::SolidState(state.clone()),
             ));
         }
         self.residuals.clear();
-        self.omegas.clear();
-        self.aitken = None;
-        self.columns.clear();
-        self.predicted = predicted.is_some();
-        if let Some(iqn) = self.iqn.as_mut() {
-            iqn.start_step();
-        }
-        self.input = predicted.or_else(|| self.accepted.clone());
+        self.input = first.map(|(state, _)| state);
         self.phase = if self.cfg.fluid && self.cfg.solid {
             Phase::Loads(0)
         } else {
@@ -959,7 +906,7 @@ impl Coupler {
         let next_input = if accept {
             trial.clone()
         } else {
-            self.relax(&trial)
+            self.acceleration.next_input(input, &trial)
         };
         actions.push(Action::Send(
             NodeKind::Fluid,
@@ -970,121 +917,17 @@ impl Coupler {
             Message::FixedPointDecision(decision),
         ));
         if accept {
-            let dt = self.plan.as_ref().map_or(0.0, |p| p.0);
-            if let (Some(iqn), Some(input)) = (self.iqn.as_mut(), self.input.as_ref()) {
-                // The accepted trial's secant column is as good as any: keep it for the next
-                // steps, which would otherwise reuse nothing from a step accepted at once.
-                iqn.observe(&unknowns_residual(input, &trial, dt), &flatten(&trial));
-            }
-            self.previous = self.accepted.take().map(|a| (a, dt));
-            let acc = flatten(&trial);
-            self.correction = Some(match self.first_trial.take() {
-                Some(f) if f.len() == acc.len() => acc.iter().zip(&f).map(|(a, b)| a - b).collect(),
-                _ => vec![0.0; acc.len()],
-            });
-            self.accepted = Some(trial);
-            self.input = None;
+            let input = self
+                .input
+                .take()
+                .expect("an input state precedes every trial");
+            self.acceleration.accept(&input, trial);
             self.phase = Phase::Totals(Vec::new());
         } else {
             self.input = Some(next_input);
             self.phase = Phase::Loads(k + 1);
         }
         Ok(())
-    }
-
-    /// The input of the next iteration: the trial itself, its relaxation (Aitken, IQN-ILS), or
-    /// after iteration 0 the `correction` predictor's (this trial plus the last step's converged
-    /// correction). The `linear` predictor acts before iteration 0 ([`Coupler::start_step`]).
-    fn relax(&mut self, trial: &SolidState) -> SolidState {
-        let input = self
-            .input
-            .as_ref()
-            .expect("an input state precedes every trial");
-        let x = flatten(input);
-        let gx = flatten(trial);
-        if trial.stamp.iteration == 0 {
-            self.first_trial = Some(gx.clone());
-        }
-        let predicted = match self.cfg.predictor {
-            _ if trial.stamp.iteration > 0 => None,
-            Predictor::None | Predictor::Linear => None,
-            Predictor::Correction => self
-                .correction
-                .as_ref()
-                .filter(|c| c.len() == gx.len())
-                .map(|c| gx.iter().zip(c).map(|(g, c)| g + c).collect::<Vec<f64>>()),
-        };
-        self.predicted |= predicted.is_some();
-        match self.cfg.relaxation {
-            Relaxation::None => match predicted {
-                Some(p) => unflatten(trial, &p),
-                None => trial.clone(),
-            },
-            Relaxation::Aitken => {
-                if let Some(p) = predicted {
-                    // NOTE: Aitken's recursion assumes x_k − x_{k−1} = ω_{k−1} r_{k−1}; a
-                    // predicted input breaks it, so the recursion restarts after it.
-                    self.aitken = None;
-                    return unflatten(trial, &p);
-                }
-                let r: Vec<f64> = gx.iter().zip(&x).map(|(g, x)| g - x).collect();
-                // NOTE: Aitken's Δ² (Küttler & Wall 2008): ω_k = −ω_{k−1} r_{k−1}·(r_k − r_{k−1})
-                // / |r_k − r_{k−1}|², starting from ω_0 = `run.relaxation_initial` and kept in
-                // [0.05, 2] so a stagnating pair of residuals cannot stall or throw the iteration.
-                let omega = match &self.aitken {
-                    None => self.cfg.relaxation_initial,
-                    Some((r_prev, w_prev)) => {
-                        let (mut num, mut den) = (0.0, 0.0);
-                        for (rk, rp) in r.iter().zip(r_prev) {
-                            let d = rk - rp;
-                            num += rp * d;
-                            den += d * d;
-                        }
-                        if den > 0.0 {
-                            (-w_prev * num / den).clamp(0.05, 2.0)
-                        } else {
-                            *w_prev
-                        }
-                    }
-                };
-                self.omegas.push(omega);
-                let relaxed: Vec<f64> = x.iter().zip(&r).map(|(x, r)| x + omega * r).collect();
-                self.aitken = Some((r, omega));
-                unflatten(trial, &relaxed)
-            }
-            Relaxation::IqnIls => {
-                let dt = self.plan.as_ref().map_or(0.0, |p| p.0);
-                let r = unknowns_residual(input, trial, dt);
-                let iqn = self.iqn.as_mut().expect("IQN-ILS has its model");
-                if let Some(p) = predicted {
-                    iqn.observe(&r, &gx);
-                    self.columns.push(0);
-                    return unflatten(trial, &p);
-                }
-                let (next, used) = iqn.next(&r, &x, &gx);
-                self.columns.push(used);
-                unflatten(trial, &next)
-            }
-        }
-    }
-
-    /// Linear extrapolation `X^n + dt^n / dt^{n−1} (X^n − X^{n−1})` of the accepted states,
-    /// flattened, when two are known with the shapes of this trial.
-    fn predict(&self, len: usize) -> Option<Vec<f64>> {
-        let (prev, dt_prev) = self.previous.as_ref()?;
-        let now = flatten(self.accepted.as_ref()?);
-        let prev = flatten(prev);
-        let dt = self.plan.as_ref()?.0;
-        if now.len() != len || prev.len() != len || !dt_prev.is_finite() || *dt_prev <= 0.0 {
-            return None;
-        }
-        let ratio = dt / dt_prev;
-        Some(
-            now.iter()
-                .zip(&prev)
-                .map(|(a, b)| a + ratio * (a - b))
-                .collect(),
-        )
     }
 
     fn finish_step(
@@ -1101,6 +944,7 @@ impl Coupler {
             None => self.t + dt,
         };
         let iterations = self.residuals.len() as u32;
+        let account = self.acceleration.take_account();
         self.iteration_total += u64::from(iterations);
         self.iteration_max = self.iteration_max.max(iterations);
         actions.push(Action::StepDone(StepReport {
@@ -1110,10 +954,10 @@ impl Coupler {
             limiter,
             iterations,
             residuals: std::mem::take(&mut self.residuals),
-            relaxation: std::mem::take(&mut self.omegas),
-            columns: std::mem::take(&mut self.columns),
-            columns_dropped: self.iqn.as_ref().map_or(0, IqnIls::dropped),
-            predicted: self.predicted,
+            relaxation: account.omegas,
+            columns: account.columns,
+            columns_dropped: account.columns_dropped,
+            predicted: account.predicted,
             output,
             ledger: entry.clone(),
         }));
@@ -1201,120 +1045,6 @@ fn check_state(s: &SolidState) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// Criterion (22) of paper 003: `max_I |ΔX_I| + max_I h_I ‖ΔQ_I‖` between two solid states, with
-/// `‖·‖` the Frobenius norm of the difference of the rotation matrices.
-pub fn criterion_22(a: &SolidState, b: &SolidState) -> f64 {
-    let dim = a.dim as usize;
-    let mut max_dx: f64 = 0.0;
-    let mut max_dq: f64 = 0.0;
-    for i in 0..a.n_particles() {
-        let dx: f64 = (0..dim)
-            .map(|d| (a.position[i * dim + d] - b.position[i * dim + d]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let dq = if dim == 2 {
-            // ‖R(θa) − R(θb)‖_F = 2√2 |sin((θa − θb)/2)|.
-            2.0 * std::f64::consts::SQRT_2
-                * ((a.orientation[i] - b.orientation[i]) / 2.0).sin().abs()
-        } else {
-            let qa = &a.orientation[4 * i..4 * i + 4];
-            let qb = &b.orientation[4 * i..4 * i + 4];
-            let dot: f64 = qa.iter().zip(qb).map(|(x, y)| x * y).sum();
-            let sign = if dot < 0.0 { -1.0 } else { 1.0 };
-            // NOTE: |qa − qb| = 2 sin(θ/4) for unit quaternions, so sin(θ/2) = |qa − qb|
-            // √(1 − |qa − qb|²/4) keeps full precision for tiny rotations, where 1 − dot² would
-            // cancel; ‖Ra − Rb‖_F = 2√2 sin(θ/2).
-            let d: f64 = qa
-                .iter()
-                .zip(qb)
-                .map(|(x, y)| (x - sign * y).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            let sin_half = d * (1.0 - d * d / 4.0).max(0.0).sqrt();
-            2.0 * std::f64::consts::SQRT_2 * sin_half
-        };
-        max_dx = max_dx.max(dx);
-        max_dq = max_dq.max(a.diameter[i].max(b.diameter[i]) * dq);
-    }
-    max_dx + max_dq
-}
-
-/// The unknowns of IQN-ILS, as a residual `trial − input`: the positions, and the orientations
-/// weighted by the particle diameter as in criterion (22) (2-D: angle; 3-D: quaternion, with the
-/// sign that brings the trial nearest the input).
-fn unknowns_residual(input: &SolidState, trial: &SolidState, dt: f64) -> Vec<f64> {
-    let mut r: Vec<f64> = trial
-        .position
-        .iter()
-        .zip(&input.position)
-        .map(|(t, x)| t - x)
-        .collect();
-    let ori = trial.orientation.len() / trial.n_particles().max(1);
-    for i in 0..trial.n_particles() {
-        let h = trial.diameter[i].max(input.diameter[i]);
-        let a = &input.orientation[ori * i..ori * (i + 1)];
-        let b = &trial.orientation[ori * i..ori * (i + 1)];
-        let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-        let sign = if ori == 4 && dot < 0.0 { -1.0 } else { 1.0 };
-        r.extend(a.iter().zip(b).map(|(x, y)| h * (sign * y - x)));
-    }
-    // Velocities times dt: a fluid whose loads read the velocity (an impedance) sees them.
-    r.extend(
-        trial
-            .velocity
-            .iter()
-            .zip(&input.velocity)
-            .map(|(t, x)| dt * (t - x)),
-    );
-    let rot = trial.angular_velocity.len() / trial.n_particles().max(1);
-    for i in 0..trial.n_particles() {
-        let h = trial.diameter[i].max(input.diameter[i]);
-        let a = &input.angular_velocity[rot * i..rot * (i + 1)];
-        let b = &trial.angular_velocity[rot * i..rot * (i + 1)];
-        r.extend(a.iter().zip(b).map(|(x, y)| h * dt * (y - x)));
-    }
-    r
-}
-
-fn flatten(s: &SolidState) -> Vec<f64> {
-    let mut v = Vec::with_capacity(
-        s.position.len()
-            + s.orientation.len()
-            + s.velocity.len()
-            + s.angular_velocity.len()
-            + s.surface.vertices.len(),
-    );
-    v.extend_from_slice(&s.position);
-    v.extend_from_slice(&s.orientation);
-    v.extend_from_slice(&s.velocity);
-    v.extend_from_slice(&s.angular_velocity);
-    v.extend_from_slice(&s.surface.vertices);
-    v
-}
-
-fn unflatten(template: &SolidState, v: &[f64]) -> SolidState {
-    let mut s = template.clone();
-    let mut at = 0;
-    for field in [
-        &mut s.position,
-        &mut s.orientation,
-        &mut s.velocity,
-        &mut s.angular_velocity,
-        &mut s.surface.vertices,
-    ] {
-        let n = field.len();
-        field.copy_from_slice(&v[at..at + n]);
-        at += n;
-    }
-    if s.dim == 3 {
-        for q in s.orientation.chunks_exact_mut(4) {
-            let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-            q.iter_mut().for_each(|x| *x /= norm);
-        }
-    }
-    s
 }
 
 #[cfg(test)]

@@ -284,7 +284,7 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes_and_the_coupler() {
     };
     let mut state: coupler_node::scheme::CouplerCheckpoint =
         codec::decode_blob(&c.bytes).expect("coupler state");
-    let columns = state.iqn.as_mut().expect("IQN-ILS columns");
+    let columns = state.acceleration.iqn.as_mut().expect("IQN-ILS columns");
     assert!(!columns.old.is_empty() || !columns.now.is_empty());
     columns.old.clear();
     columns.now.clear();
