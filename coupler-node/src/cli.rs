@@ -82,6 +82,37 @@ pub enum Command {
         #[arg(long)]
         recover: bool,
     },
+    /// Draw the papers' figures from a run's outputs.
+    #[command(subcommand)]
+    Report(Report),
+}
+
+/// `coupler-node report` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Report {
+    /// Every figure a run's outputs allow: energy error, probes, fields (PNG), SVG + CSV.
+    Figures {
+        /// The run's output folder.
+        run: PathBuf,
+        /// Where the figures go (default RUN/figures).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Also the normal stress against the azimuthal angle about the solid's centroid.
+        #[arg(long)]
+        polar: bool,
+    },
+    /// The energy errors of several runs on one chart, each times its scale (paper 003 Fig. 7).
+    Energy {
+        /// The runs' output folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// One factor per run, comma-separated (for example 1,4,16).
+        #[arg(long, value_delimiter = ',')]
+        scale: Vec<f64>,
+        /// The SVG to write (its numbers go beside it as CSV).
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors.
@@ -181,6 +212,18 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     Ok(ExitCode::from(1))
                 }
             }
+        }
+        Command::Report(Report::Figures { run, out, polar }) => {
+            let out = out.unwrap_or_else(|| run.join("figures"));
+            for path in crate::report::figures(&run, &out, polar)? {
+                println!("{}", path.display());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Report(Report::Energy { runs, scale, out }) => {
+            crate::report::energy(&runs, &scale, &out)?;
+            println!("{}", out.display());
+            Ok(ExitCode::SUCCESS)
         }
         Command::Inspect {
             file,

@@ -8,6 +8,7 @@
 //!   [`restart`]: a run resumed from a record's checkpoints.
 //! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`], [`coupler_replay`]: reading
 //!   it back.
+//! - [`report`]: the papers' figures from a run's outputs.
 //! - [`cli`]: the command line.
 
 #![warn(missing_docs)]
@@ -22,6 +23,7 @@ pub mod launch;
 pub mod ledger;
 pub mod record;
 pub mod replay;
+pub mod report;
 pub mod restart;
 pub mod scheme;
 pub mod sink;

@@ -1,0 +1,196 @@
+//! What the figures plot, read from a run's outputs: numeric CSV tables and the energy history
+//! of the record's diagnostics. Pure functions of their inputs.
+
+use serde_json::Value;
+
+/// A numeric CSV table (header line, then numbers).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows, each as long as the header.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl Table {
+    /// Parses `text` (`what` names it in errors).
+    pub fn parse(text: &str, what: &str) -> Result<Table, String> {
+        let mut lines = text.lines();
+        let header: Vec<String> = lines
+            .next()
+            .ok_or_else(|| format!("{what}: empty"))?
+            .split(',')
+            .map(|h| h.trim().to_string())
+            .collect();
+        let mut rows = Vec::new();
+        for (i, line) in lines.enumerate() {
+            if line.trim().is_empty() {
+                continue;
+            }
+            let row: Vec<f64> = line
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|e| format!("{what}: line {}: {e}", i + 2))?;
+            if row.len() != header.len() {
+                return Err(format!(
+                    "{what}: line {} has {} values, the header {}",
+                    i + 2,
+                    row.len(),
+                    header.len()
+                ));
+            }
+            rows.push(row);
+        }
+        Ok(Table { header, rows })
+    }
+
+    /// Index of column `name`.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// The pairs (column `x`, column `y`), if both exist.
+    pub fn pairs(&self, x: &str, y: &str) -> Option<Vec<(f64, f64)>> {
+        let (i, j) = (self.column(x)?, self.column(y)?);
+        Some(self.rows.iter().map(|r| (r[i], r[j])).collect())
+    }
+}
+
+/// One step's energy balance from the diagnostics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnergyPoint {
+    /// Time at the end of the step \[s\].
+    pub t: f64,
+    /// |E(t) − E(0)| \[J\].
+    pub error: f64,
+    /// Largest |interface work| so far \[J\].
+    pub exchange: f64,
+}
+
+/// The energy history of a run from its diagnostics objects (one JSON object per step, as
+/// the record's `diagnostics` channel holds them).
+pub fn energy_history<'a>(
+    diagnostics: impl IntoIterator<Item = &'a [u8]>,
+) -> Result<Vec<EnergyPoint>, String> {
+    let mut out = Vec::new();
+    let mut exchange: f64 = 0.0;
+    for (i, json) in diagnostics.into_iter().enumerate() {
+        let v: Value =
+            serde_json::from_slice(json).map_err(|e| format!("diagnostics object {i}: {e}"))?;
+        let num = |path: &[&str]| -> Result<f64, String> {
+            path.iter()
+                .try_fold(&v, |v, k| v.get(k))
+                .and_then(Value::as_f64)
+                .ok_or_else(|| format!("diagnostics object {i}: no number at {}", path.join(".")))
+        };
+        let t = num(&["t"])?;
+        exchange = exchange
+            .max(num(&["ledger", "work_fluid"])?.abs())
+            .max(num(&["ledger", "work_solid"])?.abs());
+        // The ledger's error relative to the largest exchange so far, times that exchange.
+        let error = num(&["ledger", "energy_err_vs_exchange"])? * exchange;
+        out.push(EnergyPoint { t, error, exchange });
+    }
+    Ok(out)
+}
+
+/// The energy error against time as paper 003 plots it (Fig. 7): |E(t) − E(0)| over the
+/// largest energy exchanged in the whole run, times `scale`.
+pub fn relative_energy_error(history: &[EnergyPoint], scale: f64) -> Vec<(f64, f64)> {
+    let max = history.iter().map(|p| p.exchange).fold(0.0, f64::max);
+    history
+        .iter()
+        .map(|p| {
+            (
+                p.t,
+                if max > 0.0 {
+                    scale * p.error / max
+                } else {
+                    0.0
+                },
+            )
+        })
+        .collect()
+}
+
+/// Normal stress against the azimuthal angle about the particles' centroid (paper 003
+/// Fig. 15): `(θ in degrees, σ_n)` sorted by θ ∈ (−180, 180].
+pub fn stress_by_angle(solid: &Table) -> Option<Vec<(f64, f64)>> {
+    let (x, y, s) = (
+        solid.column("x")?,
+        solid.column("y")?,
+        solid.column("sigma_n")?,
+    );
+    let n = solid.rows.len() as f64;
+    if n == 0.0 {
+        return None;
+    }
+    let cx = solid.rows.iter().map(|r| r[x]).sum::<f64>() / n;
+    let cy = solid.rows.iter().map(|r| r[y]).sum::<f64>() / n;
+    let mut pts: Vec<(f64, f64)> = solid
+        .rows
+        .iter()
+        .map(|r| ((r[y] - cy).atan2(r[x] - cx).to_degrees(), r[s]))
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(pts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tables_parse_and_refuse_ragged_rows() {
+        let t = Table::parse("t,x\n0,1\n0.5,2e0\n", "probe").expect("parses");
+        assert_eq!(t.pairs("t", "x"), Some(vec![(0.0, 1.0), (0.5, 2.0)]));
+        assert_eq!(t.pairs("t", "y"), None);
+        let err = Table::parse("t,x\n0,1,2\n", "probe").expect_err("ragged");
+        assert!(err.contains("line 2 has 3 values"), "{err}");
+        let err = Table::parse("t,x\n0,abc\n", "probe").expect_err("not a number");
+        assert!(err.contains("probe: line 2"), "{err}");
+    }
+
+    #[test]
+    fn energy_error_is_normalised_by_the_largest_exchange_of_the_run() {
+        // Errors 1, 2, 1 J; exchanges so far 10, 40, 40 J (the ledger's ratio is taken against
+        // the exchange so far): relative to the run's largest exchange, 40 J.
+        let steps = [(0.1, 10.0, 0.1), (0.2, 40.0, 0.05), (0.3, -20.0, 0.025)];
+        let json: Vec<Vec<u8>> = steps
+            .iter()
+            .map(|(t, w, r)| {
+                serde_json::to_vec(&serde_json::json!({
+                    "t": t,
+                    "ledger": {"work_fluid": w, "work_solid": -w, "energy_err_vs_exchange": r}
+                }))
+                .expect("json")
+            })
+            .collect();
+        let h = energy_history(json.iter().map(Vec::as_slice)).expect("history");
+        let rel = relative_energy_error(&h, 4.0);
+        let want = [(0.1, 4.0 / 40.0), (0.2, 8.0 / 40.0), (0.3, 4.0 / 40.0)];
+        for ((t, e), (wt, we)) in rel.iter().zip(want) {
+            assert_eq!(*t, wt);
+            assert!((e - we).abs() < 1e-15, "{e} vs {we}");
+        }
+        let bad = energy_history([b"{\"t\": 1}".as_slice()]).expect_err("no ledger");
+        assert!(bad.contains("ledger.work_fluid"), "{bad}");
+    }
+
+    #[test]
+    fn stress_is_sorted_by_angle_about_the_centroid() {
+        let t = Table::parse(
+            "id,x,y,sigma_n\n0,1,0,5\n1,0,1,6\n2,-1,0,7\n3,0,-1,8\n",
+            "solid",
+        )
+        .expect("parses");
+        let s = stress_by_angle(&t).expect("columns");
+        let angles: Vec<f64> = s.iter().map(|p| p.0).collect();
+        assert_eq!(angles, [-90.0, 0.0, 90.0, 180.0]);
+        assert_eq!(
+            s.iter().map(|p| p.1).collect::<Vec<_>>(),
+            [8.0, 5.0, 6.0, 7.0]
+        );
+    }
+}

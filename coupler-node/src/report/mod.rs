@@ -1,0 +1,305 @@
+//! `coupler-node report`: the papers' figures drawn from a run's outputs.
+//!
+//! - `report figures RUN [--out DIR] [--polar]`: everything the run's files allow: the energy
+//!   error against time (paper 003 Fig. 7, 10) from the record's diagnostics; for each particle
+//!   probe its x against time, its xy trajectory and its normal stress (Fig. 8, 9, 13), with all
+//!   particle probes on one chart when there are several (Fig. 13, 14); for each fluid probe its
+//!   pressure; for each output of a 2-D run the density and pressure fields with the wet surface
+//!   on top as PNG images (Fig. 6, 12, 18); with `--polar`, the normal stress against the
+//!   azimuthal angle about the solid's centroid (Fig. 15).
+//! - `report energy RUN... [--scale S,...] --out FILE.svg`: the energy error of several runs on
+//!   one chart, each times its scale (Fig. 7: dt, dt/2, dt/4 rescaled by 1, 4, 16).
+//!
+//! Every chart also writes its numbers as CSV beside it.
+
+pub mod data;
+pub mod plot;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use protocol::scene::Scene;
+
+use crate::record;
+use data::{Table, energy_history, relative_energy_error, stress_by_angle};
+use plot::{Field, Series, field_png, line_chart};
+
+fn read_table(path: &Path) -> anyhow::Result<Table> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Table::parse(&text, &path.display().to_string()).map_err(|e| anyhow::anyhow!(e))
+}
+
+fn write_csv(path: &Path, header: &str, series: &[Series]) -> anyhow::Result<()> {
+    let mut text = format!("series,{header}\n");
+    for s in series {
+        for (x, y) in &s.points {
+            text.push_str(&format!("{},{x:e},{y:e}\n", s.label));
+        }
+    }
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes a chart and its CSV; returns the SVG's path.
+fn chart(
+    out: &Path,
+    stem: &str,
+    title: &str,
+    axes: (&str, &str),
+    series: &[Series],
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let svg = out.join(format!("{stem}.svg"));
+    line_chart(&svg, title, axes.0, axes.1, series).map_err(|e| anyhow::anyhow!(e))?;
+    write_csv(&out.join(format!("{stem}.csv")), "x,y", series)?;
+    written.push(svg);
+    Ok(())
+}
+
+/// The relative energy error of the run in `run` (its `exchange.mcap`).
+fn run_energy(run: &Path) -> anyhow::Result<Vec<data::EnergyPoint>> {
+    let file = run.join("exchange.mcap");
+    let bytes = std::fs::read(&file).with_context(|| format!("reading {}", file.display()))?;
+    let rec =
+        record::read_recording(&bytes).with_context(|| format!("reading {}", file.display()))?;
+    let json: Vec<&[u8]> = rec
+        .topic(record::DIAGNOSTICS_TOPIC)
+        .map(|m| m.data.as_slice())
+        .collect();
+    anyhow::ensure!(
+        !json.is_empty(),
+        "{}: no diagnostics (record = \"none\"?)",
+        file.display()
+    );
+    energy_history(json).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))
+}
+
+/// Files of `dir` named `<prefix><k><suffix>`, by k.
+fn numbered(dir: &Path, prefix: &str, suffix: &str) -> Vec<(String, PathBuf)> {
+    let mut found: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e.ok())
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let key = name.strip_prefix(prefix)?.strip_suffix(suffix)?.to_string();
+            Some((key, e.path()))
+        })
+        .collect();
+    found.sort_by(|a, b| {
+        let num = |s: &str| s.parse::<u64>().ok();
+        num(&a.0).cmp(&num(&b.0)).then_with(|| a.0.cmp(&b.0))
+    });
+    found
+}
+
+/// `report figures`: every figure the outputs in `run` allow, into `out`.
+pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBuf>> {
+    let scene_path = run.join("scene.toml");
+    let text = std::fs::read_to_string(&scene_path).with_context(|| {
+        format!(
+            "reading {} (is {} the output folder of a run?)",
+            scene_path.display(),
+            run.display()
+        )
+    })?;
+    let scene = Scene::from_toml_str(&text, &scene_path.display().to_string())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut written = Vec::new();
+    if run.join("exchange.mcap").exists() && scene.fluid.is_some() && scene.solid.is_some() {
+        let energy = run_energy(run)?;
+        chart(
+            out,
+            "energy_error",
+            &format!("{}: energy error / largest exchange", scene.name),
+            ("t [s]", "|E - E0| / max |W|"),
+            &[Series {
+                label: scene.name.clone(),
+                points: relative_energy_error(&energy, 1.0),
+            }],
+            &mut written,
+        )?;
+    }
+    let mut particles: Vec<(String, Table)> = Vec::new();
+    for (name, path) in numbered(run, "probe_", ".csv") {
+        let t = read_table(&path)?;
+        if let (Some(x), Some(xy)) = (t.pairs("t", "x"), t.pairs("x", "y")) {
+            let one = |points| {
+                [Series {
+                    label: name.clone(),
+                    points,
+                }]
+            };
+            chart(
+                out,
+                &format!("probe_{name}_x"),
+                &format!("{name}: x of the particle"),
+                ("t [s]", "x [m]"),
+                &one(x),
+                &mut written,
+            )?;
+            chart(
+                out,
+                &format!("probe_{name}_xy"),
+                &format!("{name}: trajectory"),
+                ("x [m]", "y [m]"),
+                &one(xy),
+                &mut written,
+            )?;
+            if let Some(s) = t.pairs("t", "sigma_n") {
+                chart(
+                    out,
+                    &format!("probe_{name}_sigma"),
+                    &format!("{name}: normal stress"),
+                    ("t [s]", "sigma_n [Pa]"),
+                    &one(s),
+                    &mut written,
+                )?;
+            }
+            particles.push((name, t));
+        } else if let Some(p) = t.pairs("t", "p") {
+            chart(
+                out,
+                &format!("probe_{name}_p"),
+                &format!("{name}: pressure"),
+                ("t [s]", "p [Pa]"),
+                &[Series {
+                    label: name.clone(),
+                    points: p,
+                }],
+                &mut written,
+            )?;
+        }
+    }
+    if particles.len() > 1 {
+        let displacement: Vec<Series> = particles
+            .iter()
+            .filter_map(|(name, t)| {
+                let x = t.pairs("t", "x")?;
+                let x0 = x.first()?.1;
+                Some(Series {
+                    label: name.clone(),
+                    points: x.iter().map(|(t, x)| (*t, x - x0)).collect(),
+                })
+            })
+            .collect();
+        chart(
+            out,
+            "probes_displacement",
+            "x displacement of the probed particles",
+            ("t [s]", "x - x(0) [m]"),
+            &displacement,
+            &mut written,
+        )?;
+        let stress: Vec<Series> = particles
+            .iter()
+            .filter_map(|(name, t)| {
+                Some(Series {
+                    label: name.clone(),
+                    points: t.pairs("t", "sigma_n")?,
+                })
+            })
+            .collect();
+        if !stress.is_empty() {
+            chart(
+                out,
+                "probes_sigma",
+                "normal stress of the probed particles",
+                ("t [s]", "sigma_n [Pa]"),
+                &stress,
+                &mut written,
+            )?;
+        }
+    }
+    if let Some(fluid) = scene.fluid.as_ref().filter(|_| scene.dim() == 2) {
+        let grid = |cells: Vec<(f64, f64, f64)>| Field {
+            cells,
+            lower: [fluid.lower[0], fluid.lower[1]],
+            upper: [fluid.upper[0], fluid.upper[1]],
+            n: [fluid.cells[0] as usize, fluid.cells[1] as usize],
+        };
+        for (k, path) in numbered(run, "fluid_", ".csv") {
+            let t = read_table(&path)?;
+            let surface = run.join(format!("surface_{k}.csv"));
+            let segments: Vec<[f64; 4]> = if surface.exists() {
+                let s = read_table(&surface)?;
+                match ["x0", "y0", "x1", "y1"].map(|c| s.column(c)) {
+                    [Some(a), Some(b), Some(c), Some(d)] => {
+                        s.rows.iter().map(|r| [r[a], r[b], r[c], r[d]]).collect()
+                    }
+                    _ => Vec::new(),
+                }
+            } else {
+                Vec::new()
+            };
+            for var in ["rho", "p"] {
+                let (Some(x), Some(y), Some(v)) = (t.column("x"), t.column("y"), t.column(var))
+                else {
+                    continue;
+                };
+                let png = out.join(format!("field_{k}_{var}.png"));
+                let cells = t.rows.iter().map(|r| (r[x], r[y], r[v])).collect();
+                field_png(&png, &grid(cells), &segments, 1000).map_err(|e| anyhow::anyhow!(e))?;
+                written.push(png);
+            }
+        }
+    }
+    if polar {
+        for (k, path) in numbered(run, "solid_", ".csv") {
+            let t = read_table(&path)?;
+            if let Some(points) = stress_by_angle(&t) {
+                chart(
+                    out,
+                    &format!("solid_{k}_sigma_theta"),
+                    &format!("output {k}: normal stress against the azimuthal angle"),
+                    ("theta [deg]", "sigma_n [Pa]"),
+                    &[Series {
+                        label: format!("output {k}"),
+                        points,
+                    }],
+                    &mut written,
+                )?;
+            }
+        }
+    }
+    Ok(written)
+}
+
+/// `report energy`: the energy errors of `runs`, each times its scale, on one chart `out`.
+pub fn energy(runs: &[PathBuf], scales: &[f64], out: &Path) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        scales.is_empty() || scales.len() == runs.len(),
+        "{} scales for {} runs",
+        scales.len(),
+        runs.len()
+    );
+    let mut series = Vec::new();
+    for (i, run) in runs.iter().enumerate() {
+        let scale = scales.get(i).copied().unwrap_or(1.0);
+        let name = run.file_name().map_or_else(
+            || run.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        series.push(Series {
+            label: if scale == 1.0 {
+                name
+            } else {
+                format!("{name} x {scale}")
+            },
+            points: relative_energy_error(&run_energy(run)?, scale),
+        });
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    line_chart(
+        out,
+        "energy error / largest exchange",
+        "t [s]",
+        "|E - E0| / max |W|",
+        &series,
+    )
+    .map_err(|e| anyhow::anyhow!(e))?;
+    write_csv(&out.with_extension("csv"), "t,error", &series)
+}
