@@ -596,7 +596,7 @@ fn sigterm_ends_every_process_and_finishes_the_record() {
     // The record is complete (summary and footer), not just readable.
     let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
         .expect("readable");
-    assert!(!rec.truncated, "the record was not finished");
+    assert!(!rec.truncated(), "the record was not finished");
     // No node of the run is left.
     assert!(node_pids(&run_id).is_empty(), "nodes left running");
     let _ = std::fs::remove_dir_all(dir);
