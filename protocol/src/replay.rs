@@ -34,9 +34,10 @@ pub struct Script {
 /// Why a record cannot be replayed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
-    /// The bytes are not a readable MCAP record (damage is named by chunk and offset).
+    /// The bytes are not a readable MCAP record (damage is named by chunk and offset). Not a
+    /// `source`: the message already holds it, and error chains would print it twice.
     #[error("not a readable MCAP record: {0}")]
-    Mcap(#[from] ScanError),
+    Mcap(ScanError),
     /// The record holds nothing for this node.
     #[error(
         "the record holds no messages of the {0} node (was it recorded with record = \"exchange\" or \"all\"?)"
@@ -53,6 +54,12 @@ pub enum ReplayError {
     /// A transport failure.
     #[error(transparent)]
     Transport(#[from] TransportError),
+}
+
+impl From<ScanError> for ReplayError {
+    fn from(err: ScanError) -> Self {
+        ReplayError::Mcap(err)
+    }
 }
 
 impl Script {

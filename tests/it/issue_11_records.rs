@@ -215,7 +215,12 @@ fn issue_11_damaged_records_are_refused_with_the_chunk_named_and_recover_keeps_t
         stderr.contains("solid.node = \"replay:") && stderr.contains(&named),
         "{stderr}"
     );
-    assert!(stderr.contains("CRC failed"), "{stderr}");
+    // Depending on where the flip lands, lz4 refuses the chunk or its CRC does.
+    assert!(
+        stderr.contains("CRC failed") || stderr.contains("compression stream"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches(&named).count(), 1, "{stderr}");
     assert!(
         !second.exists(),
         "the refused run created its output folder"
