@@ -78,7 +78,8 @@ pub enum Command {
         /// Export format: `json` or `csv`.
         #[arg(long, default_value = "json")]
         export: String,
-        /// Rewrite a truncated record (from a killed run) into FILE.recovered.mcap.
+        /// Rewrite a killed or damaged record into FILE.recovered.mcap: keeps every chunk that
+        /// verifies, says what it dropped, and lists the recovered record.
         #[arg(long)]
         recover: bool,
     },
@@ -233,16 +234,31 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
         } => {
             let bytes = std::fs::read(&file)
                 .with_context(|| format!("reading record {}", file.display()))?;
-            if recover {
+            let rec = if recover {
                 let fixed = crate::record::recover(&bytes)
                     .with_context(|| format!("recovering {}", file.display()))?;
                 let target = file.with_extension("recovered.mcap");
-                std::fs::write(&target, &fixed)
+                std::fs::write(&target, &fixed.bytes)
                     .with_context(|| format!("writing {}", target.display()))?;
-                eprintln!("coupler-node: wrote {}", target.display());
-            }
-            let rec = crate::record::read_recording(&bytes)
-                .with_context(|| format!("reading record {}", file.display()))?;
+                for dropped in &fixed.dropped {
+                    eprintln!("coupler-node: dropped {dropped}");
+                }
+                eprintln!(
+                    "coupler-node: wrote {}: {} messages kept, {} damaged part{} dropped",
+                    target.display(),
+                    fixed.recording.messages.len(),
+                    fixed.dropped.len(),
+                    if fixed.dropped.len() == 1 { "" } else { "s" }
+                );
+                fixed.recording
+            } else {
+                crate::record::read_recording(&bytes).with_context(|| {
+                    format!(
+                        "reading record {} (--recover keeps what verifies)",
+                        file.display()
+                    )
+                })?
+            };
             match step {
                 Some(step) => {
                     let format = match export.as_str() {
@@ -253,11 +269,10 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     print!("{}", crate::inspect::export_step(&rec, step, format)?);
                 }
                 None => {
-                    if rec.truncated {
+                    if !recover && let Some(end) = crate::inspect::describe_end(&rec.end) {
                         eprintln!(
-                            "coupler-node: {} ends early ({} unreadable bytes): a killed run; --recover rewrites it whole",
-                            file.display(),
-                            rec.unreadable_bytes
+                            "coupler-node: {}: {end}; --recover rewrites it whole",
+                            file.display()
                         );
                     }
                     print!("{}", crate::inspect::list_steps(&rec)?);

@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use protocol::codec;
+use protocol::mcap_read::End;
 use protocol::wire::Message;
 use serde_json::{Value, json};
 
@@ -128,17 +129,36 @@ pub fn list_steps(rec: &Recording) -> Result<String, RecordError> {
         "{} steps, {} messages{}",
         rows.len(),
         rec.messages.len(),
-        if rec.truncated {
-            format!(
-                " (file truncated: {} bytes unreadable)",
-                rec.unreadable_bytes
-            )
-        } else {
-            String::new()
+        match describe_end(&rec.end) {
+            Some(end) => format!(" ({end})"),
+            None => String::new(),
         }
     )
     .expect("writing to a String");
     Ok(out)
+}
+
+/// How a record ends, in words, when it did not simply finish.
+pub fn describe_end(end: &End) -> Option<String> {
+    match end {
+        End::Finished {
+            summary_damage: None,
+        } => None,
+        End::Finished {
+            summary_damage: Some(damage),
+        } => Some(format!(
+            "summary section damaged, not needed: {damage}; the data section was read in full"
+        )),
+        End::Unfinished => {
+            Some("not finished: a killed run, readable up to its last completed step".to_string())
+        }
+        End::CutShort {
+            offset,
+            unreadable_bytes,
+        } => Some(format!(
+            "cut short at byte {offset}: {unreadable_bytes} bytes unreadable, a run killed while it wrote"
+        )),
+    }
 }
 
 /// Dumps what was exchanged at `step`: every recorded frame (decoded) and diagnostics message

@@ -135,6 +135,7 @@ pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<Pa
 /// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    crate::replay::check_replay_doubles(&scene)?;
     let resume = match &opts.restart {
         Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
         None => None,

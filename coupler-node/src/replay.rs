@@ -14,6 +14,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use protocol::codec;
+use protocol::scene::Scene;
 use protocol::transport::Transport;
 use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
 use serde_json::Value;
@@ -77,6 +78,32 @@ fn script(rec: &Recording, node: NodeKind) -> Vec<(Dir, u64, Vec<u8>)> {
             Some((dir, m.log_time, m.data.clone()))
         })
         .collect()
+}
+
+/// Checks, before any process starts, that every `replay:FILE` node of `scene` names a record
+/// that reads and holds messages of that node (the node reads `FILE` from the same directory).
+pub fn check_replay_doubles(scene: &Scene) -> anyhow::Result<()> {
+    let nodes = [
+        (
+            NodeKind::Fluid,
+            scene.fluid.as_ref().map(|f| f.node.as_str()),
+        ),
+        (
+            NodeKind::Solid,
+            scene.solid.as_ref().map(|s| s.node.as_str()),
+        ),
+    ];
+    for (node, choice) in nodes {
+        let Some(file) = choice.and_then(|c| c.strip_prefix("replay:")) else {
+            continue;
+        };
+        let key = format!("{node}.node = \"replay:{file}\"");
+        let bytes =
+            std::fs::read(file).with_context(|| format!("{key}: reading the record {file}"))?;
+        protocol::replay::Script::from_mcap(&bytes, node)
+            .with_context(|| format!("{key}: the record {file} cannot be replayed"))?;
+    }
+    Ok(())
 }
 
 /// Runs the replay.

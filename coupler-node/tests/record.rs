@@ -13,6 +13,7 @@ use coupler_node::record::{
 };
 use proptest::prelude::*;
 use protocol::codec;
+use protocol::mcap_read::{End, PROVISIONAL_END, ScanError};
 use protocol::scene::RecordLevel;
 use protocol::wire::*;
 
@@ -160,21 +161,32 @@ impl Seek for Shared {
 
 type Frames = Vec<Vec<(NodeKind, NodeKind, Vec<u8>)>>;
 
-/// Records `n_steps` steps and returns the bytes, the recorded frames per step and the file
-/// length after every `end_step` (what a kill right then would leave on disk).
+/// Records `n_steps` steps and returns the bytes, the recorded frames per step and where each
+/// step's data end in the finished file (where the next step's chunk starts).
 fn record_run(n_steps: u64, level: RecordLevel) -> (Vec<u8>, Frames, Vec<usize>) {
+    let (bytes, per_step, snapshots) = record_run_with_snapshots(n_steps, level);
+    let ends = snapshots
+        .iter()
+        .map(|s| s.len() - PROVISIONAL_END.len())
+        .collect();
+    (bytes, per_step, ends)
+}
+
+/// [`record_run`], with the file as it is on disk after every `end_step` (what a kill right
+/// then, or at any moment during the next step, leaves).
+fn record_run_with_snapshots(n_steps: u64, level: RecordLevel) -> (Vec<u8>, Frames, Vec<Vec<u8>>) {
     let shared = Shared::default();
     let mut rec = Recorder::new(shared.clone(), level, "unit-scene", SCENE).unwrap();
     let mut per_step = Vec::new();
-    let mut ends = Vec::new();
+    let mut snapshots = Vec::new();
     for step in 0..n_steps {
         per_step.push(record_step(&mut rec, step));
         rec.end_step().unwrap();
-        ends.push(shared.0.borrow().get_ref().len());
+        snapshots.push(shared.0.borrow().get_ref().clone());
     }
     drop(rec.finish().unwrap());
     let bytes = shared.0.borrow().get_ref().clone();
-    (bytes, per_step, ends)
+    (bytes, per_step, snapshots)
 }
 
 fn frame_topic(from: NodeKind, to: NodeKind) -> String {
@@ -185,8 +197,14 @@ fn frame_topic(from: NodeKind, to: NodeKind) -> String {
 fn frames_read_back_byte_identical_with_channels_and_metadata() {
     let (bytes, per_step, _) = record_run(3, RecordLevel::Exchange);
     let rec = read_recording(&bytes).unwrap();
-    assert!(!rec.truncated);
-    assert_eq!(rec.unreadable_bytes, 0);
+    assert!(!rec.truncated());
+    assert_eq!(rec.unreadable_bytes(), 0);
+    assert_eq!(
+        rec.end,
+        End::Finished {
+            summary_damage: None
+        }
+    );
     let frames: Vec<_> = rec
         .messages
         .iter()
@@ -237,26 +255,57 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
     assert_eq!(streamed, rec.messages.len());
 }
 
-/// Writes a complete and a cut sample recording into `$COSIM_RECORD_SAMPLE_DIR` (when set) for
-/// `tests/py/check_mcap.py`.
+/// The Python `mcap` package (`$COSIM_PYTHON`, default `python3`; CI sets it, see `.ci/run`)
+/// reads a finished record, the record of a run killed after step 2 (with `make_reader`, the
+/// standard reader, not a salvaging one), a file cut in the middle of step 3 (streaming reader)
+/// and a recovered file. Always runs: a missing Python or `mcap` package fails it, loudly.
 #[test]
-fn write_samples_for_the_python_check() {
-    let Ok(dir) = std::env::var("COSIM_RECORD_SAMPLE_DIR") else {
-        return;
-    };
-    let (bytes, _, ends) = record_run(5, RecordLevel::Exchange);
-    let dir = std::path::Path::new(&dir);
-    std::fs::write(dir.join("sample.mcap"), &bytes).unwrap();
-    std::fs::write(
-        dir.join("sample-cut.mcap"),
-        &bytes[..(ends[2] + ends[3]) / 2],
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("sample-recovered.mcap"),
-        recover(&bytes[..ends[3] - 5]).unwrap(),
-    )
-    .unwrap();
+fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
+    let (bytes, _, snapshots) = record_run_with_snapshots(5, RecordLevel::Exchange);
+    let dir = std::env::temp_dir().join(format!("cosim-record-samples-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let killed = &snapshots[2];
+    let cut_at = killed.len() - PROVISIONAL_END.len() + 100;
+    let samples = [
+        ("sample.mcap", bytes.clone(), vec![]),
+        ("sample-killed.mcap", killed.clone(), vec!["--unfinished"]),
+        (
+            "sample-cut.mcap",
+            bytes[..cut_at].to_vec(),
+            vec!["--truncated"],
+        ),
+        (
+            "sample-recovered.mcap",
+            recover(&bytes[..cut_at]).unwrap().bytes,
+            vec![],
+        ),
+    ];
+    let python = std::env::var("COSIM_PYTHON").unwrap_or_else(|_| "python3".into());
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py/check_mcap.py");
+    for (name, data, flags) in samples {
+        let path = dir.join(name);
+        std::fs::write(&path, &data).unwrap();
+        let want = read_recording(&data).unwrap().messages.len();
+        let out = std::process::Command::new(&python)
+            .arg(&script)
+            .arg(&path)
+            .args(&flags)
+            .output()
+            .unwrap_or_else(|e| {
+                panic!("running {python}: {e} (set COSIM_PYTHON to a python with the mcap package)")
+            });
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{name}: {stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            stdout.starts_with(&format!("ok {want} messages")),
+            "{name}: {stdout}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -308,12 +357,17 @@ fn a_file_cut_after_a_step_reads_up_to_that_step_and_recovers() {
         // One byte short of the next flush, the next step's chunk is complete (only its
         // trailing message index is cut), so its messages are readable too.
         let rec = read_recording(&full[..next - 1]).unwrap();
-        assert!(rec.truncated);
+        assert!(rec.truncated());
         assert!(rec.messages.starts_with(&expected));
         for cut in [end, end + 1, end + 20, (end + next) / 2] {
             let rec = read_recording(&full[..cut]).unwrap();
-            assert!(rec.truncated, "cut at {cut}");
-            assert_eq!(rec.unreadable_bytes, cut - end.min(cut), "cut at {cut}");
+            assert!(rec.truncated(), "cut at {cut}");
+            assert_eq!(rec.unreadable_bytes(), cut - end.min(cut), "cut at {cut}");
+            assert!(
+                matches!(rec.end, End::CutShort { offset, .. } if offset == end),
+                "cut at {cut}: {:?}",
+                rec.end
+            );
             assert_eq!(rec.messages, expected, "cut at {cut} after step {k}");
             assert_eq!(
                 rec.messages
@@ -324,10 +378,12 @@ fn a_file_cut_after_a_step_reads_up_to_that_step_and_recovers() {
             );
             assert!(mcap::Summary::read(&full[..cut]).is_err());
             let fixed = recover(&full[..cut]).unwrap();
+            assert!(fixed.dropped.is_empty(), "{:?}", fixed.dropped);
+            let fixed = fixed.bytes;
             let summary = mcap::Summary::read(&fixed).unwrap().expect("summary");
             assert_eq!(summary.stats.unwrap().message_count, expected.len() as u64);
             let again = read_recording(&fixed).unwrap();
-            assert!(!again.truncated);
+            assert!(!again.truncated());
             assert_eq!(again.messages, expected);
             assert_eq!(again.metadata, complete.metadata);
         }
@@ -338,8 +394,10 @@ fn a_file_cut_after_a_step_reads_up_to_that_step_and_recovers() {
 fn recover_of_a_complete_file_keeps_everything() {
     let (full, _, _) = record_run(2, RecordLevel::Exchange);
     let fixed = recover(&full).unwrap();
+    assert!(fixed.dropped.is_empty());
+    assert_eq!(fixed.recording, read_recording(&full).unwrap());
     assert_eq!(
-        read_recording(&fixed).unwrap(),
+        read_recording(&fixed.bytes).unwrap(),
         read_recording(&full).unwrap()
     );
 }
@@ -348,11 +406,11 @@ fn recover_of_a_complete_file_keeps_everything() {
 fn garbage_is_an_error() {
     assert!(matches!(
         read_recording(b""),
-        Err(RecordError::NotMcap { len: 0 })
+        Err(RecordError::Read(ScanError::NotMcap { len: 0 }))
     ));
     assert!(matches!(
         read_recording(b"hello world, not mcap"),
-        Err(RecordError::NotMcap { .. })
+        Err(RecordError::Read(ScanError::NotMcap { .. }))
     ));
     assert!(recover(b"\x00\x01").is_err());
     // The magic followed by a complete record of nonsense.
@@ -362,7 +420,11 @@ fn garbage_is_an_error() {
     bad.extend_from_slice(&[1, 2, 3, 4]);
     assert!(matches!(
         read_recording(&bad),
-        Err(RecordError::Corrupt { .. })
+        Err(RecordError::Read(ScanError::Chunk {
+            index: 0,
+            offset: 8,
+            ..
+        }))
     ));
 }
 
@@ -460,4 +522,246 @@ fn export_step_dumps_the_exchanged_arrays() {
     assert!(csv.contains("surface.vertices,2,1.0"), "{csv}");
     let err = export_step(&rec, 99, ExportFormat::Json).unwrap_err();
     assert!(err.to_string().contains("step 99"), "{err}");
+}
+
+/// Issue 11, item 4: a run killed at any moment between two writes leaves a complete MCAP file
+/// without summary, which the mcap crate's standard readers read up to the last completed step
+/// (the Python reader: `python_mcap_reads_finished_killed_cut_and_recovered_records`).
+#[test]
+fn issue_11_a_killed_run_reads_with_standard_readers_up_to_its_last_completed_step() {
+    let shared = Shared::default();
+    let mut rec =
+        Recorder::new(shared.clone(), RecordLevel::Exchange, "unit-scene", SCENE).unwrap();
+    // Killed before the first step ends: an empty but readable record.
+    let empty = shared.0.borrow().get_ref().clone();
+    assert_eq!(mcap::MessageStream::new(&empty).unwrap().count(), 0);
+    assert_eq!(read_recording(&empty).unwrap().end, End::Unfinished);
+    let mut n_expected = 0;
+    for step in 0..4 {
+        let before = shared.0.borrow().get_ref().clone();
+        // Mid-step: the frames are in the open chunk, in memory; the file is as it was.
+        let frames = record_step(&mut rec, step);
+        assert_eq!(
+            *shared.0.borrow().get_ref(),
+            before,
+            "step {step}: written mid-step"
+        );
+        rec.end_step().unwrap();
+        n_expected += frames.len() + 1 + usize::from(step.is_multiple_of(2));
+        let killed = shared.0.borrow().get_ref().clone();
+        assert!(killed.ends_with(&PROVISIONAL_END));
+        // The mcap crate's strict reader: needs the end magic, refuses a file cut short.
+        let streamed: Vec<_> = mcap::MessageStream::new(&killed)
+            .unwrap()
+            .collect::<Result<_, _>>()
+            .unwrap_or_else(|e| panic!("step {step}: {e}"));
+        assert_eq!(streamed.len(), n_expected, "step {step}");
+        assert_eq!(streamed.last().unwrap().log_time, step);
+        assert!(mcap::Summary::read(&killed).unwrap().is_none());
+        let ours = read_recording(&killed).unwrap();
+        assert_eq!(ours.end, End::Unfinished);
+        assert_eq!(ours.messages.len(), n_expected);
+        assert_eq!(ours.topic(DIAGNOSTICS_TOPIC).count() as u64, step + 1);
+    }
+    let done = rec.finish().unwrap();
+    let bytes = done.0.borrow().get_ref().clone();
+    let finished = read_recording(&bytes).unwrap();
+    assert_eq!(
+        finished.end,
+        End::Finished {
+            summary_damage: None
+        }
+    );
+    assert_eq!(finished.messages.len(), n_expected);
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
+    assert_eq!(summary.stats.unwrap().message_count, n_expected as u64);
+}
+
+/// Byte ranges of the chunks of a file, in order: (offset, length of the whole record).
+fn chunks(bytes: &[u8]) -> Vec<(usize, usize)> {
+    let summary = mcap::Summary::read(bytes).unwrap().expect("summary");
+    let mut out: Vec<_> = summary
+        .chunk_indexes
+        .iter()
+        .map(|c| (c.chunk_start_offset as usize, c.chunk_length as usize))
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// Issue 11, items 2 and 3: flipping any one byte of a small record (every byte, each flipped
+/// by two masks) never panics or aborts a reader; each read is Ok or a clear error; a flip in a
+/// chunk's compressed data is always refused with that chunk's index and offset, and recovery
+/// then keeps every other chunk.
+#[test]
+fn issue_11_every_flipped_byte_is_read_or_refused_clearly() {
+    let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
+    let complete = read_recording(&bytes).unwrap();
+    let chunk_ranges = chunks(&bytes);
+    let (mut n_ok, mut n_err, mut n_chunk, mut n_neutral) = (0, 0, 0, 0);
+    for at in 0..bytes.len() {
+        for mask in [0x01u8, 0xFF] {
+            let mut bad = bytes.clone();
+            bad[at] ^= mask;
+            let strict = read_recording(&bad);
+            let script = protocol::replay::Script::from_mcap(&bad, NodeKind::Fluid);
+            let recovered = recover(&bad);
+            match &strict {
+                Ok(rec) => {
+                    n_ok += 1;
+                    let _ = list_steps(rec);
+                    // Read without complaint, so it is not reported as a killed run unless it is one.
+                    assert!(
+                        !matches!(rec.end, End::CutShort { .. }),
+                        "flip at {at} read as cut short"
+                    );
+                }
+                Err(e) => {
+                    n_err += 1;
+                    let text = e.to_string();
+                    assert!(
+                        text.contains("byte") || text.contains("CRC"),
+                        "flip at {at}: {text}"
+                    );
+                }
+            }
+            assert_eq!(
+                script.is_ok(),
+                strict.is_ok(),
+                "flip at {at}: {:?}",
+                script.err()
+            );
+            let recovered = match recovered {
+                Ok(recovered) => recovered,
+                Err(e) => {
+                    // Only bytes that are not MCAP at all are refused.
+                    assert!(at < 8, "flip at {at}: recover: {e}");
+                    continue;
+                }
+            };
+            // Whatever was dropped is said; whatever was kept reads back.
+            let again = read_recording(&recovered.bytes).unwrap();
+            assert_eq!(again.messages, recovered.recording.messages);
+            if let Some(index) = chunk_ranges
+                .iter()
+                .position(|&(o, len)| at >= o + 9 + 40 && at < o + len)
+            {
+                // Inside a chunk's compressed records (past its header).
+                let (offset, _) = chunk_ranges[index];
+                let err = strict
+                    .as_ref()
+                    .expect_err("a flipped chunk byte is refused");
+                if let RecordError::Read(ScanError::DataCrc { .. }) = err {
+                    // The chunk still decompresses to the bytes its CRC covers (an lz4 match
+                    // offset pointing at an identical earlier run): nothing is lost, the file
+                    // is still refused for its changed byte, and recovery keeps everything.
+                    n_neutral += 1;
+                    assert_eq!(
+                        recovered.recording.messages, complete.messages,
+                        "flip at {at}"
+                    );
+                    assert_eq!(recovered.dropped.len(), 1, "flip at {at}");
+                    assert_eq!(recovered.dropped[0].what, "nothing");
+                    continue;
+                }
+                assert!(
+                    matches!(
+                        err,
+                        RecordError::Read(ScanError::ChunkCrc { index: i, offset: o, .. }
+                            | ScanError::Chunk { index: i, offset: o, .. })
+                            if *i == index && *o == offset
+                    ),
+                    "flip at {at} (chunk {index} at {offset}): {err}"
+                );
+                n_chunk += 1;
+                assert_eq!(
+                    recovered.dropped.len(),
+                    1,
+                    "flip at {at}: {:?}",
+                    recovered.dropped
+                );
+                assert!(recovered.dropped[0].what == format!("chunk {index}"));
+                // Chunk 0 holds the schemas and channels (found again in the summary); every
+                // later chunk holds a step's messages, lost with it.
+                if index > 0 {
+                    assert!(recovered.recording.messages.len() < complete.messages.len());
+                }
+                assert!(
+                    recovered
+                        .recording
+                        .messages
+                        .iter()
+                        .all(|m| complete.messages.contains(m))
+                );
+            }
+        }
+    }
+    eprintln!(
+        "{} bytes flipped twice each: {n_ok} reads Ok, {n_err} refused ({n_chunk} naming the \
+         damaged chunk, {n_neutral} chunk flips that change no recorded byte)",
+        bytes.len()
+    );
+    assert!(n_err > 0 && n_ok > 0 && n_chunk > n_neutral);
+}
+
+/// Issue 11, item 3: damage confined to the summary section loses nothing: the data section is
+/// read in full and the damage is reported.
+#[test]
+fn issue_11_summary_damage_leaves_the_data_readable() {
+    let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
+    let complete = read_recording(&bytes).unwrap();
+    let summary_start = u64::from_le_bytes(
+        bytes[bytes.len() - 8 - 20..bytes.len() - 8 - 12]
+            .try_into()
+            .unwrap(),
+    ) as usize;
+    assert!(summary_start > 0);
+    for at in (summary_start..bytes.len() - 8 - 29).step_by(7) {
+        let mut bad = bytes.clone();
+        bad[at] ^= 0x5A;
+        let rec = read_recording(&bad).unwrap_or_else(|e| panic!("flip at {at}: {e}"));
+        assert_eq!(rec.messages, complete.messages, "flip at {at}");
+        assert_eq!(rec.metadata, complete.metadata);
+        assert!(
+            matches!(&rec.end, End::Finished { summary_damage: Some(d) } if d.contains("CRC")),
+            "flip at {at}: {:?}",
+            rec.end
+        );
+        assert!(!rec.truncated());
+        let script = protocol::replay::Script::from_mcap(&bad, NodeKind::Fluid).unwrap();
+        assert!(!script.truncated);
+    }
+}
+
+/// Issue 11, item 3: a file that ends with the end magic but holds a record running past the
+/// end was damaged, not cut short by a kill: refused, with the offset.
+#[test]
+fn issue_11_a_damaged_file_is_not_called_a_killed_run() {
+    let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
+    let (offset, _) = chunks(&bytes)[1];
+    let mut bad = bytes.clone();
+    // The chunk's record length: now far past the end of the file.
+    bad[offset + 8] ^= 0x40;
+    let err = read_recording(&bad).unwrap_err().to_string();
+    assert!(
+        err.contains(&format!("at byte {offset}")) && err.contains("damaged, not cut short"),
+        "{err}"
+    );
+    let fixed = recover(&bad).unwrap();
+    assert_eq!(fixed.dropped.len(), 1, "{:?}", fixed.dropped);
+    assert_eq!(fixed.dropped[0].offset, offset);
+    // Chunks 0 and 2 and later are kept.
+    assert!(!fixed.recording.messages.is_empty());
+    assert!(
+        fixed
+            .recording
+            .topic(DIAGNOSTICS_TOPIC)
+            .any(|m| m.log_time == 2)
+    );
+    assert!(
+        !fixed
+            .recording
+            .topic(DIAGNOSTICS_TOPIC)
+            .any(|m| m.log_time == 0)
+    );
 }

@@ -7,6 +7,7 @@
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
+//! - `mcap_read` (feature `replay`): bounded, CRC-checked reading of MCAP bytes.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
 //!   replay double that plays them in step with the coupler.
 //!
@@ -23,6 +24,8 @@ pub mod wire;
 
 #[cfg(feature = "bus")]
 pub mod bus;
+#[cfg(feature = "replay")]
+pub mod mcap_read;
 #[cfg(feature = "replay")]
 pub mod replay;
 #[cfg(all(feature = "bus", feature = "replay"))]

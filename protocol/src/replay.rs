@@ -9,6 +9,7 @@
 use std::time::Duration;
 
 use crate::codec;
+use crate::mcap_read::{self, End, Mode, ScanError};
 use crate::transport::{Transport, TransportError};
 use crate::wire::{Message, MessageKind, NodeKind};
 
@@ -33,9 +34,10 @@ pub struct Script {
 /// Why a record cannot be replayed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
-    /// The bytes are not a readable MCAP record.
+    /// The bytes are not a readable MCAP record (damage is named by chunk and offset). Not a
+    /// `source`: the message already holds it, and error chains would print it twice.
     #[error("not a readable MCAP record: {0}")]
-    Mcap(String),
+    Mcap(ScanError),
     /// The record holds nothing for this node.
     #[error(
         "the record holds no messages of the {0} node (was it recorded with record = \"exchange\" or \"all\"?)"
@@ -54,35 +56,36 @@ pub enum ReplayError {
     Transport(#[from] TransportError),
 }
 
+impl From<ScanError> for ReplayError {
+    fn from(err: ScanError) -> Self {
+        ReplayError::Mcap(err)
+    }
+}
+
 impl Script {
     /// Reads the frames exchanged with `node` from MCAP bytes (complete or truncated).
     pub fn from_mcap(bytes: &[u8], node: NodeKind) -> Result<Script, ReplayError> {
         let from_topic = format!("{}-to-coupler", node.name());
         let to_topic = format!("coupler-to-{}", node.name());
         let checkpoint_topic = format!("checkpoint/{}", node.name());
-        let stream = mcap::MessageStream::new_with_options(
-            bytes,
-            mcap::read::Options::IgnoreEndMagic.into(),
-        )
-        .map_err(|e| ReplayError::Mcap(e.to_string()))?;
-        let mut script = Script::default();
-        for msg in stream {
-            let msg = match msg {
-                Ok(msg) => msg,
-                Err(_) if !script.frames.is_empty() => {
-                    script.truncated = true;
-                    break;
-                }
-                Err(e) => return Err(ReplayError::Mcap(e.to_string())),
-            };
-            let dir = if msg.channel.topic == from_topic || msg.channel.topic == checkpoint_topic {
+        // NOTE: a bounded, CRC-checked read: a damaged record is an error naming the chunk and
+        // offset, never a panic or a huge allocation (the mcap crate's MessageStream has no
+        // limit on the lengths inside a chunk).
+        let scan = mcap_read::scan(bytes, Mode::Strict)?;
+        let mut script = Script {
+            frames: Vec::new(),
+            truncated: !matches!(scan.end, End::Finished { .. }),
+        };
+        for msg in scan.messages {
+            let topic = &scan.channels[&msg.channel_id].topic;
+            let dir = if *topic == from_topic || *topic == checkpoint_topic {
                 Direction::FromNode
-            } else if msg.channel.topic == to_topic {
+            } else if *topic == to_topic {
                 Direction::ToNode
             } else {
                 continue;
             };
-            script.frames.push((dir, msg.data.into_owned()));
+            script.frames.push((dir, msg.data));
         }
         if script.frames.is_empty() {
             return Err(ReplayError::Empty(node));

@@ -82,7 +82,8 @@ pub fn serve<M>(
     if let Some(file) = implementation.strip_prefix("replay:") {
         let bytes =
             std::fs::read(file).map_err(|e| input(format!("reading record {file}: {e}")))?;
-        let script = Script::from_mcap(&bytes, kind).map_err(|e| input(e.to_string()))?;
+        let script = Script::from_mcap(&bytes, kind)
+            .map_err(|e| input(format!("reading record {file}: {e}")))?;
         play(&mut bus, &script, opts.timeout).map_err(|e| input(e.to_string()))?;
         return Ok(());
     }

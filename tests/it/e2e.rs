@@ -13,17 +13,17 @@ use protocol::codec;
 use protocol::scene::RecordLevel;
 use protocol::wire::{Message, NodeKind};
 
-fn workspace() -> PathBuf {
+pub(crate) fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn out_dir(test: &str) -> PathBuf {
+pub(crate) fn out_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("cosim-it-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
 
-fn coupler() -> Command {
+pub(crate) fn coupler() -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_it-coupler-node"));
     cmd.env("COSIM_FLUID_BIN", env!("CARGO_BIN_EXE_it-fluid-node"))
         .env("COSIM_SOLID_BIN", env!("CARGO_BIN_EXE_it-solid-node"));
@@ -41,7 +41,7 @@ fn shared_start() -> RwLockReadGuard<'static, ()> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+pub(crate) fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let _start = shared_start();
     let output = coupler()
         .arg("run")
@@ -300,7 +300,7 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes_and_the_coupler() {
 }
 
 /// Process ids of the nodes of a run (`--` so pgrep does not read the pattern as an option).
-fn node_pids(run_id: &str) -> String {
+pub(crate) fn node_pids(run_id: &str) -> String {
     let out = Command::new("pgrep")
         .args(["-f", "--", &format!("--run-id {run_id} ")])
         .output()
@@ -308,7 +308,7 @@ fn node_pids(run_id: &str) -> String {
     String::from_utf8_lossy(&out.stdout).trim().to_string()
 }
 
-fn long_doubles_scene(dir: &Path) -> PathBuf {
+pub(crate) fn long_doubles_scene(dir: &Path) -> PathBuf {
     std::fs::create_dir_all(dir).expect("dir");
     let text = std::fs::read_to_string(workspace().join("scenes/backbone-doubles.toml"))
         .expect("scene")
@@ -320,7 +320,7 @@ fn long_doubles_scene(dir: &Path) -> PathBuf {
 }
 
 /// Starts the coupler on a long scene and waits (bounded) until it has recorded `bytes`.
-fn start_long_run(
+pub(crate) fn start_long_run(
     scene: &Path,
     out: &Path,
     bytes: u64,
@@ -640,7 +640,7 @@ fn sigterm_ends_every_process_and_finishes_the_record() {
     // The record is complete (summary and footer), not just readable.
     let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
         .expect("readable");
-    assert!(!rec.truncated, "the record was not finished");
+    assert!(!rec.truncated(), "the record was not finished");
     // No node of the run is left.
     assert!(node_pids(&run_id).is_empty(), "nodes left running");
     let _ = std::fs::remove_dir_all(dir);

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks a co-simulation MCAP recording with the Python `mcap` package (pip install 'mcap==1.*').
 
-usage: check_mcap.py FILE.mcap [--truncated]
+usage: check_mcap.py FILE.mcap [--truncated | --unfinished] [--allow-gaps]
 
 Opens the file, reads every message, and checks that
   - every channel is a known topic with the expected message encoding and schema
@@ -9,10 +9,12 @@ Opens the file, reads every message, and checks that
     "diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object),
   - every bincode message starts with the frame magic b"FSI\\0" and protocol version 2,
   - every diagnostics message parses as a JSON object with an integer "step" equal to log_time,
-  - sequence numbers count up from 0 per channel, and the metadata "scene" and "run" exist,
+  - sequence numbers count up from 0 per channel (with --allow-gaps, as in a record recovered
+    from a damaged one, they only increase), and the metadata "scene" and "run" exist,
   - the file has a summary whose message count matches (unless --truncated: then the file is
-    read with the streaming reader up to where it ends).
-Prints "ok N messages" and exits 0, or prints the first problem and exits 1.
+    read with the streaming reader up to where it ends; or --unfinished, the record of a killed
+    run: then the standard `make_reader` must read it as it is, a file without summary).
+Prints "ok N messages, last step S" and exits 0, or prints the first problem and exits 1.
 """
 
 import json
@@ -60,8 +62,13 @@ def check_channel(channel, schema):
         raise CheckError(f"unknown topic {channel.topic!r}")
 
 
+ALLOW_GAPS = False
+
+
 def check_message(channel, message, next_seq):
     want = next_seq.get(channel.id, 0)
+    if ALLOW_GAPS and message.sequence > want:
+        want = message.sequence
     if message.sequence != want:
         raise CheckError(f"{channel.topic}: sequence {message.sequence}, want {want}")
     next_seq[channel.id] = want + 1
@@ -80,14 +87,17 @@ def check_message(channel, message, next_seq):
             raise CheckError(f"{channel.topic} seq {message.sequence}: protocol version {version}")
 
 
-def check_complete(path):
+def check_complete(path, unfinished=False):
     with open(path, "rb") as f:
         reader = make_reader(f)
         try:
             summary = reader.get_summary()
         except Exception as e:  # a file without footer makes the summary lookup fail
             raise CheckError(f"no readable summary ({type(e).__name__}); truncated file? use --truncated")
-        if summary is None:
+        if unfinished:
+            if summary is not None:
+                raise CheckError("a summary section: the run finished, not --unfinished")
+        elif summary is None:
             raise CheckError("no summary section (truncated file? use --truncated)")
         metadata = {m.name for m in reader.iter_metadata()}
         for name in ("scene", "run"):
@@ -95,19 +105,23 @@ def check_complete(path):
                 raise CheckError(f"metadata {name!r} missing")
         next_seq = {}
         n = 0
+        last = None
         for schema, channel, message in reader.iter_messages(log_time_order=False):
             check_channel(channel, schema)
             check_message(channel, message, next_seq)
             n += 1
-        if summary.statistics is not None and summary.statistics.message_count != n:
+            if channel.topic == DIAGNOSTICS:
+                last = message.log_time
+        if summary is not None and summary.statistics is not None and summary.statistics.message_count != n:
             raise CheckError(f"summary counts {summary.statistics.message_count} messages, read {n}")
-        return n
+        return n, last
 
 
 def check_truncated(path):
     schemas, channels, next_seq = {}, {}, {}
     metadata = set()
     n = 0
+    last = None
     with open(path, "rb") as f:
         try:
             for record in StreamReader(f, skip_magic=False, emit_chunks=False).records:
@@ -122,6 +136,8 @@ def check_truncated(path):
                     check_channel(channel, schemas.get(channel.schema_id))
                     check_message(channel, record, next_seq)
                     n += 1
+                    if channel.topic == DIAGNOSTICS:
+                        last = record.log_time
         except CheckError:
             raise
         except Exception as e:  # the streaming reader ends with an error where the file was cut
@@ -129,7 +145,7 @@ def check_truncated(path):
     for name in ("scene", "run"):
         if name not in metadata:
             raise CheckError(f"metadata {name!r} missing")
-    return n
+    return n, last
 
 
 def main(argv):
@@ -137,12 +153,17 @@ def main(argv):
         print(__doc__)
         return 2
     path = argv[1]
+    global ALLOW_GAPS
+    ALLOW_GAPS = "--allow-gaps" in argv[2:]
     try:
-        n = check_truncated(path) if "--truncated" in argv[2:] else check_complete(path)
+        if "--truncated" in argv[2:]:
+            n, last = check_truncated(path)
+        else:
+            n, last = check_complete(path, unfinished="--unfinished" in argv[2:])
     except (CheckError, json.JSONDecodeError, KeyError) as e:
         print(f"{path}: {e}")
         return 1
-    print(f"ok {n} messages")
+    print(f"ok {n} messages, last step {last}")
     return 0
 
 

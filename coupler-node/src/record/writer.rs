@@ -1,0 +1,312 @@
+//! The recorder: writes the frames, checkpoints and diagnostics of a run into MCAP, so that the
+//! file stays readable by standard readers up to the last completed step at every moment
+//! between two writes (module docs of [`crate::record`], "Durability").
+
+use std::collections::BTreeMap;
+use std::io::{Seek, SeekFrom, Write};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use mcap::records::{MessageHeader, Metadata};
+use mcap::{Compression, WriteOptions, Writer};
+use protocol::PROTOCOL_VERSION;
+use protocol::mcap_read::PROVISIONAL_END;
+use protocol::scene::RecordLevel;
+use protocol::wire::NodeKind;
+
+use crate::record::RecordError;
+use crate::record::channels::{
+    DIAGNOSTICS_SCHEMA, DIAGNOSTICS_TOPIC, FRAME_MESSAGE_ENCODING, FRAME_SCHEMA_ENCODING,
+    FRAME_SCHEMA_NAME, checkpoint_topic, frame_schema_text, frame_topic, level_name,
+};
+
+/// Largest uncompressed chunk [`Recorder`] holds in memory before it writes it (4 MiB).
+const CHUNK_SIZE: u64 = 4 << 20;
+
+/// Records a run into MCAP.
+pub struct Recorder<W: Write + Seek> {
+    writer: Writer<ProvisionalEnd<W>>,
+    level: RecordLevel,
+    /// Set by [`Recorder::close_chunk`] just before it flushes the writer: the next flush of
+    /// [`ProvisionalEnd`] writes the provisional end.
+    end_due: Arc<AtomicBool>,
+    /// Uncompressed bytes written into the open chunk.
+    open_chunk_bytes: u64,
+    /// Channel id and next sequence number per topic.
+    channels: BTreeMap<&'static str, (u16, u32)>,
+}
+
+impl<W: Write + Seek> Recorder<W> {
+    /// `level`: `All` | `Exchange`: all bus frames, checkpoints and diagnostics; `Diagnostics`:
+    /// only the diagnostics JSON channel; `None` is refused ([`RecordError::Disabled`]).
+    /// `scene_toml` is stored as metadata `scene` (key `toml`) with the scene name; metadata
+    /// `run` holds the protocol version.
+    pub fn new(
+        writer: W,
+        level: RecordLevel,
+        scene_name: &str,
+        scene_toml: &str,
+    ) -> Result<Self, RecordError> {
+        if level == RecordLevel::None {
+            return Err(RecordError::Disabled);
+        }
+        // NOTE: lz4 is fast enough not to slow the coupler, and `compression_threads(0)` keeps
+        // the writer on the caller's thread (pitfall 13; it only matters for zstd).
+        let end_due = Arc::new(AtomicBool::new(false));
+        // NOTE: `disable_seeking` makes the writer build each chunk in memory and write it
+        // whole, so nothing reaches the file mid-step and the provisional end stays the last
+        // thing in it; `chunk_size(None)` leaves closing chunks to `close_chunk`.
+        let mut writer = WriteOptions::new()
+            .compression(Some(Compression::Lz4))
+            .compression_threads(0)
+            .chunk_size(None)
+            .disable_seeking(true)
+            .profile("")
+            .create(ProvisionalEnd {
+                inner: writer,
+                pos: 0,
+                len: 0,
+                end_due: end_due.clone(),
+            })?;
+        writer.write_metadata(&Metadata {
+            name: "scene".into(),
+            metadata: BTreeMap::from([
+                ("name".to_string(), scene_name.to_string()),
+                ("toml".to_string(), scene_toml.to_string()),
+            ]),
+        })?;
+        writer.write_metadata(&Metadata {
+            name: "run".into(),
+            metadata: BTreeMap::from([
+                ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+                ("record_level".to_string(), level_name(level).to_string()),
+                (
+                    "recorder".to_string(),
+                    format!("coupler-node {}", env!("CARGO_PKG_VERSION")),
+                ),
+            ]),
+        })?;
+        let mut channels = BTreeMap::new();
+        let mut frame_schema = None;
+        if level != RecordLevel::Diagnostics {
+            let schema = writer.add_schema(
+                FRAME_SCHEMA_NAME,
+                FRAME_SCHEMA_ENCODING,
+                frame_schema_text().as_bytes(),
+            )?;
+            let links = [
+                (NodeKind::Fluid, NodeKind::Coupler),
+                (NodeKind::Coupler, NodeKind::Fluid),
+                (NodeKind::Solid, NodeKind::Coupler),
+                (NodeKind::Coupler, NodeKind::Solid),
+            ];
+            for (from, to) in links {
+                let topic = frame_topic(from, to).expect("links of the star");
+                let meta = BTreeMap::from([
+                    ("from".to_string(), from.name().to_string()),
+                    ("to".to_string(), to.name().to_string()),
+                    ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+                ]);
+                let id = writer.add_channel(schema, topic, FRAME_MESSAGE_ENCODING, &meta)?;
+                channels.insert(topic, (id, 0));
+            }
+            for node in [NodeKind::Fluid, NodeKind::Solid] {
+                let topic = checkpoint_topic(node).expect("a solver node");
+                let meta = BTreeMap::from([
+                    ("node".to_string(), node.name().to_string()),
+                    ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+                ]);
+                let id = writer.add_channel(schema, topic, FRAME_MESSAGE_ENCODING, &meta)?;
+                channels.insert(topic, (id, 0));
+            }
+            frame_schema = Some(schema);
+        }
+        let schema = writer.add_schema(
+            "cosim.Diagnostics",
+            "jsonschema",
+            DIAGNOSTICS_SCHEMA.as_bytes(),
+        )?;
+        let id = writer.add_channel(schema, DIAGNOSTICS_TOPIC, "json", &BTreeMap::new())?;
+        channels.insert(DIAGNOSTICS_TOPIC, (id, 0));
+        if let Some(frames) = frame_schema {
+            // After `diagnostics`, so the ids of the older channels stay as they were.
+            let topic = checkpoint_topic(NodeKind::Coupler).expect("the coupler's topic");
+            let meta = BTreeMap::from([
+                ("node".to_string(), NodeKind::Coupler.name().to_string()),
+                ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+            ]);
+            let id = writer.add_channel(frames, topic, FRAME_MESSAGE_ENCODING, &meta)?;
+            channels.insert(topic, (id, 0));
+        }
+        let mut recorder = Recorder {
+            writer,
+            level,
+            end_due,
+            open_chunk_bytes: 0,
+            channels,
+        };
+        // A run killed before its first step ends leaves a readable (empty) record.
+        recorder.close_chunk()?;
+        Ok(recorder)
+    }
+
+    /// The level this recorder was made with.
+    pub fn level(&self) -> RecordLevel {
+        self.level
+    }
+
+    /// Records one bus frame exactly as it crossed the bus, on topic `<from>-to-<to>`; log time =
+    /// `step`, publish time = `wall_ns`. A no-op at level `Diagnostics`.
+    pub fn record_frame(
+        &mut self,
+        from: NodeKind,
+        to: NodeKind,
+        step: u64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), RecordError> {
+        if self.level == RecordLevel::Diagnostics {
+            return Ok(());
+        }
+        let topic = frame_topic(from, to).ok_or_else(|| RecordError::Decode {
+            topic: format!("{from}-to-{to}"),
+            step,
+            reason: "no such bus channel (frames go between the coupler and a node)".into(),
+        })?;
+        self.write(topic, step, wall_ns, frame)
+    }
+
+    /// Records a checkpoint frame on `checkpoint/fluid`, `checkpoint/solid` or
+    /// `checkpoint/coupler`. A no-op at level
+    /// `Diagnostics`.
+    pub fn record_checkpoint(
+        &mut self,
+        node: NodeKind,
+        step: u64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), RecordError> {
+        if self.level == RecordLevel::Diagnostics {
+            return Ok(());
+        }
+        let topic = checkpoint_topic(node).ok_or_else(|| RecordError::Decode {
+            topic: format!("checkpoint/{node}"),
+            step,
+            reason: "only the fluid and solid nodes have checkpoints".into(),
+        })?;
+        self.write(topic, step, wall_ns, frame)
+    }
+
+    /// Records the diagnostics object of a step (`json` is the serialized object).
+    pub fn record_diagnostics(
+        &mut self,
+        step: u64,
+        wall_ns: u64,
+        json: &[u8],
+    ) -> Result<(), RecordError> {
+        self.write(DIAGNOSTICS_TOPIC, step, wall_ns, json)
+    }
+
+    /// Called after each completed step: closes the open chunk, writes it and the provisional
+    /// end, and flushes the writer, so a killed run leaves a file that standard readers read up
+    /// to here (pitfall 12; module docs, "Durability").
+    pub fn end_step(&mut self) -> Result<(), RecordError> {
+        self.close_chunk()
+    }
+
+    /// Writes the summary and footer over the provisional end and returns the inner writer.
+    pub fn finish(mut self) -> Result<W, RecordError> {
+        self.writer.finish()?;
+        let out = self.writer.into_inner();
+        // The summary is longer than the provisional end, so nothing of it is left behind.
+        if out.pos < out.len {
+            return Err(RecordError::Mcap(mcap::McapError::Io(
+                std::io::Error::other(format!(
+                    "the finished record ({} bytes) is shorter than what was written ({} bytes)",
+                    out.pos, out.len
+                )),
+            )));
+        }
+        Ok(out.inner)
+    }
+
+    fn close_chunk(&mut self) -> Result<(), RecordError> {
+        self.end_due.store(true, Ordering::Relaxed);
+        let res = self.writer.flush();
+        self.end_due.store(false, Ordering::Relaxed);
+        self.open_chunk_bytes = 0;
+        res?;
+        Ok(())
+    }
+
+    fn write(
+        &mut self,
+        topic: &'static str,
+        step: u64,
+        wall_ns: u64,
+        data: &[u8],
+    ) -> Result<(), RecordError> {
+        let (channel_id, sequence) = self
+            .channels
+            .get_mut(topic)
+            .expect("every topic has a channel at this level");
+        let header = MessageHeader {
+            channel_id: *channel_id,
+            sequence: *sequence,
+            log_time: step,
+            publish_time: wall_ns,
+        };
+        *sequence = sequence.wrapping_add(1);
+        self.writer.write_to_known_channel(&header, data)?;
+        // NOTE: a chunk is held in memory until it is closed; past CHUNK_SIZE it is closed
+        // mid-step (then a kill keeps the messages of part of a step as well).
+        self.open_chunk_bytes += data.len() as u64;
+        if self.open_chunk_bytes >= CHUNK_SIZE {
+            self.close_chunk()?;
+        }
+        Ok(())
+    }
+}
+
+/// The file under the MCAP writer: passes writes through, and when asked (`end_due`), writes
+/// [`PROVISIONAL_END`] after the last byte on flush and steps back over it, so that the next
+/// write overwrites it.
+///
+/// With seeking disabled the MCAP writer only asks it for its position, never seeks it.
+struct ProvisionalEnd<W: Write + Seek> {
+    inner: W,
+    /// Where the writer's next byte goes.
+    pos: u64,
+    /// Bytes in the file (`pos`, plus a provisional end after it).
+    len: u64,
+    end_due: Arc<AtomicBool>,
+}
+
+impl<W: Write + Seek> Write for ProvisionalEnd<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.pos += n as u64;
+        self.len = self.len.max(self.pos);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.end_due.load(Ordering::Relaxed) {
+            self.inner.write_all(&PROVISIONAL_END)?;
+            self.len = self.len.max(self.pos + PROVISIONAL_END.len() as u64);
+            self.inner.seek(SeekFrom::Start(self.pos))?;
+        }
+        self.inner.flush()
+    }
+}
+
+impl<W: Write + Seek> Seek for ProvisionalEnd<W> {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.pos = self.inner.seek(pos)?;
+        Ok(self.pos)
+    }
+
+    fn stream_position(&mut self) -> std::io::Result<u64> {
+        Ok(self.pos)
+    }
+}
