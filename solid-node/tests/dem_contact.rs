@@ -430,3 +430,140 @@ fn oblique_elastic_impact_keeps_the_energy_within_the_stated_bound() {
         assert!(errs[2] < 0.25 * errs[0], "{dim}-D: {errs:?}");
     }
 }
+
+/// A fragmenting 3-D lattice with contact on (defaults: damping and friction, so the contact
+/// loads are state), big enough that pairs span several rayon chunks (256 items).
+fn fragmenting(threads: usize) -> Solid {
+    let mut cfg = box_config(
+        vec![0.0; 3],
+        vec![1.2, 0.6, 0.4],
+        vec![12, 6, 4],
+        1e6,
+        0.25,
+        1000.0,
+    );
+    cfg.gravity = Some(vec![0.0, 0.0, -9.81]);
+    with_fracture(&mut cfg, 0.002);
+    cfg.contact = Some(ContactConfig::default());
+    let mut solid = build(&cfg, 3, threads);
+    let mut noise = Noise(777);
+    for p in 0..solid.n_particles() {
+        let v = [noise.next(), noise.next(), noise.next()];
+        solid.set_velocity(ParticleId(p as u32), &v);
+        let w = [5.0 * noise.next(), 5.0 * noise.next(), 5.0 * noise.next()];
+        solid.set_angular_velocity(ParticleId(p as u32), &w);
+    }
+    solid
+}
+
+fn bits(solid: &Solid) -> Vec<u64> {
+    let mut out = Vec::new();
+    for p in 0..solid.n_particles() {
+        let id = ParticleId(p as u32);
+        out.extend(solid.position(id).iter().map(|v| v.to_bits()));
+        out.extend(solid.velocity(id).iter().map(|v| v.to_bits()));
+        out.extend(solid.orientation(id).iter().map(|v| v.to_bits()));
+        out.extend(solid.angular_velocity(id).iter().map(|v| v.to_bits()));
+    }
+    let e = solid.energies();
+    out.extend(
+        [e.elastic, e.contact, e.dissipated, e.kinetic_rotation]
+            .iter()
+            .map(|v| v.to_bits()),
+    );
+    out
+}
+
+/// Steps; returns (links broken, largest contact energy seen, most overlapping pairs).
+fn advance(solid: &mut Solid, steps: usize, dt: f64) -> (usize, f64, usize) {
+    let (mut broken, mut contact, mut overlapping) = (0, 0.0f64, 0);
+    for _ in 0..steps {
+        let r = solid.step_free(dt);
+        assert!(r.diagnostics.is_empty(), "{:?}", r.diagnostics);
+        broken += r.broken_links.len();
+        contact = contact.max(r.energies.contact);
+        let c = solid.contact().expect("contact on");
+        overlapping = overlapping.max(c.pairs().iter().filter(|p| p.energy > 0.0).count());
+    }
+    (broken, contact, overlapping)
+}
+
+#[test]
+fn contact_gives_the_same_bits_for_one_and_two_threads() {
+    let mut one = fragmenting(1);
+    let mut two = fragmenting(2);
+    let dt = 0.5 * one.max_dt(f64::INFINITY);
+    let r1 = advance(&mut one, 40, dt);
+    let r2 = advance(&mut two, 40, dt);
+    let n_pairs = one.contact().expect("contact on").pairs().len();
+    println!(
+        "fragmenting lattice: {n_pairs} pairs examined, (broken, max contact J, overlapping) {r1:?}"
+    );
+    assert!(n_pairs > 512, "{n_pairs} pairs");
+    assert!(
+        r1.0 > 0 && r1.1 > 0.0 && r1.2 > 0,
+        "fracture and contact exercised: {r1:?}"
+    );
+    assert_eq!(r1, r2);
+    assert_eq!(bits(&one), bits(&two));
+}
+
+#[test]
+fn checkpoint_restore_keeps_the_contact_state() {
+    let mut straight = fragmenting(1);
+    let dt = 0.5 * straight.max_dt(f64::INFINITY);
+    advance(&mut straight, 20, dt);
+    assert!(
+        straight.energies().contact > 0.0,
+        "in contact at the checkpoint"
+    );
+    let bytes = straight.to_checkpoint();
+    advance(&mut straight, 20, dt);
+    let mut restored = fragmenting(2);
+    restored.restore_checkpoint(&bytes).expect("restores");
+    advance(&mut restored, 20, dt);
+    assert_eq!(bits(&straight), bits(&restored));
+    // A checkpoint without contact state does not restore into a solid with contact.
+    let mut cfg = box_config(
+        vec![0.0; 3],
+        vec![1.2, 0.6, 0.4],
+        vec![12, 6, 4],
+        1e6,
+        0.25,
+        1000.0,
+    );
+    with_fracture(&mut cfg, 0.002);
+    let plain = build(&cfg, 3, 1).to_checkpoint();
+    let err = fragmenting(1).restore_checkpoint(&plain).unwrap_err();
+    assert!(err.contains("contact"), "{err}");
+}
+
+#[test]
+fn deep_overlap_is_reported_naming_the_particles() {
+    // Blocks thrown together at 40 m/s with a soft contact overlap by far more than a quarter.
+    let mut cfg = two_blocks(2, 0.001, 1.0, 0.0);
+    cfg.contact.as_mut().expect("contact").stiffness = 1e-3;
+    let mut solid = build(&cfg, 2, 1);
+    solid.set_velocity(ParticleId(0), &[40.0, 0.0]);
+    solid.set_velocity(ParticleId(1), &[-40.0, 0.0]);
+    let dt = 2e-5;
+    let mut found = None;
+    for _ in 0..200 {
+        let r = solid.step_free(dt);
+        if let Some(d) = r.diagnostics.first() {
+            found = Some(d.clone());
+            break;
+        }
+    }
+    match found {
+        Some(Diagnostic::DeepContact {
+            particles,
+            overlap,
+            volume,
+        }) => {
+            assert_eq!(particles, [ParticleId(0), ParticleId(1)]);
+            assert!(overlap > 0.25 * volume, "{overlap} of {volume}");
+        }
+        other => panic!("expected a deep contact report, got {other:?}"),
+    }
+}

@@ -403,7 +403,37 @@ impl Contact {
             // The law, piece by piece of B.
             let xb = Vector3::from(x[b]);
             let range = shapes.piece_start[b] as usize..shapes.piece_start[b + 1] as usize;
+            let (va0, va1) = (
+                shapes.vertex_start[a] as usize,
+                shapes.vertex_start[a + 1] as usize,
+            );
+            let (fa0, fa1) = (
+                shapes.face_start[a] as usize,
+                shapes.face_start[a + 1] as usize,
+            );
             for piece in &shapes.pieces[range] {
+                // Cheap rejection: all corners outside one face plane of A.
+                let corners = [
+                    xb,
+                    xb + rotate(b, &piece.corners[0]),
+                    xb + rotate(b, &piece.corners[1]),
+                    xb + rotate(b, &piece.corners[2]),
+                ];
+                // (2-D: the centre is `corners[0]` and `corners[1]`.)
+                let outside = |n: &Vector3<f64>, d: f64| corners.iter().all(|c| n.dot(c) > d);
+                let separated = if dim == 2 {
+                    let poly = &world[va0..va1];
+                    (0..poly.len()).any(|k| {
+                        let e = poly[(k + 1) % poly.len()] - poly[k];
+                        let n = Vector3::new(e.y, -e.x, 0.0);
+                        outside(&n, n.dot(&poly[k]))
+                    })
+                } else {
+                    planes_all[fa0..fa1].iter().any(|(n, d)| outside(n, *d))
+                };
+                if separated {
+                    continue;
+                }
                 let o = SCRATCH.with(|s| {
                     let scratch = &mut s.borrow_mut();
                     if dim == 2 {
