@@ -567,3 +567,28 @@ fn deep_overlap_is_reported_naming_the_particles() {
         other => panic!("expected a deep contact report, got {other:?}"),
     }
 }
+
+#[test]
+fn contact_leaves_the_wet_surface_shape_unchanged() {
+    let mut with = fragmenting(1);
+    let mut cfg = box_config(
+        vec![0.0; 3],
+        vec![1.2, 0.6, 0.4],
+        vec![12, 6, 4],
+        1e6,
+        0.25,
+        1000.0,
+    );
+    cfg.gravity = Some(vec![0.0, 0.0, -9.81]);
+    with_fracture(&mut cfg, 0.002);
+    let without = build(&cfg, 3, 1);
+    let (a, b) = (with.wet_surface(), without.wet_surface());
+    assert_eq!(a.vertices.len(), b.vertices.len());
+    assert_eq!(a.elements, b.elements);
+    assert_eq!(a.wet, b.wet);
+    let dt = 0.5 * with.max_dt(f64::INFINITY);
+    advance(&mut with, 10, dt);
+    let after = with.wet_surface();
+    assert_eq!(after.vertices.len(), b.vertices.len());
+    assert_eq!(after.n_elements(), b.n_elements());
+}

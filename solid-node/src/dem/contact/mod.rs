@@ -185,8 +185,9 @@ thread_local! {
 }
 
 impl Contact {
-    /// Builds the shapes of every particle from the model.
-    pub fn new(model: &Model, params: ContactParams) -> Self {
+    /// Builds the shapes of every particle from the model; refuses a 2-D particle of more
+    /// than 64 vertices (the kernels' stack buffers).
+    pub fn new(model: &Model, params: ContactParams) -> Result<Self, String> {
         let mut shapes = Shapes::default();
         let mut face_cursor = 0usize;
         for (p, part) in model.particles.iter().enumerate() {
@@ -279,6 +280,13 @@ impl Contact {
                     }
                 }
             }
+            if model.dim == 2 && verts.len() > MAX_VERTICES {
+                return Err(format!(
+                    "solid.contact: particle {p} has {} vertices, contact handles at most \
+                     {MAX_VERTICES} in 2-D",
+                    verts.len()
+                ));
+            }
             let radius = verts.iter().map(|v| v.norm()).fold(0.0, f64::max);
             shapes.radius.push(radius.max(0.5 * part.size));
             shapes
@@ -289,7 +297,7 @@ impl Contact {
         shapes.vertex_start.push(shapes.vertices.len() as u32);
         shapes.face_start.push(shapes.face_ranges.len() as u32);
         shapes.piece_start.push(shapes.pieces.len() as u32);
-        Contact {
+        Ok(Contact {
             params,
             world: vec![Vector3::zeros(); shapes.vertices.len()],
             planes: vec![(Vector3::zeros(), 0.0); shapes.face_ranges.len()],
@@ -299,7 +307,7 @@ impl Contact {
             pairs: Vec::new(),
             damping: Vec::new(),
             energy: 0.0,
-        }
+        })
     }
 
     /// Contact potential `Σ ½ κ V²` at the last evaluation \[J\].
@@ -613,7 +621,7 @@ fn overlap_2d(
             shapes.vertex_start[p] as usize,
             shapes.vertex_start[p + 1] as usize,
         );
-        assert!(v1 - v0 <= MAX, "a 2-D particle has at most {MAX} vertices");
+        debug_assert!(v1 - v0 <= MAX, "checked by Contact::new");
         for (k, w) in world[v0..v1].iter().enumerate() {
             buf[k] = w.xy();
         }

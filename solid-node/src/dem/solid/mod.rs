@@ -139,6 +139,8 @@ pub struct Solid {
     contact_limit: (f64, u32),
     /// Per particle `[ΔX, Ω Δt]` of the step being committed.
     motion: Vec<[[f64; 3]; 2]>,
+    /// Output of [`Solid::evaluate_contact`].
+    bench_loads: (Vec<[f64; 3]>, Vec<[f64; 3]>),
 }
 
 /// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.
@@ -255,7 +257,10 @@ impl Solid {
                 ));
             }
         }
-        let contact = cfg.contact.as_ref().map(ContactParams::from_config);
+        let contact = match &cfg.contact {
+            Some(c) => Some(Contact::new(&model, ContactParams::from_config(c))?),
+            None => None,
+        };
         let mut solid = Self::from_model(model, gravity, elongation_at_break, pool, contact);
         solid.apply_init(&cfg.init);
         Ok(solid)
@@ -291,7 +296,7 @@ impl Solid {
         gravity: [f64; 3],
         elongation_at_break: Option<f64>,
         pool: Option<rayon::ThreadPool>,
-        contact: Option<ContactParams>,
+        contact: Option<Contact>,
     ) -> Self {
         let n = model.particles.len();
         let n_links = model.links.len();
@@ -333,7 +338,6 @@ impl Solid {
             },
         };
         let topo = build_elements(&model, elongation_at_break.is_some());
-        let contact = contact.map(|params| Contact::new(&model, params));
         let contact_limit = contact
             .as_ref()
             .map_or((f64::INFINITY, 0), |c| c.stability_limit(&model));
@@ -368,6 +372,7 @@ impl Solid {
             contact,
             contact_limit,
             motion: vec![[[0.0; 3]; 2]; n],
+            bench_loads: (Vec::new(), Vec::new()),
             model,
         };
         solid.rebuild_wet_topology();
@@ -558,11 +563,34 @@ impl Solid {
         self.contact.as_ref()
     }
 
-    /// Evaluates every unbroken link and every contact at the committed configuration again
-    /// (exposed for benchmarks). Returns the number of pairs the narrow phase examined.
-    pub fn recompute_contact_forces(&mut self) -> usize {
-        self.update_forces();
-        self.contact.as_ref().map_or(0, |c| c.pairs().len())
+    /// Evaluates the contact alone (broad phase, narrow phase, law) at the committed
+    /// configuration into scratch buffers, leaving the solid unchanged (for benchmarks).
+    /// Returns the pairs the narrow phase examined and those overlapping; `(0, 0)` without
+    /// contact.
+    pub fn evaluate_contact(&mut self) -> (usize, usize) {
+        let Some(contact) = self.contact.as_mut() else {
+            return (0, 0);
+        };
+        let n = self.model.particles.len();
+        let (force, torque) = &mut self.bench_loads;
+        force.clear();
+        force.resize(n, [0.0; 3]);
+        torque.clear();
+        torque.resize(n, [0.0; 3]);
+        let dim = self.model.dim;
+        let rot = &self.state.rot;
+        let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rot[p], v);
+        contact.add_forces(
+            &self.model,
+            self.pool.as_ref(),
+            &self.state.x,
+            &rotate,
+            &self.state.broken,
+            force,
+            torque,
+        );
+        let pairs = contact.pairs();
+        (pairs.len(), pairs.iter().filter(|p| p.energy > 0.0).count())
     }
 
     fn rebuild_wet_topology(&mut self) {
@@ -592,7 +620,8 @@ impl Solid {
         self.kin.2 = omega;
     }
 
-    /// The largest step allowed now \[s\]: `ELASTIC_SAFETY ×` the elastic bound, the step that
+    /// The largest step allowed now \[s\]: `ELASTIC_SAFETY ×` the stability bound (links and,
+    /// with `[solid.contact]`, the contact springs: [`Solid::elastic_dt_limit`]), the step that
     /// moves a particle by its size h_s or by `displacement_cap` (the caller's limit, e.g. one
     /// fluid cell), and the step that turns a particle by π/8 (003 §2.2).
     pub fn max_dt(&self, displacement_cap: f64) -> f64 {
