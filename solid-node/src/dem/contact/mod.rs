@@ -27,8 +27,9 @@
 //! Dissipative part, at the centroid `G` of the whole overlap with the normal `n` of the
 //! elastic force on B (from A to B) and the relative velocity `w` of B's material point at `G`
 //! w.r.t. A's: a normal dashpot `−c_n (w·n) n`, `c_n = 2ζ √(k m*)`, `k = Σ κ_p |∇V_p|²` (the
-//! tangent normal stiffness), `m*` the reduced mass and `ζ = −ln e / √(π² + ln² e)` for the restitution `e`
-//! (the linear spring–dashpot value), limited so that the total normal force never pulls; and a
+//! tangent normal stiffness), `m*` the reduced mass and `ζ = −ln e / √(π² + ln² e)` for the
+//! restitution `e` (the linear spring–dashpot value), limited so that the total normal force
+//! never pulls (which leaves a head-on flat impact at e = 0.5 with 0.53–0.55); and a
 //! regularised Coulomb friction `−min(μ N, c_t |w_t|) w_t/|w_t|`, `c_t = 2√(k m*)`, with `N` the
 //! total normal force. These loads are evaluated at commit from the positions at n+1 and the
 //! mid-step velocities `V^{n+1/2}`, `Ω^{n+1/2}`, and held like a force at n+1 (second half kick,
@@ -36,8 +37,9 @@
 //! trapezoidal `½ (D^n + D^{n+1})·(ΔX, Ω Δt)` summed over particles, goes to `dissipated`.
 //!
 //! NOTE: the friction is regularised (stateless), so a body under a sustained tangential load
-//! below the Coulomb limit creeps at the speed `μ N / c_t`-limited velocity instead of sticking;
-//! an elastic tangential spring (Cundall–Strack) would need per-pair history.
+//! `F_t` below the Coulomb limit creeps at `F_t / c_t` instead of sticking; an elastic
+//! tangential spring (Cundall–Strack) would need per-pair history in the checkpoint.
+//! The law treats A and B alike except that B (the larger index) is the one cut into pieces.
 
 pub mod broad;
 pub mod overlap;

@@ -515,8 +515,9 @@ impl Solid {
         self.recompute_internal_forces()
     }
 
-    /// Evaluates every unbroken link at the committed configuration again (the step does this
-    /// itself; exposed for benchmarks and diagnostics). Returns the elastic energy \[J\].
+    /// Evaluates every unbroken link (and, with `[solid.contact]`, every contact) at the
+    /// committed configuration again (the step does this itself; exposed for benchmarks and
+    /// diagnostics). Returns the elastic energy of the links \[J\].
     pub fn recompute_internal_forces(&mut self) -> f64 {
         self.update_forces();
         self.elastic
