@@ -597,3 +597,64 @@ fn contact_leaves_the_wet_surface_shape_unchanged() {
     assert_eq!(after.vertices.len(), b.vertices.len());
     assert_eq!(after.n_elements(), b.n_elements());
 }
+
+/// The block of `block_on_floor` resting on the floor (μ = 0.3) under gravity tilted by `α`
+/// from −y towards +x (a slope); returns (x displacement over [t₁, t₂], mean acceleration
+/// along x over [t₁, t₂]).
+fn on_slope(dim: usize, tan_alpha: f64, t1: f64, t2: f64) -> (f64, f64) {
+    let mut cfg = block_on_floor(dim, 0.0);
+    let alpha = tan_alpha.atan();
+    let mut g = vec![0.0; dim];
+    g[0] = 9.81 * alpha.sin();
+    g[1] = -9.81 * alpha.cos();
+    cfg.gravity = Some(g);
+    let mut solid = build(&cfg, dim, 1);
+    let block = ParticleId(solid.n_particles() as u32 - 1);
+    let dt = 0.5 * solid.max_dt(f64::INFINITY);
+    let mut marks = Vec::new();
+    for t_mark in [t1, t2] {
+        while solid.time() < t_mark {
+            let r = solid.step_free(dt);
+            assert!(r.diagnostics.is_empty(), "{:?}", r.diagnostics);
+        }
+        marks.push((
+            solid.time(),
+            solid.position(block)[0],
+            solid.velocity(block)[0],
+        ));
+    }
+    let (t1, x1, v1) = marks[0];
+    let (t2, x2, v2) = marks[1];
+    (x2 - x1, (v2 - v1) / (t2 - t1))
+}
+
+#[test]
+fn friction_slides_a_block_at_the_coulomb_rate_and_creeps_below_the_limit() {
+    for dim in [2usize, 3] {
+        let alpha = 0.5f64.atan();
+        let (_, accel) = on_slope(dim, 0.5, 0.1, 0.2);
+        let expected = 9.81 * (alpha.sin() - 0.3 * alpha.cos());
+        // FIXME(issue 10): the friction is regularised, so below the Coulomb limit the block
+        // creeps at F_t / c_t instead of sticking (c_t = 2 √(k m), k = κ S²); a tangential
+        // spring (Cundall–Strack) would hold it (tried: it held, but without torsional friction
+        // the pushed 3-D bar half then twisted about the contact normal and kept spinning).
+        let (creep, _) = on_slope(dim, 0.2, 0.5, 1.0);
+        let mass = 1000.0 * A.powi(dim as i32);
+        let h = A * (dim as f64).sqrt();
+        let k = 1e6 / h.powi(dim as i32) * A.powi(2 * (dim as i32 - 1));
+        let beta = 0.2f64.atan();
+        let predicted = mass * 9.81 * beta.sin() / (2.0 * (k * mass).sqrt()) * 0.5;
+        println!(
+            "{dim}-D slope: tan α = 0.5 slides at {accel:.4} m/s² (Coulomb {expected:.4}); \
+             tan α = 0.2 creeps {creep:.3e} m from 0.5 to 1 s (F_t/c_t predicts {predicted:.3e})"
+        );
+        assert!(
+            (accel / expected - 1.0).abs() < 0.05,
+            "{dim}-D: {accel} vs {expected}"
+        );
+        assert!(
+            (creep / predicted - 1.0).abs() < 0.2,
+            "{dim}-D: {creep} vs {predicted}"
+        );
+    }
+}
