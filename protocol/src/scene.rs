@@ -451,6 +451,75 @@ pub struct SolidConfig {
     /// Settings of the prescribed double (`solid-node --double prescribed`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prescribed: Option<PrescribedConfig>,
+    /// Contact between particles that are not linked; absent: none is computed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactConfig>,
+}
+
+/// `[solid.contact]`: contact between particles that are not linked (never linked, or whose
+/// link broke) and with fixed particles. Every key has a default, so an empty table turns
+/// contact on.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactConfig {
+    /// Penalty stiffness as a multiple of the material's [-] (default 1): a face-to-face contact
+    /// over a particle's cross-section is as stiff as a link of Young's modulus `stiffness × E`.
+    #[serde(default = "default_contact_stiffness")]
+    pub stiffness: f64,
+    /// Normal restitution coefficient in \[0, 1\] (default 0.5; 1: elastic, no damping).
+    #[serde(default = "default_contact_restitution")]
+    pub restitution: f64,
+    /// Coulomb friction coefficient μ ≥ 0 (default 0.3; 0: frictionless).
+    #[serde(default = "default_contact_friction")]
+    pub friction: f64,
+}
+
+fn default_contact_stiffness() -> f64 {
+    1.0
+}
+fn default_contact_restitution() -> f64 {
+    0.5
+}
+fn default_contact_friction() -> f64 {
+    0.3
+}
+
+impl Default for ContactConfig {
+    fn default() -> Self {
+        ContactConfig {
+            stiffness: default_contact_stiffness(),
+            restitution: default_contact_restitution(),
+            friction: default_contact_friction(),
+        }
+    }
+}
+
+impl ContactConfig {
+    /// The first bad key as `(path, expected, found)`.
+    fn check(&self) -> Result<(), (&'static str, &'static str, f64)> {
+        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
+            return Err((
+                "solid.contact.stiffness",
+                "a finite number > 0",
+                self.stiffness,
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.restitution) {
+            return Err((
+                "solid.contact.restitution",
+                "a number in [0, 1]",
+                self.restitution,
+            ));
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err((
+                "solid.contact.friction",
+                "a finite number >= 0",
+                self.friction,
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// `solid.fracture`.
@@ -1059,6 +1128,10 @@ impl Scene {
             }
             if let Some(f) = &solid.fracture {
                 positive("solid.fracture.elongation_at_break", f.elongation_at_break)?;
+            }
+            if let Some(c) = &solid.contact {
+                c.check()
+                    .map_err(|(path, expected, v)| invalid(path, expected, v.to_string()))?;
             }
             if let Some(g) = &solid.gravity {
                 check_len("solid.gravity", g)?;

@@ -133,7 +133,7 @@ impl NodeModel for RealSolid {
             t,
             mass,
             momentum: m.linear[..dim].to_vec(),
-            energy: e.kinetic_translation + e.kinetic_rotation + e.elastic + e.gravity,
+            energy: e.kinetic_translation + e.kinetic_rotation + e.elastic + e.contact + e.gravity,
             dissipated: e.dissipated,
             interface_work: e.external_work,
             interface_impulse: self.solid.external_impulse()[..dim].to_vec(),
@@ -143,6 +143,7 @@ impl NodeModel for RealSolid {
             energy_scale: e.kinetic_translation
                 + e.kinetic_rotation
                 + e.elastic.abs()
+                + e.contact
                 + e.gravity.abs()
                 + e.dissipated.abs(),
         }

@@ -24,6 +24,7 @@ pub(crate) fn lattice(threads: usize) -> Solid {
         constraints: vec![],
         init: vec![],
         prescribed: None,
+        contact: None,
     };
     let mut solid = Solid::from_scene(&cfg, 3, threads).expect("bench scene builds");
     // Seeded deformation: a few steps from seeded velocities.

@@ -14,7 +14,7 @@
 //!                                           -> [[solid.init]] velocities of free particles
 //! loop {
 //!     dt = min(solid.max_dt(cell_size), fluid dt)
-//!     solid.begin_step(dt)                  internal forces at Xⁿ (cached)
+//!     solid.begin_step(dt)                  internal (+ contact) forces at Xⁿ (cached)
 //!     loop { trial = solid.trial(F, M) }    half kick + drift, wet surface at n+1; repeatable
 //!     report = solid.commit()               forces at n+1, fracture, half kick, diagnostics
 //! }
@@ -53,7 +53,10 @@
 //!
 //! # Limitations
 //!
-//! - No contact between particles that are not linked (as in 000: fragments fly freely).
+//! - Contact (`[solid.contact]`, [`contact`]) acts between particles that are not linked by an
+//!   unbroken link, including particles of one intact body that touch only along an edge or at
+//!   a vertex (their overlap, and so their contact energy, is of fourth order in the strain).
+//!   Friction is regularised: no sticking under a sustained tangential load.
 //! - Explicit particles are linked only through faces with the same vertex set.
 //! - 2-D positions are stored with a zero z so that both dimensions share the state layout; the
 //!   2-D kernels work on 2 translations and 1 angle.
@@ -64,6 +67,7 @@
 //! - Results are bit-identical for any thread count (fixed partition, serial reductions).
 //! - No allocation in the per-link and per-particle kernels.
 
+pub mod contact;
 pub mod geometry;
 pub mod lattice;
 pub mod link_force;

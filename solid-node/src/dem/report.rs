@@ -50,6 +50,17 @@ pub enum Diagnostic {
         /// The particle whose stiffness sets the bound.
         particle: ParticleId,
     },
+    /// Two particles in contact overlap by more than
+    /// [`crate::dem::contact::DEEP_OVERLAP`] of the smaller one's volume (contact too soft or
+    /// step too large).
+    DeepContact {
+        /// The particles.
+        particles: [ParticleId; 2],
+        /// Overlap volume \[m³\] (2-D: area).
+        overlap: f64,
+        /// Volume of the smaller particle \[m³\] (2-D: area).
+        volume: f64,
+    },
     /// The RATTLE fixed point did not converge.
     RattleNotConverged {
         /// The particle.
@@ -79,7 +90,10 @@ pub struct Energies {
     pub kinetic_rotation: f64,
     /// Elastic energy of the unbroken links (potential of eq. (29)–(30)).
     pub elastic: f64,
-    /// Elastic energy released by broken links, counted as dissipated.
+    /// Contact potential `Σ ½ κ V²` of the overlapping pairs (0 without contact).
+    pub contact: f64,
+    /// Elastic energy released by broken links and work of the contact dashpots and friction,
+    /// counted as dissipated.
     pub dissipated: f64,
     /// Potential of gravity `−Σ m g·X` (free particles).
     pub gravity: f64,
@@ -88,11 +102,13 @@ pub struct Energies {
 }
 
 impl Energies {
-    /// Kinetic + elastic + dissipated + gravity potential (conserved without external loads).
+    /// Kinetic + elastic + contact + dissipated + gravity potential (conserved without
+    /// external loads).
     pub fn total(&self) -> f64 {
         self.kinetic_translation
             + self.kinetic_rotation
             + self.elastic
+            + self.contact
             + self.dissipated
             + self.gravity
     }

@@ -54,6 +54,7 @@ fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
         constraints: vec![],
         init: vec![],
         prescribed: None,
+        contact: None,
     }
 }
 

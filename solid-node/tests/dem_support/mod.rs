@@ -36,6 +36,7 @@ pub fn box_config(
         constraints: vec![],
         init: vec![],
         prescribed: None,
+        contact: None,
     }
 }
 

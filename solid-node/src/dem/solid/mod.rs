@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use protocol::scene::{Motion, SolidConfig, SolidInit};
 
+use crate::dem::contact::{Contact, ContactParams};
 use crate::dem::lattice::build_lattice;
 use crate::dem::link_force::LinkOut;
 use crate::dem::model::{LinkId, Material, Model, ParticleId, ParticleMotion, build_model, to3};
@@ -22,7 +23,7 @@ use crate::dem::wet::{
 
 /// Items per rayon task. NOTE: a fixed partition; every item is computed independently and
 /// every reduction runs serially in index order, so results do not depend on the thread count.
-const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 
 /// Safety factor applied to the elastic bound in [`Solid::max_dt`].
 pub const ELASTIC_SAFETY: f64 = 0.9;
@@ -49,6 +50,8 @@ struct State {
     /// Impulse of the external loads so far, `Σ F Δt` over all particles (fixed ones too).
     external_impulse: [f64; 3],
     wet_revision: u64,
+    /// Dissipative contact loads `[force, torque]` per particle at n (empty without contact).
+    contact_damping: Vec<[[f64; 3]; 2]>,
 }
 
 /// One particle's share of a trial.
@@ -130,13 +133,21 @@ pub struct Solid {
     /// Reused per-particle buffers for the wet-surface geometry (x, v, ω, orientation).
     kin: KinematicsScratch,
     limit: (f64, u32),
+    /// Contact model (absent: `[solid.contact]` absent, nothing computed).
+    contact: Option<Contact>,
+    /// Stability bound of the contact springs (∞ without contact).
+    contact_limit: (f64, u32),
+    /// Per particle `[ΔX, Ω Δt]` of the step being committed.
+    motion: Vec<[[f64; 3]; 2]>,
+    /// Output of [`Solid::evaluate_contact`].
+    bench_loads: (Vec<[f64; 3]>, Vec<[f64; 3]>),
 }
 
 /// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.
 type KinematicsScratch = (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 4]>);
 
 /// Fills `out\[k\] = f(k)` over a fixed partition.
-fn par_fill<T: Send>(
+pub(crate) fn par_fill<T: Send>(
     pool: Option<&rayon::ThreadPool>,
     out: &mut [T],
     f: impl Fn(usize) -> T + Sync + Send,
@@ -246,7 +257,11 @@ impl Solid {
                 ));
             }
         }
-        let mut solid = Self::from_model(model, gravity, elongation_at_break, pool);
+        let contact = match &cfg.contact {
+            Some(c) => Some(Contact::new(&model, ContactParams::from_config(c))?),
+            None => None,
+        };
+        let mut solid = Self::from_model(model, gravity, elongation_at_break, pool, contact);
         solid.apply_init(&cfg.init);
         Ok(solid)
     }
@@ -281,6 +296,7 @@ impl Solid {
         gravity: [f64; 3],
         elongation_at_break: Option<f64>,
         pool: Option<rayon::ThreadPool>,
+        contact: Option<Contact>,
     ) -> Self {
         let n = model.particles.len();
         let n_links = model.links.len();
@@ -315,9 +331,17 @@ impl Solid {
             external_work: 0.0,
             external_impulse: [0.0; 3],
             wet_revision: 0,
+            contact_damping: if contact.is_some() {
+                vec![[[0.0; 3]; 2]; n]
+            } else {
+                Vec::new()
+            },
         };
         let topo = build_elements(&model, elongation_at_break.is_some());
-        let limit = elastic_limit(&model, &state.broken);
+        let contact_limit = contact
+            .as_ref()
+            .map_or((f64::INFINITY, 0), |c| c.stability_limit(&model));
+        let limit = min_limit(elastic_limit(&model, &state.broken), contact_limit);
         let mut solid = Solid {
             gravity,
             elongation_at_break,
@@ -345,6 +369,10 @@ impl Solid {
             sums: Vec::new(),
             kin: (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
             limit,
+            contact,
+            contact_limit,
+            motion: vec![[[0.0; 3]; 2]; n],
+            bench_loads: (Vec::new(), Vec::new()),
             model,
         };
         solid.rebuild_wet_topology();
@@ -487,8 +515,9 @@ impl Solid {
         self.recompute_internal_forces()
     }
 
-    /// Evaluates every unbroken link at the committed configuration again (the step does this
-    /// itself; exposed for benchmarks and diagnostics). Returns the elastic energy \[J\].
+    /// Evaluates every unbroken link (and, with `[solid.contact]`, every contact) at the
+    /// committed configuration again (the step does this itself; exposed for benchmarks and
+    /// diagnostics). Returns the elastic energy of the links \[J\].
     pub fn recompute_internal_forces(&mut self) -> f64 {
         self.update_forces();
         self.elastic
@@ -505,7 +534,64 @@ impl Solid {
             &mut self.force_int,
             &mut self.torque_int,
         );
+        if let Some(contact) = self.contact.as_mut() {
+            let dim = self.model.dim;
+            let rot = &self.state.rot;
+            let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rot[p], v);
+            contact.add_forces(
+                &self.model,
+                self.pool.as_ref(),
+                &self.state.x,
+                &rotate,
+                &self.state.broken,
+                &mut self.force_int,
+                &mut self.torque_int,
+            );
+        }
         self.forces_valid = true;
+    }
+
+    /// The stability bound now: links and contact.
+    fn stability_limit(&self) -> (f64, u32) {
+        min_limit(
+            elastic_limit(&self.model, &self.state.broken),
+            self.contact_limit,
+        )
+    }
+
+    /// The contact model, if `[solid.contact]` is on.
+    pub fn contact(&self) -> Option<&Contact> {
+        self.contact.as_ref()
+    }
+
+    /// Evaluates the contact alone (broad phase, narrow phase, law) at the committed
+    /// configuration into scratch buffers, leaving the solid unchanged (for benchmarks).
+    /// Returns the pairs the narrow phase examined and those overlapping; `(0, 0)` without
+    /// contact.
+    pub fn evaluate_contact(&mut self) -> (usize, usize) {
+        let Some(contact) = self.contact.as_mut() else {
+            return (0, 0);
+        };
+        let n = self.model.particles.len();
+        let (force, torque) = &mut self.bench_loads;
+        force.clear();
+        force.resize(n, [0.0; 3]);
+        torque.clear();
+        torque.resize(n, [0.0; 3]);
+        let dim = self.model.dim;
+        let rot = &self.state.rot;
+        let rotate = |p: usize, v: &Vector3<f64>| rotate_body(dim, &rot[p], v);
+        contact.add_forces(
+            &self.model,
+            self.pool.as_ref(),
+            &self.state.x,
+            &rotate,
+            &self.state.broken,
+            force,
+            torque,
+        );
+        let pairs = contact.pairs();
+        (pairs.len(), pairs.iter().filter(|p| p.energy > 0.0).count())
     }
 
     fn rebuild_wet_topology(&mut self) {
@@ -535,7 +621,8 @@ impl Solid {
         self.kin.2 = omega;
     }
 
-    /// The largest step allowed now \[s\]: `ELASTIC_SAFETY ×` the elastic bound, the step that
+    /// The largest step allowed now \[s\]: `ELASTIC_SAFETY ×` the stability bound (links and,
+    /// with `[solid.contact]`, the contact springs: [`Solid::elastic_dt_limit`]), the step that
     /// moves a particle by its size h_s or by `displacement_cap` (the caller's limit, e.g. one
     /// fluid cell), and the step that turns a particle by π/8 (003 §2.2).
     pub fn max_dt(&self, displacement_cap: f64) -> f64 {
@@ -553,8 +640,9 @@ impl Solid {
         dt
     }
 
-    /// Elastic stability bound of the explicit scheme \[s\] and the particle that sets it
-    /// (see [`crate::dem::stability`]).
+    /// Stability bound of the explicit scheme \[s\] and the particle that sets it: the links'
+    /// (see [`crate::dem::stability`]) and, with contact, the contact springs'
+    /// ([`Contact::stability_limit`]).
     pub fn elastic_dt_limit(&self) -> (f64, ParticleId) {
         (self.limit.0, ParticleId(self.limit.1))
     }
@@ -574,6 +662,7 @@ impl Solid {
     pub fn energies(&self) -> Energies {
         let mut e = Energies {
             elastic: self.elastic,
+            contact: self.contact.as_ref().map_or(0.0, |c| c.energy()),
             dissipated: self.state.dissipated,
             external_work: self.state.external_work,
             ..Energies::default()
@@ -665,8 +754,19 @@ impl Solid {
                 self.model.links.len()
             ));
         }
+        let n_damping = if self.contact.is_some() {
+            self.n_particles()
+        } else {
+            0
+        };
+        if state.contact_damping.len() != n_damping {
+            return Err(format!(
+                "checkpoint has contact loads for {} particles, the solid needs {n_damping}",
+                state.contact_damping.len()
+            ));
+        }
         self.state = state;
-        self.limit = elastic_limit(&self.model, &self.state.broken);
+        self.limit = self.stability_limit();
         self.rebuild_wet_topology();
         self.update_forces();
         self.update_wet();
@@ -682,4 +782,8 @@ fn rotate_body(dim: usize, rot: &[f64; 4], v: &Vector3<f64>) -> Vector3<f64> {
         let (s, c) = rot[0].sin_cos();
         Vector3::new(c * v.x - s * v.y, s * v.x + c * v.y, 0.0)
     }
+}
+
+fn min_limit(a: (f64, u32), b: (f64, u32)) -> (f64, u32) {
+    if b.0 < a.0 { b } else { a }
 }

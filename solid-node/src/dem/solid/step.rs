@@ -9,7 +9,6 @@ use crate::dem::report::{BrokenLink, Diagnostic, StepReport};
 use crate::dem::solid::{
     MAX_ROTATION, ParticleTrial, Solid, State, Trial, par_fill, quat, quat_arr, rotate_body,
 };
-use crate::dem::stability::elastic_limit;
 use crate::dem::wet::{write_connectivity, write_geometry};
 
 impl Solid {
@@ -62,8 +61,10 @@ impl Solid {
             &self.ext_torque,
             self.gravity,
         );
+        let damping = &self.state.contact_damping;
         par_fill(self.pool.as_ref(), &mut self.particle_trial, |p| {
-            trial_particle(model, state, p, dt, fi[p], ti[p], fe[p], te[p], g)
+            let (f, t) = with_damping(damping, p, fi[p], ti[p]);
+            trial_particle(model, state, p, dt, f, t, fe[p], te[p], g)
         });
         // Flat views and the wet surface at the trial configuration.
         let t = &mut self.trial;
@@ -145,6 +146,7 @@ impl Solid {
             let w = Vector3::from(pt.omega) * dt;
             external_work += Vector3::from(self.ext_force[p]).dot(&dx)
                 + Vector3::from(self.ext_torque[p]).dot(&w);
+            self.motion[p] = [dx.into(), w.into()];
             for a in 0..3 {
                 self.state.external_impulse[a] += self.ext_force[p][a] * dt;
             }
@@ -178,8 +180,11 @@ impl Solid {
                 self.state.dissipated += before - self.elastic;
                 self.state.wet_revision += 1;
                 self.rebuild_wet_topology();
-                self.limit = elastic_limit(&self.model, &self.state.broken);
+                self.limit = self.stability_limit();
             }
+        }
+        if self.contact.is_some() {
+            self.update_contact_damping();
         }
         // Second half kick with the forces at n+1 and the same external loads.
         for (p, part) in self.model.particles.iter().enumerate() {
@@ -192,12 +197,18 @@ impl Solid {
                     continue;
                 }
             }
-            let f = Vector3::from(self.force_int[p])
+            let (f_int, t_int) = with_damping(
+                &self.state.contact_damping,
+                p,
+                self.force_int[p],
+                self.torque_int[p],
+            );
+            let f = Vector3::from(f_int)
                 + Vector3::from(self.ext_force[p])
                 + Vector3::from(self.gravity) * part.mass;
             let v = Vector3::from(pt.v_half) + f * (0.5 * dt / part.mass);
             self.state.v[p] = v.into();
-            let tau = Vector3::from(self.torque_int[p]) + Vector3::from(self.ext_torque[p]);
+            let tau = Vector3::from(t_int) + Vector3::from(self.ext_torque[p]);
             if dim == 3 {
                 let tau_body = quat(&self.state.rot[p]).inverse_transform_vector(&tau);
                 self.state.ang[p] = (Vector3::from(pt.ang) + tau_body * (0.5 * dt)).into();
@@ -238,6 +249,20 @@ impl Solid {
                 });
             }
         }
+        if let Some(contact) = &self.contact {
+            for pair in contact.pairs() {
+                let volume = self.model.particles[pair.a as usize]
+                    .volume
+                    .min(self.model.particles[pair.b as usize].volume);
+                if pair.overlap.volume > crate::dem::contact::DEEP_OVERLAP * volume {
+                    diagnostics.push(Diagnostic::DeepContact {
+                        particles: [ParticleId(pair.a), ParticleId(pair.b)],
+                        overlap: pair.overlap.volume,
+                        volume,
+                    });
+                }
+            }
+        }
         if dt > self.limit.0 {
             diagnostics.push(Diagnostic::DtAboveElasticLimit {
                 dt,
@@ -259,6 +284,37 @@ impl Solid {
         }
     }
 
+    /// Dissipative contact loads at n+1 (positions at n+1, velocities at n+½) replace those at
+    /// n; the work of both over the step (trapezoidal) goes to `dissipated`.
+    fn update_contact_damping(&mut self) {
+        let n = self.n_particles();
+        let mut v = std::mem::take(&mut self.kin.1);
+        let mut omega = std::mem::take(&mut self.kin.2);
+        v.clear();
+        omega.clear();
+        v.extend(self.particle_trial.iter().map(|pt| pt.v_half));
+        omega.extend(self.particle_trial.iter().map(|pt| pt.omega));
+        let mut work = 0.0;
+        for p in 0..n {
+            work += load_work(&self.state.contact_damping[p], &self.motion[p]);
+        }
+        let contact = self.contact.as_mut().expect("called with contact");
+        contact.damping_loads(
+            &self.model,
+            self.pool.as_ref(),
+            &self.state.x,
+            &v,
+            &omega,
+            &mut self.state.contact_damping,
+        );
+        for p in 0..n {
+            work += load_work(&self.state.contact_damping[p], &self.motion[p]);
+        }
+        self.state.dissipated -= 0.5 * work;
+        self.kin.1 = v;
+        self.kin.2 = omega;
+    }
+
     /// One whole step with the given external loads (`begin_step`, `trial`, `commit`).
     pub fn step(&mut self, dt: f64, force: &[f64], torque: &[f64]) -> StepReport {
         self.begin_step(dt);
@@ -274,6 +330,28 @@ impl Solid {
         let torque = vec![0.0; n * if dim == 3 { 3 } else { 1 }];
         self.step(dt, &force, &torque)
     }
+}
+
+/// Internal loads of particle `p` plus its dissipative contact loads (none without contact).
+fn with_damping(
+    damping: &[[[f64; 3]; 2]],
+    p: usize,
+    force: [f64; 3],
+    torque: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
+    match damping.get(p) {
+        Some([f, t]) => (
+            (Vector3::from(force) + Vector3::from(*f)).into(),
+            (Vector3::from(torque) + Vector3::from(*t)).into(),
+        ),
+        None => (force, torque),
+    }
+}
+
+/// `F·ΔX + τ·Ω Δt` of one particle's loads over the step's motion.
+fn load_work(load: &[[f64; 3]; 2], motion: &[[f64; 3]; 2]) -> f64 {
+    Vector3::from(load[0]).dot(&Vector3::from(motion[0]))
+        + Vector3::from(load[1]).dot(&Vector3::from(motion[1]))
 }
 
 /// First half kick and drift of one particle (003 eq. (4)–(7)).
