@@ -114,6 +114,19 @@ pub enum Report {
         #[arg(long)]
         out: PathBuf,
     },
+    /// The largest pressure deviation over the fluid cells of each output against time, one
+    /// curve per run (paper 003 Fig. 5).
+    Pressure {
+        /// The runs' output folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The pressure the gas should keep.
+        #[arg(long)]
+        reference: f64,
+        /// The SVG to write (its numbers go beside it as CSV).
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors.
@@ -219,6 +232,15 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             for path in crate::report::figures(&run, &out, polar)? {
                 println!("{}", path.display());
             }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Report(Report::Pressure {
+            runs,
+            reference,
+            out,
+        }) => {
+            crate::report::pressure(&runs, reference, &out)?;
+            println!("{}", out.display());
             Ok(ExitCode::SUCCESS)
         }
         Command::Report(Report::Energy { runs, scale, out }) => {

@@ -130,3 +130,29 @@ fn figures_of_a_folder_that_is_not_a_run_say_so() {
     assert!(err.to_string().contains("2 scales for 1 runs"), "{err}");
     let _ = std::fs::remove_dir_all(run);
 }
+
+#[test]
+fn pressure_error_is_the_largest_deviation_of_each_output() {
+    let run = run_dir("pressure");
+    std::fs::write(run.join("outputs.csv"), "k,t\n0,0.1\n1,0.2\n").expect("outputs");
+    std::fs::write(
+        run.join("fluid_0.csv"),
+        "x,y,rho,u,v,p,alpha\n0,0,1,0,0,1,1\n1,0,1,0,0,1,1\n",
+    )
+    .expect("fluid");
+    std::fs::write(
+        run.join("fluid_1.csv"),
+        "x,y,rho,u,v,p,alpha\n0,0,1,0,0,1.25,1\n1,0,1,0,0,0.5,1\n",
+    )
+    .expect("fluid");
+    let e = report::pressure_error(&run, 1.0).expect("pressure");
+    assert_eq!(e, [(0.1, 0.0), (0.2, 0.5)]);
+    let out = run.join("p.svg");
+    report::pressure(std::slice::from_ref(&run), 1.0, &out).expect("chart");
+    let csv = std::fs::read_to_string(out.with_extension("csv")).expect("csv");
+    assert!(csv.ends_with(",2e-1,5e-1\n"), "{csv}");
+    std::fs::remove_file(run.join("fluid_1.csv")).expect("remove");
+    let err = report::pressure_error(&run, 1.0).expect_err("a missing output");
+    assert!(format!("{err:#}").contains("fluid_1.csv"), "{err:#}");
+    let _ = std::fs::remove_dir_all(run);
+}

@@ -9,6 +9,9 @@
 //!   azimuthal angle about the solid's centroid (Fig. 15).
 //! - `report energy RUN... [--scale S,...] --out FILE.svg`: the energy error of several runs on
 //!   one chart, each times its scale (Fig. 7: dt, dt/2, dt/4 rescaled by 1, 4, 16).
+//! - `report pressure RUN... --reference P --out FILE.svg`: the largest |p − P| over the fluid
+//!   cells of each output against its time, one curve per run (Fig. 5: explicit against
+//!   semi-implicit on the rod).
 //!
 //! Every chart also writes its numbers as CSV beside it.
 
@@ -298,6 +301,57 @@ pub fn energy(runs: &[PathBuf], scales: &[f64], out: &Path) -> anyhow::Result<()
         "energy error / largest exchange",
         "t [s]",
         "|E - E0| / max |W|",
+        &series,
+    )
+    .map_err(|e| anyhow::anyhow!(e))?;
+    write_csv(&out.with_extension("csv"), "t,error", &series)
+}
+
+/// Largest |p − `reference`| over the cells of each fluid output of `run`, against the
+/// output's time (from `outputs.csv`).
+pub fn pressure_error(run: &Path, reference: f64) -> anyhow::Result<Vec<(f64, f64)>> {
+    let outputs = read_table(&run.join("outputs.csv"))?;
+    let (k, t) = outputs
+        .column("k")
+        .zip(outputs.column("t"))
+        .with_context(|| format!("{}: outputs.csv has no k,t columns", run.display()))?;
+    let mut points = Vec::new();
+    for row in &outputs.rows {
+        let path = run.join(format!("fluid_{}.csv", row[k]));
+        let fluid = read_table(&path)?;
+        let p = fluid
+            .column("p")
+            .with_context(|| format!("{}: no p column", path.display()))?;
+        let worst = fluid
+            .rows
+            .iter()
+            .map(|r| (r[p] - reference).abs())
+            .fold(0.0, f64::max);
+        points.push((row[t], worst));
+    }
+    Ok(points)
+}
+
+/// `report pressure`: [`pressure_error`] of `runs` on one chart `out`.
+pub fn pressure(runs: &[PathBuf], reference: f64, out: &Path) -> anyhow::Result<()> {
+    let mut series = Vec::new();
+    for run in runs {
+        series.push(Series {
+            label: run.file_name().map_or_else(
+                || run.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            ),
+            points: pressure_error(run, reference)?,
+        });
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    line_chart(
+        out,
+        &format!("largest |p - {reference}| over the fluid cells"),
+        "t [s]",
+        "max |p - p0| [Pa]",
         &series,
     )
     .map_err(|e| anyhow::anyhow!(e))?;
