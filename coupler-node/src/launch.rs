@@ -80,21 +80,18 @@ pub fn run_id(scene: &Scene) -> String {
 }
 
 /// Cleans the leftovers of earlier runs that crashed: every run id with files under
-/// `/dev/shm/cosim_<id>_*` whose nodes are all dead. Runs still alive are left alone
-/// ([`protocol::bus::cleanup_run`] refuses them). Returns the run ids cleaned.
+/// `/dev/shm/cosim_<id>_*` (or a lock file left) and no live process. Runs still alive are left
+/// alone ([`protocol::bus::cleanup_run`] refuses them). Returns the run ids cleaned.
 pub fn sweep_stale_runs() -> Vec<String> {
-    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
-        return Vec::new();
-    };
-    let mut ids: Vec<String> = entries
-        .filter_map(|e| e.ok())
-        .filter_map(|e| {
+    let mut ids = protocol::bus::locked_run_ids();
+    if let Ok(entries) = std::fs::read_dir("/dev/shm") {
+        ids.extend(entries.filter_map(|e| e.ok()).filter_map(|e| {
             let name = e.file_name().to_string_lossy().into_owned();
             let rest = name.strip_prefix("cosim_")?;
             Some(rest.split('_').next()?.to_string())
-        })
-        .filter(|id| !id.is_empty() && protocol::bus::validate_run_id(id).is_ok())
-        .collect();
+        }));
+    }
+    ids.retain(|id| !id.is_empty() && protocol::bus::validate_run_id(id).is_ok());
     ids.sort();
     ids.dedup();
     ids.into_iter()
@@ -102,7 +99,7 @@ pub fn sweep_stale_runs() -> Vec<String> {
             Ok(removed) => !removed.is_empty(),
             Err(err) => {
                 // A run still alive (a parallel run) is left alone; say so for the others.
-                if !err.to_string().contains("live node") {
+                if !err.to_string().contains("is live") {
                     eprintln!("coupler-node: could not clean the leftovers of run {id}: {err}");
                 }
                 false
