@@ -1,4 +1,5 @@
-//! Command line of the `solid-node` binary: args → validated config → the node loop.
+//! Command line of the `solid-node` binary: args → validated config → the node loop, and which
+//! model (the DEM or the prescribed double) a scene's implementation name asks for.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -69,8 +70,32 @@ fn run(args: Args) -> anyhow::Result<()> {
     serve(
         NodeKind::Solid,
         &opts,
-        node::model_from_scene,
+        model_from_scene,
         |mut model, link, cfg| node::run(model.as_mut(), link, cfg),
     )?;
     Ok(())
+}
+
+/// Builds the solid implementation named `implementation` (`real` or `prescribed`) for a scene.
+pub fn model_from_scene(
+    scene: &protocol::scene::Scene,
+    implementation: &str,
+) -> Result<Box<dyn crate::model::SolidModel + Send>, String> {
+    let solid = scene
+        .solid
+        .as_ref()
+        .ok_or("the scene has no [solid] section")?;
+    match implementation {
+        "prescribed" => Ok(Box::new(crate::double::PrescribedDouble::new(
+            scene.dim(),
+            solid
+                .prescribed
+                .as_ref()
+                .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
+        ))),
+        "real" => Ok(Box::new(crate::exchange::RealSolid::from_scene(scene)?)),
+        other => Err(format!(
+            "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
+        )),
+    }
 }

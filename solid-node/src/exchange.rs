@@ -11,7 +11,7 @@ use protocol::wire::{
 };
 
 use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
-use crate::node::SolidModel;
+use crate::model::SolidModel;
 
 /// The real solid.
 pub struct RealSolid {
