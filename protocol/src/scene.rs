@@ -59,9 +59,16 @@ pub struct RunConfig {
     /// Optional cap on the coupling step \[s\].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dt_max: Option<f64>,
-    /// Optional cap on the number of steps (the run stops with status "max_steps").
+    /// Optional cap on the number of steps, at least 1 (the run stops with status
+    /// "max_steps").
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_steps: Option<u64>,
+    /// Smallest coupling step a node may impose \[s\]: a step a node limits to less stops the
+    /// run with a report naming the node and what limits it (cell or particle). Default: the
+    /// larger of [`DT_MIN_RELATIVE`] times the smallest step the nodes proposed for the first
+    /// step and [`DT_MIN_OF_T_END`] times `t_end`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
     /// Worker threads per node for the solver cores (default 1; results do not depend on it).
     pub threads: u32,
     /// Largest relative mass error the ledger accepts before it stops the run (default 1e-9;
@@ -88,12 +95,28 @@ impl Default for RunConfig {
             checkpoint_every: 0,
             dt_max: None,
             max_steps: None,
+            dt_min: None,
             threads: 1,
             mass_tolerance: 1e-9,
             energy_tolerance: None,
         }
     }
 }
+
+/// Default `run.dt_min` relative to the first step the nodes propose: a step that has collapsed
+/// a millionfold is a run without progress.
+///
+/// NOTE: a shock reflecting from a wall or a body speeding up changes the step by factors of a
+/// few; a millionfold collapse takes hours of steps for nothing.
+pub const DT_MIN_RELATIVE: f64 = 1e-6;
+
+/// Default `run.dt_min` relative to `run.t_end`: a step that would need more than a billion
+/// steps to reach the end is a run without progress, even from the first step.
+///
+/// NOTE: Sod with ρ = 1e-300 on one side proposes 3e-153 s for its first step (the sound speed
+/// of the near-vacuum cells), then 1e-8 s for hours; [`DT_MIN_RELATIVE`] alone, relative to
+/// that first proposal, would never stop it.
+pub const DT_MIN_OF_T_END: f64 = 1e-9;
 
 /// `run.scheme`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -262,14 +285,40 @@ pub enum FluxScheme {
 #[serde(deny_unknown_fields)]
 pub struct BoundaryConfig {
     /// x axis (default outflow, outflow).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
     pub x: Option<[Boundary; 2]>,
     /// y axis.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
     pub y: Option<[Boundary; 2]>,
     /// z axis.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
     pub z: Option<[Boundary; 2]>,
+}
+
+/// Reads `[low, high]`, refusing a list of another length (a fixed-size array would drop the
+/// entries after the second without a word).
+fn low_high<'de, D: serde::Deserializer<'de>>(de: D) -> Result<Option<[Boundary; 2]>, D::Error> {
+    let list: Vec<Boundary> = Vec::deserialize(de)?;
+    match list.as_slice() {
+        [low, high] => Ok(Some([*low, *high])),
+        other => Err(serde::de::Error::custom(format!(
+            "expected 2 entries [low, high], found {} ({})",
+            other.len(),
+            quote_list(other)
+        ))),
+    }
 }
 
 impl BoundaryConfig {
@@ -706,14 +755,14 @@ impl Scene {
         let de = toml::Deserializer::parse(text).map_err(|err| SceneError::Parse {
             file: file.to_string(),
             path: String::new(),
-            message: err.to_string().trim().to_string(),
+            message: shorten_lines(err.to_string().trim()),
         })?;
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|err| {
             let path = err.path().to_string();
             SceneError::Parse {
                 file: file.to_string(),
                 path: if path == "." { String::new() } else { path },
-                message: err.into_inner().to_string().trim().to_string(),
+                message: shorten_lines(err.into_inner().to_string().trim()),
             }
         })?;
         scene.validate(file)?;
@@ -771,7 +820,15 @@ impl Scene {
         toml::to_string(self).expect("a scene always serializes")
     }
 
-    /// Output times in increasing order, the end time always last.
+    /// Whether `output.times` holds 0: the initial state is then written as output 0, before
+    /// the first step (as Clawpack does), and the outputs of [`Scene::output_times`] follow
+    /// from 1.
+    pub fn initial_output(&self) -> bool {
+        self.output.times.contains(&0.0)
+    }
+
+    /// Times at which a step ends on an output, in increasing order, the end time always last
+    /// (an output at t = 0 is not among them: see [`Scene::initial_output`]).
     pub fn output_times(&self) -> Vec<f64> {
         let t_end = self.run.t_end;
         let mut times: Vec<f64> = self
@@ -779,7 +836,7 @@ impl Scene {
             .times
             .iter()
             .copied()
-            .filter(|t| *t < t_end)
+            .filter(|t| *t > 0.0 && *t < t_end)
             .collect();
         if let Some(every) = self.output.every {
             let n = (t_end / every).floor() as u64;
@@ -819,7 +876,7 @@ impl Scene {
             return Err(invalid(
                 "name",
                 "a non-empty name of letters, digits, '-' and '_'",
-                format!("{:?}", self.name),
+                shorten_lines(&format!("{:?}", self.name)),
             ));
         }
         let run = &self.run;
@@ -859,6 +916,21 @@ impl Scene {
         if run.threads == 0 || run.threads > 256 {
             return Err(invalid("run.threads", "1 to 256", run.threads.to_string()));
         }
+        if run.max_steps == Some(0) {
+            return Err(invalid("run.max_steps", "at least 1 step", "0".into()));
+        }
+        if let Some(dt_min) = run.dt_min {
+            positive("run.dt_min", dt_min)?;
+            if let Some(dt_max) = run.dt_max
+                && dt_min >= dt_max
+            {
+                return Err(invalid(
+                    "run.dt_min",
+                    &format!("a step below run.dt_max = {dt_max:e}"),
+                    format!("{dt_min:e}"),
+                ));
+            }
+        }
         if self.fluid.is_none() && self.solid.is_none() {
             return Err(invalid(
                 "fluid",
@@ -885,7 +957,7 @@ impl Scene {
                 Err(invalid(
                     path,
                     &format!("{dim} finite numbers (the scene is {dim}-D)"),
-                    format!("{v:?}"),
+                    quote_list(v),
                 ))
             }
         };
@@ -897,7 +969,7 @@ impl Scene {
                 return Err(invalid(
                     "fluid.cells",
                     &format!("{dim} positive cell counts"),
-                    format!("{:?}", fluid.cells),
+                    quote_list(&fluid.cells),
                 ));
             }
             for axis in 0..dim {
@@ -905,7 +977,11 @@ impl Scene {
                     return Err(invalid(
                         "fluid.upper",
                         "upper > lower on every axis",
-                        format!("{:?} vs lower {:?}", fluid.upper, fluid.lower),
+                        format!(
+                            "{} vs lower {}",
+                            quote_list(&fluid.upper),
+                            quote_list(&fluid.lower)
+                        ),
                     ));
                 }
                 let [lo, hi] = fluid.boundary.axis(axis);
@@ -1001,6 +1077,33 @@ impl Scene {
                 for (name, v) in init.region.vectors() {
                     check_len(&format!("{base}.region.{name}"), v)?;
                 }
+                check_region(&format!("{base}.region"), &init.region)
+                    .map_err(|(path, expected, found)| invalid(&path, &expected, found))?;
+                if !init.region.meets_box(&fluid.lower, &fluid.upper) {
+                    return Err(invalid(
+                        &format!("{base}.region"),
+                        "a region that meets the domain",
+                        format!(
+                            "a region outside the domain {} to {}",
+                            quote_list(&fluid.lower),
+                            quote_list(&fluid.upper)
+                        ),
+                    ));
+                }
+            }
+            if fluid.node == "real"
+                && fluid.profile.is_none()
+                && let Some((cell, centre)) = uncovered_cell(fluid)
+            {
+                return Err(invalid(
+                    "fluid.init",
+                    "[[fluid.init]] entries that cover every cell (or one with region = \"all\")",
+                    format!(
+                        "cell {} (centre {}) in none of them",
+                        quote_list(&cell),
+                        quote_list(&centre)
+                    ),
+                ));
             }
             if let Some(pressure) = &fluid.pressure {
                 if !pressure.value.is_finite() {
@@ -1073,7 +1176,7 @@ impl Scene {
                             return Err(invalid(
                                 &format!("{base}.divisions"),
                                 &format!("{dim} positive counts"),
-                                format!("{:?}", body.divisions),
+                                quote_list(&body.divisions),
                             ));
                         }
                     }
@@ -1139,6 +1242,8 @@ impl Scene {
                 for (name, v) in c.region.vectors() {
                     check_len(&format!("solid.constraints[{k}].region.{name}"), v)?;
                 }
+                check_region(&format!("solid.constraints[{k}].region"), &c.region)
+                    .map_err(|(path, expected, found)| invalid(&path, &expected, found))?;
                 if let Motion::Velocity(v) = &c.motion {
                     check_len(&format!("solid.constraints[{k}].motion.velocity"), v)?;
                 }
@@ -1148,6 +1253,8 @@ impl Scene {
                 for (name, v) in init.region.vectors() {
                     check_len(&format!("{base}.region.{name}"), v)?;
                 }
+                check_region(&format!("{base}.region"), &init.region)
+                    .map_err(|(path, expected, found)| invalid(&path, &expected, found))?;
                 if init.velocity.is_none() && init.angular_velocity.is_none() {
                     return Err(invalid(
                         &base,
@@ -1166,7 +1273,7 @@ impl Scene {
                             &format!(
                                 "1 finite number in a 2-D scene, 3 in a 3-D scene (the scene is {dim}-D)"
                             ),
-                            format!("{w:?}"),
+                            quote_list(w),
                         ));
                     }
                 }
@@ -1264,6 +1371,295 @@ fn check_node_impl(path: &str, value: &str, known: &[&str], file: &str) -> Resul
             path: path.to_string(),
             expected: format!("one of {known:?} or \"replay:FILE.mcap\""),
             found: format!("{value:?}"),
+        })
+    }
+}
+
+/// A region's own consistency: a ball's radius > 0, a box's lower <= upper, a half space's
+/// normal not zero. Returns `(key path, expected, found)`.
+fn check_region(base: &str, region: &Region) -> Result<(), (String, String, String)> {
+    match region {
+        Region::All => Ok(()),
+        Region::Ball { radius, .. } if !(radius.is_finite() && *radius > 0.0) => Err((
+            format!("{base}.ball.radius"),
+            "a finite radius > 0".into(),
+            radius.to_string(),
+        )),
+        Region::Box { lower, upper } if lower.iter().zip(upper).any(|(lo, hi)| lo > hi) => Err((
+            format!("{base}.box"),
+            "lower <= upper on every axis".into(),
+            format!(
+                "lower {} and upper {}",
+                quote_list(lower),
+                quote_list(upper)
+            ),
+        )),
+        Region::HalfSpace { normal, .. } if normal.iter().all(|n| *n == 0.0) => Err((
+            format!("{base}.half_space.normal"),
+            "a normal that is not zero".into(),
+            quote_list(normal),
+        )),
+        _ => Ok(()),
+    }
+}
+
+impl Region {
+    /// Whether the region meets the box `[lower, upper]` (touching counts).
+    fn meets_box(&self, lower: &[f64], upper: &[f64]) -> bool {
+        let corners = lower.iter().zip(upper);
+        match self {
+            Region::All => true,
+            Region::Box {
+                lower: lo,
+                upper: hi,
+            } => corners
+                .zip(lo.iter().zip(hi))
+                .all(|((d_lo, d_hi), (lo, hi))| lo <= d_hi && hi >= d_lo),
+            Region::Ball { center, radius } => {
+                let d2: f64 = corners
+                    .zip(center)
+                    .map(|((d_lo, d_hi), c)| {
+                        let gap = (d_lo - c).max(c - d_hi).max(0.0);
+                        gap * gap
+                    })
+                    .sum();
+                d2 <= radius * radius
+            }
+            // The box corner deepest on the inner side (normal points out of the half space).
+            Region::HalfSpace { point, normal } => {
+                let s: f64 = corners
+                    .zip(point.iter().zip(normal))
+                    .map(|((d_lo, d_hi), (p, n))| (if *n > 0.0 { d_lo } else { d_hi } - p) * n)
+                    .sum();
+                s <= 0.0
+            }
+        }
+    }
+}
+
+/// Largest grid whose coverage by `[[fluid.init]]` is checked cell by cell (cells).
+///
+/// NOTE: about a second of validation; a larger grid without a `region = "all"` entry is left to
+/// the fluid node (and is refused by the memory estimate first when it is too large to run).
+const COVERAGE_CHECK_MAX_CELLS: u64 = 20_000_000;
+
+/// The first cell (index per axis and centre) whose centre no `[[fluid.init]]` region holds;
+/// `None` when every cell is covered, or when an entry covers all of them by itself.
+fn uncovered_cell(fluid: &FluidConfig) -> Option<(Vec<u64>, Vec<f64>)> {
+    if fluid.init.iter().any(|e| e.region == Region::All) {
+        return None;
+    }
+    let n_cells: u64 = fluid.cells.iter().map(|&n| u64::from(n)).product();
+    if n_cells > COVERAGE_CHECK_MAX_CELLS {
+        return None;
+    }
+    let dim = fluid.cells.len();
+    let mut idx = vec![0u64; dim];
+    let mut centre = vec![0.0; dim];
+    for _ in 0..n_cells {
+        for a in 0..dim {
+            let dx = (fluid.upper[a] - fluid.lower[a]) / f64::from(fluid.cells[a]);
+            centre[a] = fluid.lower[a] + (idx[a] as f64 + 0.5) * dx;
+        }
+        if !fluid.init.iter().any(|e| e.region.contains(&centre)) {
+            return Some((idx, centre));
+        }
+        for (i, n) in idx.iter_mut().zip(&fluid.cells) {
+            *i += 1;
+            if *i < u64::from(*n) {
+                break;
+            }
+            *i = 0;
+        }
+    }
+    None
+}
+
+/// Longest quoted value or message line in an error, in bytes.
+const QUOTE_MAX: usize = 160;
+
+/// A list quoted for an error: its entries, or for a long list the first ones and the count (a
+/// 50 MB array must not come back whole on stderr).
+fn quote_list<T: std::fmt::Debug>(list: &[T]) -> String {
+    let whole = format!("{list:?}");
+    if whole.len() <= QUOTE_MAX {
+        return whole;
+    }
+    let mut head = String::from("[");
+    for (k, v) in list.iter().enumerate() {
+        let next = format!("{}{v:?}", if k == 0 { "" } else { ", " });
+        if head.len() + next.len() > QUOTE_MAX {
+            break;
+        }
+        head.push_str(&next);
+    }
+    format!("{head}, ...] ({} entries)", list.len())
+}
+
+/// A message with every line longer than [`QUOTE_MAX`] cut (the TOML parser quotes the line of
+/// the error, which can be megabytes long).
+fn shorten_lines(message: &str) -> String {
+    message
+        .lines()
+        .map(|line| {
+            if line.len() <= QUOTE_MAX {
+                return line.to_string();
+            }
+            let cut = (0..=QUOTE_MAX)
+                .rev()
+                .find(|&i| line.is_char_boundary(i))
+                .unwrap_or(0);
+            format!("{}... ({} more bytes)", &line[..cut], line.len() - cut)
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Memory a scene's processes need, part by part, before anything runs ([`Scene::memory_estimate`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemoryEstimate {
+    /// `(key, bytes, how)`: the scene key that sets the part, its estimate, and how it was
+    /// counted (for the error).
+    pub parts: Vec<(String, u64, String)>,
+}
+
+impl MemoryEstimate {
+    /// The whole estimate, in bytes (saturating).
+    pub fn total_bytes(&self) -> u64 {
+        self.parts
+            .iter()
+            .fold(0u64, |acc, (_, b, _)| acc.saturating_add(*b))
+    }
+
+    /// The largest part: its key and bytes (`("", 0)` for none).
+    pub fn largest(&self) -> (&str, u64) {
+        self.parts
+            .iter()
+            .max_by_key(|(_, b, _)| *b)
+            .map_or(("", 0), |(k, b, _)| (k.as_str(), *b))
+    }
+}
+
+/// A scene that needs more memory than the machine has ([`Scene::check_memory`]).
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[error(
+    "the scene needs an estimated {} of memory, more than the {} available; the largest part is `{key}`: {} ({how})",
+    gib(*estimate), gib(*limit), gib(*part)
+)]
+pub struct MemoryError {
+    /// Key of the largest part.
+    pub key: String,
+    /// Its bytes.
+    pub part: u64,
+    /// How it was counted.
+    pub how: String,
+    /// The whole estimate \[bytes\].
+    pub estimate: u64,
+    /// What the machine has \[bytes\].
+    pub limit: u64,
+}
+
+fn gib(bytes: u64) -> String {
+    format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
+}
+
+/// Bytes per fluid cell and conserved variable: the state and the split step's copy of it.
+///
+/// NOTE: measured, fluid-only 3-D 128³: 161 MiB for 2.1 M cells of 5 variables (2 copies of 8
+/// bytes, README "Coupled step cost").
+const FLUID_BYTES_PER_VARIABLE: u64 = 16;
+
+/// Bytes per fluid cell of a coupled run: the dense Λ and λ of two geometries and the
+/// near-surface data (README: 342 MiB against 161 MiB at 128³).
+const FLUID_COUPLED_BYTES_PER_CELL: u64 = 96;
+
+/// Bytes per solid particle: particle, links, wet surface, and the shared-memory slots of the
+/// frames carrying them.
+///
+/// NOTE: an upper estimate from the data structures (a 3-D cuboid: 8 vertices, 12 wet
+/// triangles, up to 26 links; every frame about it is held in 10 bus slots per direction).
+const SOLID_BYTES_PER_PARTICLE: [u64; 3] = [1 << 10, 4 << 10, 16 << 10];
+
+/// Slots of a publisher's data segment, each the size of its largest frame
+/// (`bus::SAMPLES_PER_SEGMENT`): what one checkpoint frame costs in shared memory.
+const BUS_SLOTS: u64 = 10;
+
+impl Scene {
+    /// Estimates the memory the scene's processes need: fluid cells × variables × copies (more
+    /// with a solid), the shared-memory slots of checkpoint frames, solid particles. A lower
+    /// bound of what a run takes, meant to refuse scenes that cannot start (issue 11).
+    pub fn memory_estimate(&self) -> MemoryEstimate {
+        let dim = self.dim().clamp(1, 3);
+        let mut parts = Vec::new();
+        let checkpoints = self.run.checkpoint_every > 0 || self.run.record == RecordLevel::All;
+        if let Some(fluid) = &self.fluid
+            && fluid.node == "real"
+        {
+            let n_cells = fluid
+                .cells
+                .iter()
+                .fold(1u64, |acc, &n| acc.saturating_mul(u64::from(n)));
+            let nvar = dim as u64 + 2;
+            let mut per_cell = FLUID_BYTES_PER_VARIABLE * nvar;
+            if self.solid.is_some() {
+                per_cell += FLUID_COUPLED_BYTES_PER_CELL;
+            }
+            parts.push((
+                "fluid.cells".to_string(),
+                n_cells.saturating_mul(per_cell),
+                format!("{n_cells} cells x {per_cell} B"),
+            ));
+            if checkpoints {
+                let frame = n_cells.saturating_mul(nvar * 8);
+                parts.push((
+                    "run.checkpoint_every".to_string(),
+                    frame.saturating_mul(BUS_SLOTS),
+                    format!("{BUS_SLOTS} shared-memory slots of a {frame} B fluid checkpoint"),
+                ));
+            }
+        }
+        if let Some(solid) = &self.solid
+            && solid.node == "real"
+        {
+            for (k, body) in solid.bodies.iter().enumerate() {
+                let n_particles = match &body.shape {
+                    Shape::Particles(list) => list.len() as u64,
+                    _ => body
+                        .divisions
+                        .iter()
+                        .fold(1u64, |acc, &n| acc.saturating_mul(u64::from(n))),
+                };
+                let per_particle = SOLID_BYTES_PER_PARTICLE[dim - 1];
+                parts.push((
+                    format!("solid.bodies[{k}].divisions"),
+                    n_particles.saturating_mul(per_particle),
+                    format!("{n_particles} particles x {per_particle} B"),
+                ));
+            }
+        }
+        MemoryEstimate { parts }
+    }
+
+    /// Refuses a scene whose [`Scene::memory_estimate`] exceeds `limit` bytes (what the machine
+    /// has available), naming the largest part's key, the estimate and the limit.
+    pub fn check_memory(&self, limit: u64) -> Result<(), MemoryError> {
+        let est = self.memory_estimate();
+        let total = est.total_bytes();
+        if total <= limit {
+            return Ok(());
+        }
+        let (key, part) = est.largest();
+        let how = est
+            .parts
+            .iter()
+            .find(|(k, _, _)| k == key)
+            .map_or(String::new(), |(_, _, h)| h.clone());
+        Err(MemoryError {
+            key: key.to_string(),
+            part,
+            how,
+            estimate: total,
+            limit,
         })
     }
 }
