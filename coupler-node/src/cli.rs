@@ -36,8 +36,8 @@ pub enum Command {
         #[arg(long)]
         solid: Option<String>,
         /// Deadline for any one message, in seconds.
-        #[arg(long, default_value_t = 120.0)]
-        timeout_s: f64,
+        #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+        timeout_s: Duration,
         /// No progress line.
         #[arg(long)]
         quiet: bool,
@@ -65,8 +65,8 @@ pub enum Command {
         #[arg(long)]
         double: Option<String>,
         /// Deadline for any one message, in seconds.
-        #[arg(long, default_value_t = 120.0)]
-        timeout_s: f64,
+        #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+        timeout_s: Duration,
     },
     /// List the steps of a record, export one step's arrays, or recover a killed run's file.
     Inspect {
@@ -123,7 +123,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 out: out.clone(),
                 fluid,
                 solid,
-                timeout: Duration::from_secs_f64(timeout_s),
+                timeout: timeout_s,
                 progress: !quiet,
                 fluid_bin: None,
                 solid_bin: None,
@@ -162,7 +162,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 step,
                 node,
                 implementation: double,
-                timeout: Duration::from_secs_f64(timeout_s),
+                timeout: timeout_s,
                 bin: None,
             })?;
             match outcome {

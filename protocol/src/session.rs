@@ -189,3 +189,40 @@ pub fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
         report,
     }
 }
+
+/// Longest deadline a command line accepts for one message, in seconds (11.6 days).
+pub const MAX_TIMEOUT_S: f64 = 1e6;
+
+/// Reads a `--timeout-s` value: a number of seconds in (0, [`MAX_TIMEOUT_S`]]. Negative, zero,
+/// NaN, infinite and absurdly large values are refused with the reason (a `Duration` cannot
+/// hold them).
+pub fn parse_timeout_s(text: &str) -> Result<std::time::Duration, String> {
+    let secs: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number of seconds, found {text:?}"))?;
+    if secs.is_finite() && secs > 0.0 && secs <= MAX_TIMEOUT_S {
+        Ok(std::time::Duration::from_secs_f64(secs))
+    } else {
+        Err(format!(
+            "expected a number of seconds in (0, {MAX_TIMEOUT_S:e}], found {text}"
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timeouts_outside_the_range_are_refused() {
+        assert_eq!(
+            parse_timeout_s("2.5"),
+            Ok(std::time::Duration::from_millis(2500))
+        );
+        for bad in ["-1", "nan", "NaN", "inf", "-inf", "1e30", "0", "ten", ""] {
+            let err = parse_timeout_s(bad).expect_err(bad);
+            assert!(err.contains("seconds"), "{bad}: {err}");
+        }
+    }
+}
