@@ -208,6 +208,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
         progress: opts.progress,
         name: scene.name.clone(),
         t_end: scene.run.t_end,
+        dt_min: scene.run.dt_min,
     };
     let transport: &mut dyn Transport = &mut bus;
     let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);

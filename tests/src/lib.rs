@@ -111,6 +111,7 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
         progress: false,
         name: scene.name.clone(),
         t_end: scene.run.t_end,
+        dt_min: scene.run.dt_min,
     };
     let (summary, error) = driver::drive(
         &mut coupler_end,
