@@ -84,14 +84,19 @@ pub enum Command {
     },
 }
 
-/// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors.
+/// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors,
+/// [`launch::EXIT_INTERRUPTED`] (130) when SIGINT, SIGTERM or SIGHUP interrupted a run.
 pub fn main() -> ExitCode {
     let args = Args::parse();
     match dispatch(args) {
         Ok(code) => code,
         Err(err) => {
             eprintln!("coupler-node: {err:#}");
-            ExitCode::from(2)
+            if err.downcast_ref::<launch::Interrupted>().is_some() {
+                ExitCode::from(launch::EXIT_INTERRUPTED)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

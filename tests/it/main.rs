@@ -3,4 +3,5 @@
 mod coupled;
 mod doubles;
 mod e2e;
+mod issue_11;
 mod tidy;

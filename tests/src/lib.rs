@@ -86,6 +86,7 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
                         scene_hash: scene.hash(),
                         coupled: scene.solid.is_some(),
                         out: out.clone(),
+                        initial_output: scene.initial_output(),
                     };
                     fluid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())
@@ -97,6 +98,7 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
                         scene_hash: scene.hash(),
                         coupled: scene.fluid.is_some(),
                         out,
+                        initial_output: scene.initial_output(),
                     };
                     solid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())
