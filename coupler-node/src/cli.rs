@@ -36,8 +36,8 @@ pub enum Command {
         #[arg(long)]
         solid: Option<String>,
         /// Deadline for any one message, in seconds.
-        #[arg(long, default_value_t = 120.0)]
-        timeout_s: f64,
+        #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+        timeout_s: Duration,
         /// No progress line.
         #[arg(long)]
         quiet: bool,
@@ -65,8 +65,8 @@ pub enum Command {
         #[arg(long)]
         double: Option<String>,
         /// Deadline for any one message, in seconds.
-        #[arg(long, default_value_t = 120.0)]
-        timeout_s: f64,
+        #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+        timeout_s: Duration,
     },
     /// List the steps of a record, export one step's arrays, or recover a killed run's file.
     Inspect {
@@ -129,14 +129,19 @@ pub enum Report {
     },
 }
 
-/// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors.
+/// Entry point: exit 0 on success, 1 when a replay differs, 2 on errors,
+/// [`launch::EXIT_INTERRUPTED`] (130) when SIGINT, SIGTERM or SIGHUP interrupted a run.
 pub fn main() -> ExitCode {
     let args = Args::parse();
     match dispatch(args) {
         Ok(code) => code,
         Err(err) => {
             eprintln!("coupler-node: {err:#}");
-            ExitCode::from(2)
+            if err.downcast_ref::<launch::Interrupted>().is_some() {
+                ExitCode::from(launch::EXIT_INTERRUPTED)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }
@@ -168,7 +173,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 out: out.clone(),
                 fluid,
                 solid,
-                timeout: Duration::from_secs_f64(timeout_s),
+                timeout: timeout_s,
                 progress: !quiet,
                 fluid_bin: None,
                 solid_bin: None,
@@ -207,7 +212,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 step,
                 node,
                 implementation: double,
-                timeout: Duration::from_secs_f64(timeout_s),
+                timeout: timeout_s,
                 bin: None,
             })?;
             match outcome {

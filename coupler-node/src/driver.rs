@@ -70,6 +70,10 @@ pub struct DriverConfig {
     pub name: String,
     /// End time \[s\], for the progress line.
     pub t_end: f64,
+    /// `run.dt_min` \[s\]: a step a node limits to less stops the run (`None`: the default, the
+    /// larger of [`protocol::scene::DT_MIN_RELATIVE`] times the smallest first proposal and
+    /// [`protocol::scene::DT_MIN_OF_T_END`] times `t_end`).
+    pub dt_min: Option<f64>,
 }
 
 /// Busy seconds per role.
@@ -147,6 +151,27 @@ pub enum DriverError {
     /// A node's process ended or the supervisor asked to stop.
     #[error("{0}")]
     Aborted(String),
+    /// A node limited the step to less than `run.dt_min`: a run without progress.
+    #[error(
+        "the time step collapsed at step {step}, t = {t:.4e} s: {node} limits dt to {dt:.4e} s ({why}), below run.dt_min = {dt_min:.4e} s{}",
+        if *default_floor { " (the default: 1e-6 of the first step proposed or 1e-9 of t_end, whichever is larger; set run.dt_min to change it)" } else { "" }
+    )]
+    DtCollapsed {
+        /// The step.
+        step: u64,
+        /// Its start time \[s\].
+        t: f64,
+        /// The step size \[s\].
+        dt: f64,
+        /// The node that limited it.
+        node: String,
+        /// What limits it there (the node's limiter: cell, particle).
+        why: String,
+        /// The floor \[s\].
+        dt_min: f64,
+        /// The floor is the default one.
+        default_floor: bool,
+    },
 }
 
 /// What the supervisor can tell the loop while it waits.
@@ -305,6 +330,8 @@ fn drive_inner(
     // 100 ms even when the transport cannot tell.
     let slice = Duration::from_millis(100).min(cfg.timeout);
     let mut out = Vec::new();
+    // The smallest step the nodes proposed for step 0, for the default `run.dt_min`.
+    let mut first_proposal = f64::INFINITY;
     loop {
         let waiting_since = Instant::now();
         let (from, frame) = loop {
@@ -351,6 +378,13 @@ fn drive_inner(
             sink.frame(from, NodeKind::Coupler, header.stamp.step, now, &frame)
         };
         record.map_err(DriverError::Record)?;
+        if let Message::DtProposal(p) = &msg
+            && p.stamp.step == 0
+            && p.dt_max > 0.0
+            && p.dt_max.is_finite()
+        {
+            first_proposal = first_proposal.min(p.dt_max);
+        }
         let actions = coupler.on_message(from, msg)?;
         for action in actions {
             match action {
@@ -368,6 +402,7 @@ fn drive_inner(
                         .map_err(DriverError::Record)?;
                 }
                 Action::StepDone(report) => {
+                    check_dt_min(&report, cfg.dt_min, first_proposal, cfg.t_end)?;
                     let json = serde_json::to_vec(&Diagnostics {
                         step: report.step,
                         t: report.t,
@@ -400,6 +435,40 @@ fn drive_inner(
             }
         }
     }
+}
+
+/// Stops the run when a node limited the step below `run.dt_min` (given, or the default
+/// relative to the first proposal). Steps shortened by the scene's cap or by an output time
+/// are not a collapse.
+fn check_dt_min(
+    report: &StepReport,
+    dt_min: Option<f64>,
+    first_proposal: f64,
+    t_end: f64,
+) -> Result<(), DriverError> {
+    let Some((node, why)) = report.limiter.split_once(':') else {
+        return Ok(());
+    };
+    // No finite first proposal (doubles at rest, a gas at rest): the floor from t_end alone.
+    let relative = if first_proposal.is_finite() {
+        protocol::scene::DT_MIN_RELATIVE * first_proposal
+    } else {
+        0.0
+    };
+    let default_floor = relative.max(protocol::scene::DT_MIN_OF_T_END * t_end);
+    let floor = dt_min.unwrap_or(default_floor);
+    if report.dt >= floor {
+        return Ok(());
+    }
+    Err(DriverError::DtCollapsed {
+        step: report.step,
+        t: report.t,
+        dt: report.dt,
+        node: format!("the {node} node"),
+        why: why.to_string(),
+        dt_min: floor,
+        default_floor: dt_min.is_none(),
+    })
 }
 
 /// The progress line: simulated time, step, dt, iterations, ETA.

@@ -3,17 +3,25 @@
 //! The scene is validated before any process starts. The resolved scene (defaults filled in,
 //! `--fluid`/`--solid` choices applied) is written to `OUT/scene.toml` and every node reads that
 //! file, so all three hash the same text. Children run beside this executable; a child that
-//! exits early, or stops answering, ends the run with its name in the status. Ctrl-C or SIGTERM
-//! reach the coupler's bus waits as an interruption: the nodes are told to shut down and the
-//! record is finished.
+//! exits early, or stops answering, ends the run with its name in the status. Ctrl-C, SIGTERM or
+//! SIGHUP interrupt the run: the nodes are told to shut down, the record is finished, the files
+//! of the run are removed, the summary's status starts with "interrupted" and the coupler exits
+//! with [`EXIT_INTERRUPTED`]. The nodes run in a process group of their own, so a signal to the
+//! coupler's group (Ctrl-C or a hangup of its terminal) reaches the coupler only, which ends them.
+//!
+//! A scene whose estimated memory ([`Scene::memory_estimate`]) exceeds what the machine has
+//! available is refused before any process starts.
 
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::time::Duration;
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use anyhow::Context;
 use protocol::scene::{RecordLevel, Scene};
-use protocol::transport::Transport;
+use protocol::transport::{Transport, TransportError};
 use protocol::wire::NodeKind;
 
 use crate::driver::{self, Abort, DriverConfig, NoRecord, RecordSink, Summary};
@@ -42,6 +50,15 @@ pub struct RunOptions {
     /// Resume from the checkpoints of this record at this step.
     pub restart: Option<(PathBuf, u64)>,
 }
+
+/// Exit status of `coupler-node run` when SIGINT, SIGTERM or SIGHUP interrupted the run (the
+/// shell's 128 + SIGINT).
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+/// The run was interrupted by a signal and ended cleanly; the text is the summary's status.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Interrupted(pub String);
 
 /// Reads and validates a scene, applying implementation overrides; returns it with its path.
 pub fn load_scene(path: &Path, fluid: Option<&str>, solid: Option<&str>) -> anyhow::Result<Scene> {
@@ -80,21 +97,18 @@ pub fn run_id(scene: &Scene) -> String {
 }
 
 /// Cleans the leftovers of earlier runs that crashed: every run id with files under
-/// `/dev/shm/cosim_<id>_*` whose nodes are all dead. Runs still alive are left alone
-/// ([`protocol::bus::cleanup_run`] refuses them). Returns the run ids cleaned.
+/// `/dev/shm/cosim_<id>_*` (or a lock file left) and no live process. Runs still alive are left
+/// alone ([`protocol::bus::cleanup_run`] refuses them). Returns the run ids cleaned.
 pub fn sweep_stale_runs() -> Vec<String> {
-    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
-        return Vec::new();
-    };
-    let mut ids: Vec<String> = entries
-        .filter_map(|e| e.ok())
-        .filter_map(|e| {
+    let mut ids = protocol::bus::locked_run_ids();
+    if let Ok(entries) = std::fs::read_dir("/dev/shm") {
+        ids.extend(entries.filter_map(|e| e.ok()).filter_map(|e| {
             let name = e.file_name().to_string_lossy().into_owned();
             let rest = name.strip_prefix("cosim_")?;
             Some(rest.split('_').next()?.to_string())
-        })
-        .filter(|id| !id.is_empty() && protocol::bus::validate_run_id(id).is_ok())
-        .collect();
+        }));
+    }
+    ids.retain(|id| !id.is_empty() && protocol::bus::validate_run_id(id).is_ok());
     ids.sort();
     ids.dedup();
     ids.into_iter()
@@ -102,7 +116,7 @@ pub fn sweep_stale_runs() -> Vec<String> {
             Ok(removed) => !removed.is_empty(),
             Err(err) => {
                 // A run still alive (a parallel run) is left alone; say so for the others.
-                if !err.to_string().contains("live node") {
+                if !err.to_string().contains("is live") {
                     eprintln!("coupler-node: could not clean the leftovers of run {id}: {err}");
                 }
                 false
@@ -132,9 +146,34 @@ pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<Pa
     Ok(path)
 }
 
-/// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`).
+/// Memory the machine can give a run, in bytes: `MemAvailable` of `/proc/meminfo` (`MemTotal`
+/// on kernels without it).
+pub fn available_memory() -> anyhow::Result<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").context("reading /proc/meminfo")?;
+    let field = |name: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|rest| {
+                rest.trim()
+                    .trim_end_matches("kB")
+                    .trim()
+                    .parse::<u64>()
+                    .ok()
+            })
+            .map(|kib| kib * 1024)
+    };
+    field("MemAvailable:")
+        .or_else(|| field("MemTotal:"))
+        .context("/proc/meminfo has neither MemAvailable nor MemTotal")
+}
+
+/// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`). An
+/// interrupted run returns [`Interrupted`] (after writing the summary).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    scene
+        .check_memory(available_memory()?)
+        .with_context(|| opts.scene.display().to_string())?;
     crate::replay::check_replay_doubles(&scene)?;
     let resume = match &opts.restart {
         Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
@@ -186,11 +225,16 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             .arg("--timeout-s")
             .arg(opts.timeout.as_secs_f64().to_string())
             .stdin(Stdio::null())
+            // NOTE: a group of its own, so that Ctrl-C or a terminal hangup reaches the coupler
+            // only, which shuts the node down cleanly (a node killed by the signal would read
+            // as a node death).
+            .process_group(0)
             .kill_on_drop(true);
         children.push((*node, cmd));
     }
     let abort = Abort::default();
-    let supervisor = Supervisor::start(children, abort.clone())?;
+    let hung_up = Arc::new(AtomicBool::new(false));
+    let supervisor = Supervisor::start(children, abort.clone(), hung_up.clone())?;
 
     let record_path = opts.out.join("exchange.mcap");
     let mut file_sink = match scene.run.record {
@@ -212,6 +256,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
         progress: opts.progress,
         name: scene.name.clone(),
         t_end: scene.run.t_end,
+        dt_min: scene.run.dt_min,
     };
     let transport: &mut dyn Transport = &mut bus;
     let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);
@@ -219,11 +264,19 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let exits = supervisor.stop(Duration::from_secs(2));
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);
-    // A node that died explains a lost peer better than the transport does.
-    if matches!(
-        error,
-        Some(driver::DriverError::Transport(_) | driver::DriverError::Aborted(_))
-    ) && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
+    let interrupted = hung_up.load(Ordering::SeqCst)
+        || matches!(
+            error,
+            Some(driver::DriverError::Transport(TransportError::Interrupted))
+        );
+    // A node that died explains a lost peer better than the transport does (but a node that
+    // ended after the coupler was interrupted is no cause).
+    if !interrupted
+        && matches!(
+            error,
+            Some(driver::DriverError::Transport(_) | driver::DriverError::Aborted(_))
+        )
+        && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
     {
         summary.status = format!("{node} node died ({}): {}", status.text, summary.status);
     }
@@ -233,8 +286,13 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             .insert(node.name().to_string(), implementation.clone());
     }
     let mut table = String::from("k,t\n");
+    // Output 0 is the initial state when the scene asks for t = 0; the steps' outputs follow.
+    let first_planned = u32::from(scene.initial_output());
+    if scene.initial_output() {
+        table.push_str(&format!("0,{:e}\n", 0.0));
+    }
     for (k, t) in &summary.outputs {
-        table.push_str(&format!("{k},{t:e}\n"));
+        table.push_str(&format!("{},{t:e}\n", k + first_planned));
     }
     std::fs::write(opts.out.join("outputs.csv"), table)
         .with_context(|| format!("writing {}", opts.out.join("outputs.csv").display()))?;
@@ -242,6 +300,9 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     std::fs::write(opts.out.join("summary.json"), json + "\n")
         .with_context(|| format!("writing {}", opts.out.join("summary.json").display()))?;
     finished.context("finishing the record")?;
+    if interrupted {
+        return Err(Interrupted(summary.status).into());
+    }
     if error.is_some() {
         anyhow::bail!("{}", summary.status);
     }
@@ -280,6 +341,7 @@ impl Supervisor {
     fn start(
         children: Vec<(NodeKind, tokio::process::Command)>,
         abort: Abort,
+        hung_up: Arc<AtomicBool>,
     ) -> anyhow::Result<Supervisor> {
         let (started_tx, started_rx) = std::sync::mpsc::channel();
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<Duration>();
@@ -290,7 +352,7 @@ impl Supervisor {
                     .enable_all()
                     .build()
                     .expect("a current-thread runtime builds");
-                rt.block_on(supervise(children, abort, started_tx, stop_rx))
+                rt.block_on(supervise(children, abort, hung_up, started_tx, stop_rx))
             })
             .context("starting the supervisor thread")?;
         match started_rx.recv() {
@@ -316,9 +378,20 @@ impl Supervisor {
 async fn supervise(
     commands: Vec<(NodeKind, tokio::process::Command)>,
     abort: Abort,
+    hung_up: Arc<AtomicBool>,
     started: std::sync::mpsc::Sender<Result<(), String>>,
     stop: tokio::sync::oneshot::Receiver<Duration>,
 ) -> Vec<(NodeKind, ExitInfo)> {
+    // NOTE: SIGHUP is handled here, like SIGINT and SIGTERM are by iceoryx2 in the bus waits:
+    // it raises the abort the loop checks every 100 ms.
+    use tokio::signal::unix::{SignalKind, signal};
+    let mut hangup = match signal(SignalKind::hangup()) {
+        Ok(stream) => stream,
+        Err(err) => {
+            let _ = started.send(Err(format!("handling SIGHUP: {err}")));
+            return Vec::new();
+        }
+    };
     let mut children = Vec::new();
     for (node, mut cmd) in commands {
         match cmd.spawn() {
@@ -347,6 +420,10 @@ async fn supervise(
         }
         tokio::select! {
             grace = &mut stop => break grace.unwrap_or(Duration::ZERO),
+            Some(()) = hangup.recv() => {
+                hung_up.store(true, Ordering::SeqCst);
+                abort.raise("interrupted by a signal (SIGHUP)".to_string());
+            }
             ((node, status), _, _) = futures_select_all(waits) => {
                 let info = match status {
                     Ok(s) => describe(s),

@@ -7,7 +7,7 @@
 //!   energy exchanged through the interface, the measure of paper 003 Fig. 7);
 //! - interface: the work the fluid gives equals the work the solid receives.
 
-use protocol::wire::{ConservedTotals, NodeKind};
+use protocol::wire::ConservedTotals;
 use serde::{Deserialize, Serialize};
 
 /// One step's balance.
@@ -126,15 +126,10 @@ impl Ledger {
     }
 }
 
-/// Checks that a totals message comes from the node it claims.
-pub fn sender_matches(from: NodeKind, totals: &ConservedTotals) -> bool {
-    from == totals.node
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use protocol::wire::Stamp;
+    use protocol::wire::{NodeKind, Stamp};
 
     fn totals(node: NodeKind, mass: f64, energy: f64, out_m: f64, out_e: f64) -> ConservedTotals {
         ConservedTotals {

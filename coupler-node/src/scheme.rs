@@ -483,11 +483,6 @@ impl Coupler {
         }
     }
 
-    /// Whether the run is over.
-    pub fn is_done(&self) -> bool {
-        matches!(self.phase, Phase::Done)
-    }
-
     fn missing(&self, got: impl Iterator<Item = NodeKind> + Clone) -> Vec<NodeKind> {
         self.cfg
             .nodes()

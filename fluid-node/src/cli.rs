@@ -29,8 +29,8 @@ pub struct Args {
     #[arg(long)]
     pub double: Option<String>,
     /// Deadline for each message from the coupler, in seconds.
-    #[arg(long, default_value_t = 120.0)]
-    pub timeout_s: f64,
+    #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+    pub timeout_s: Duration,
     /// Tools.
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -112,7 +112,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         scene: args.scene.context("--scene is required")?,
         run_id: args.run_id.context("--run-id is required")?,
         double: args.double,
-        timeout: Duration::from_secs_f64(args.timeout_s),
+        timeout: args.timeout_s,
         out: args.out,
     };
     serve(

@@ -121,7 +121,21 @@ impl NodeModel for RealFluid {
         let cfl = self.solver.max_dt();
         match &self.embedded {
             Some(e) if e.one_cell_dt() < cfl => (e.one_cell_dt(), "one-cell".into()),
-            _ => (cfl, "cfl".into()),
+            _ => {
+                // The cell that limits the step, so that a collapsing step names it.
+                let grid = self.solver.grid();
+                let ijk = grid.ijk(self.solver.limiting_cell());
+                let centre = grid.cell_center(ijk);
+                let dim = grid.dim;
+                (
+                    cfl,
+                    format!(
+                        "cfl at cell {:?} (centre {:?})",
+                        &ijk[..dim],
+                        &centre[..dim]
+                    ),
+                )
+            }
         }
     }
 

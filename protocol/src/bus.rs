@@ -31,9 +31,17 @@
 //! - **Signals.** SIGINT/SIGTERM during a wait end it with [`TransportError::Interrupted`].
 //! - **Files.** [`cleanup_run`] removes what a run leaves behind (dead nodes, the
 //!   `global_mgmt` segment that iceoryx2 keeps by design, listener sockets of crashed processes).
+//! - **Ownership.** Every process with a `Bus` of a run holds that run's lock file
+//!   (`<iceoryx2 root>/cosim-runs/<run-id>.lock`) shared, from before its first iceoryx2 file
+//!   exists until after its last port is gone; [`cleanup_run`] removes files only while it holds
+//!   the lock exclusively. The kernel drops a dead process's lock, so "locked" means "a process
+//!   of the run is alive", whatever iceoryx2's node list says while a node is being created: a
+//!   sweep never touches a live run, and a run never starts inside a sweep of its files.
 
 use std::collections::VecDeque;
-use std::path::Path as StdPath;
+use std::fs::{File, TryLockError};
+use std::os::unix::fs::MetadataExt;
+use std::path::{Path as StdPath, PathBuf};
 use std::sync::Once;
 use std::time::{Duration, Instant};
 
@@ -80,6 +88,10 @@ pub const SAMPLES_PER_SEGMENT: usize = SUBSCRIBER_BUFFER + 2;
 /// Initial slot size of a publisher's data segment; it grows by powers of two.
 const INITIAL_SLICE_LEN: usize = 64 << 10;
 
+/// How long [`Bus::open`] retries the transient failures of a run whose files are being created
+/// or removed by another process at the same moment.
+pub const OPEN_RETRY_DEADLINE: Duration = Duration::from_secs(10);
+
 /// How long a receive spins on the subscribers before it blocks.
 const SPIN: Duration = Duration::from_micros(20);
 
@@ -104,8 +116,17 @@ pub struct Bus {
     pending: VecDeque<(NodeKind, Vec<u8>)>,
     last_check: Instant,
     send_timeout: Duration,
-    /// Declared last: dropped after every port.
+    /// Dropped after every port.
     node: Node<Svc>,
+    /// Declared last: released after the node, so a sweep never sees the run unowned while its
+    /// files still change.
+    _lock: RunLock,
+}
+
+/// A run's lock file, held shared by each process of the run and exclusively by a cleanup.
+struct RunLock {
+    file: File,
+    path: PathBuf,
 }
 
 /// The two directions between this end and one peer.
@@ -130,10 +151,38 @@ impl Bus {
     /// `cosim_<run_id>_`; at most [`MAX_RUN_ID_LEN`] bytes of `A-Z a-z 0-9 _ -`), `me` is this
     /// role, `peers` the roles it talks to (coupler: `[Fluid, Solid]` or a subset; a node:
     /// `[Coupler]`).
+    ///
+    /// The run's lock is taken shared first (waiting out a cleanup of the run's files that is
+    /// under way); failures that a concurrent creation or removal of the run's iceoryx2 files
+    /// can cause are retried until [`OPEN_RETRY_DEADLINE`].
     pub fn open(run_id: &str, me: NodeKind, peers: &[NodeKind]) -> Result<Bus, TransportError> {
         static LOG_LEVEL: Once = Once::new();
         LOG_LEVEL.call_once(|| set_log_level_from_env_or(LogLevel::Warn));
         let config = run_config(run_id)?;
+        let deadline = Instant::now() + OPEN_RETRY_DEADLINE;
+        let mut pause = Duration::from_millis(5);
+        loop {
+            let lock = RunLock::shared(&config, run_id, deadline)?;
+            match Bus::open_locked(run_id, me, peers, &config, lock) {
+                Err(err) if is_transient(&err) && Instant::now() < deadline => {
+                    // NOTE: a pause that grows and differs per process, so that runs started
+                    // together do not retry in lockstep.
+                    let jitter = Duration::from_micros(u64::from(std::process::id() % 997));
+                    std::thread::sleep(pause + jitter);
+                    pause = (pause * 2).min(Duration::from_millis(200));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    fn open_locked(
+        run_id: &str,
+        me: NodeKind,
+        peers: &[NodeKind],
+        config: &Config,
+        lock: RunLock,
+    ) -> Result<Bus, TransportError> {
         for (i, peer) in peers.iter().enumerate() {
             if *peer == me || peers[..i].contains(peer) {
                 return Err(TransportError::Other(format!(
@@ -149,7 +198,7 @@ impl Bus {
         // after a peer found later died after this point.
         let node = NodeBuilder::new()
             .name(&node_name)
-            .config(&config)
+            .config(config)
             .create::<Svc>()
             .map_err(|e| other(format!("creating iceoryx2 node {me} of run {run_id}"), e))?;
         // Installs iceoryx2's SIGINT/SIGTERM handlers now, not at the first wait (pitfall 7).
@@ -218,6 +267,7 @@ impl Bus {
             last_check: Instant::now(),
             send_timeout: DEFAULT_SEND_TIMEOUT,
             node,
+            _lock: lock,
         };
         bus.refresh_liveness()?;
         Ok(bus)
@@ -242,13 +292,6 @@ impl Bus {
     /// The run id this end was opened with.
     pub fn run_id(&self) -> &str {
         &self.run_id
-    }
-
-    /// Whether `peer` has been seen alive (its node or its publisher) since this end opened.
-    pub fn peer_seen(&self, peer: NodeKind) -> bool {
-        self.links
-            .iter()
-            .any(|l| l.peer == peer && (l.seen_node || l.seen_publisher))
     }
 
     fn link_index(&self, peer: NodeKind) -> Result<usize, TransportError> {
@@ -566,11 +609,20 @@ fn block_on_one(
 }
 
 /// Removes leftovers (stale nodes, services, `/dev/shm/<prefix>*` and `/tmp/iceoryx2` files) of
-/// a run id; called by the launcher at start (for a crashed earlier run with the same id) and
-/// after all processes ended. Refuses, without removing anything, while a node of the run is
-/// alive or in a state that cannot be read. Returns what it removed: `node <name>` for each dead node, then the file paths.
+/// a run id; called by the launcher at start (for a crashed earlier run with the same id, and
+/// for the stale-run sweep) and after all processes ended.
+///
+/// Refuses, without removing anything, while a process of the run is alive (it holds the run's
+/// lock), or while a node of the run is alive or in a state that cannot be read (a run of a
+/// binary from before the lock). Returns what it removed: `node <name>` for each dead node,
+/// then the file paths.
 pub fn cleanup_run(run_id: &str) -> Result<Vec<String>, TransportError> {
     let config = run_config(run_id)?;
+    let Some(lock) = RunLock::exclusive(&config, run_id)? else {
+        return Err(TransportError::Other(format!(
+            "run {run_id} is live (a process of the run holds its lock); not removing its files"
+        )));
+    };
     let mut alive = Vec::new();
     let mut removed = Vec::new();
     Node::<Svc>::list(&config, |state| {
@@ -593,17 +645,35 @@ pub fn cleanup_run(run_id: &str) -> Result<Vec<String>, TransportError> {
     .map_err(|e| other(format!("listing the nodes of run {run_id}"), e))?;
     if !alive.is_empty() {
         return Err(TransportError::Other(format!(
-            "run {run_id} still has {} live node(s) ({}); not removing its files",
+            "run {run_id} is live ({} node(s): {}); not removing its files",
             alive.len(),
             alive.join(", ")
         )));
     }
     let prefix = run_prefix(run_id);
     let shm_dir = StdPath::new("/dev/shm");
-    let root = StdPath::new(config.global.root_path().to_string().as_str()).to_path_buf();
-    remove_prefixed(shm_dir, &prefix, false, &mut removed)?;
-    remove_prefixed(&root, &prefix, true, &mut removed)?;
+    let root = iceoryx2_root(&config);
+    remove_prefixed(shm_dir, &prefix, 0, &mut removed)?;
+    remove_prefixed(&root, &prefix, 0, &mut removed)?;
+    lock.remove();
     Ok(removed)
+}
+
+/// Run ids that have a lock file (live runs, and runs whose files a cleanup has not removed).
+pub fn locked_run_ids() -> Vec<String> {
+    let Ok(config) = run_config("x") else {
+        return Vec::new();
+    };
+    let Ok(entries) = std::fs::read_dir(iceoryx2_root(&config).join("cosim-runs")) else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(|e| e.ok())
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            Some(name.strip_suffix(".lock")?.to_string())
+        })
+        .collect()
 }
 
 /// Service name of a channel: `fsi/<run-id>/<from>-to-<to>` (e.g. `fsi/r1/fluid-to-coupler`).
@@ -684,12 +754,17 @@ fn node_label(details: &Option<iceoryx2::node::NodeDetails>) -> String {
     }
 }
 
-/// Removes the entries of `dir` whose name starts with `prefix` (in subdirectories too when
-/// `recurse`), then the subdirectories left empty by that.
+/// Removes the files under `dir` whose name starts with `prefix` (in subdirectories too when
+/// `dir` is the iceoryx2 root), then the directories below the root's own (`nodes/<id>/`) left
+/// empty by that.
+///
+/// NOTE: the root's subdirectories (`nodes/`, `services/`, `cosim-runs/`) are shared by every
+/// run and stay, even when empty: removing one while another run creates its node there made
+/// that run fail ("creating iceoryx2 node ...: InternalError").
 fn remove_prefixed(
     dir: &StdPath,
     prefix: &str,
-    recurse: bool,
+    depth: usize,
     removed: &mut Vec<String>,
 ) -> Result<(), TransportError> {
     let entries = match std::fs::read_dir(dir) {
@@ -697,15 +772,16 @@ fn remove_prefixed(
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
         Err(e) => return Err(other(format!("reading {}", dir.display()), e)),
     };
+    let recurse = dir != StdPath::new("/dev/shm");
     for entry in entries.flatten() {
         let path = entry.path();
         let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
         if is_dir {
-            if recurse {
+            if recurse && depth < 3 {
                 let before = removed.len();
-                remove_prefixed(&path, prefix, recurse, removed)?;
-                // A node's directory (`nodes/<id>/`) holds only its files: drop it if emptied.
-                if removed.len() > before {
+                remove_prefixed(&path, prefix, depth + 1, removed)?;
+                if depth >= 1 && removed.len() > before {
+                    // Fails, harmlessly, when the directory still holds another run's files.
                     let _ = std::fs::remove_dir(&path);
                 }
             }
@@ -718,6 +794,115 @@ fn remove_prefixed(
         }
     }
     Ok(())
+}
+
+/// The directory of iceoryx2's files (nodes, services, listener sockets): `/tmp/iceoryx2/`.
+fn iceoryx2_root(config: &Config) -> PathBuf {
+    PathBuf::from(config.global.root_path().to_string())
+}
+
+impl RunLock {
+    fn path(config: &Config, run_id: &str) -> PathBuf {
+        iceoryx2_root(config)
+            .join("cosim-runs")
+            .join(format!("{run_id}.lock"))
+    }
+
+    fn open(path: &StdPath) -> Result<File, TransportError> {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| other(format!("creating {}", dir.display()), e))?;
+        }
+        File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .map_err(|e| other(format!("opening the run lock {}", path.display()), e))
+    }
+
+    /// Whether the locked file is still the one at `path` (a cleanup removes the file after
+    /// its work, and a lock on the removed file would guard nothing).
+    fn still_current(file: &File, path: &StdPath) -> bool {
+        match (file.metadata(), std::fs::metadata(path)) {
+            (Ok(held), Ok(now)) => held.ino() == now.ino() && held.dev() == now.dev(),
+            _ => false,
+        }
+    }
+
+    /// The lock of a process of the run; waits (until `deadline`) while a cleanup holds it.
+    fn shared(config: &Config, run_id: &str, deadline: Instant) -> Result<RunLock, TransportError> {
+        let path = RunLock::path(config, run_id);
+        loop {
+            let file = RunLock::open(&path)?;
+            match file.try_lock_shared() {
+                Ok(()) if RunLock::still_current(&file, &path) => {
+                    return Ok(RunLock { file, path });
+                }
+                Ok(()) | Err(TryLockError::WouldBlock) => {}
+                Err(TryLockError::Error(e)) => {
+                    return Err(other(format!("locking {}", path.display()), e));
+                }
+            }
+            if Instant::now() >= deadline {
+                return Err(TransportError::Other(format!(
+                    "run {run_id}: its files were still being removed by another process after {OPEN_RETRY_DEADLINE:?} ({})",
+                    path.display()
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+
+    /// The lock of a cleanup, or `None` while a process of the run holds it.
+    fn exclusive(config: &Config, run_id: &str) -> Result<Option<RunLock>, TransportError> {
+        let path = RunLock::path(config, run_id);
+        loop {
+            let file = RunLock::open(&path)?;
+            match file.try_lock() {
+                Ok(()) if RunLock::still_current(&file, &path) => {
+                    return Ok(Some(RunLock { file, path }));
+                }
+                // Another cleanup removed the file meanwhile: take the new one.
+                Ok(()) => {}
+                Err(TryLockError::WouldBlock) => return Ok(None),
+                Err(TryLockError::Error(e)) => {
+                    return Err(other(format!("locking {}", path.display()), e));
+                }
+            }
+        }
+    }
+
+    /// Removes the lock file, then releases the lock (a cleanup's last act).
+    fn remove(self) {
+        let _ = std::fs::remove_file(&self.path);
+        drop(self.file);
+    }
+}
+
+/// Whether `Bus::open` failed in a way that a concurrent creation or removal of the run's
+/// iceoryx2 files explains, so that trying again can succeed.
+///
+/// NOTE: iceoryx2 0.10's variants for "created or removed by someone else at this moment"
+/// (node creation's `InternalError`, the service builders' `SystemInFlux`,
+/// `IsMarkedForDestruction`, `ServiceInCorruptedState`, `HangsInCreation`, `InternalFailure`,
+/// `IsBeingCreatedByAnotherInstance`, `UnableToCreateServiceTag`); the errors reach here as text.
+fn is_transient(err: &TransportError) -> bool {
+    const TRANSIENT: [&str; 8] = [
+        "InternalError",
+        "SystemInFlux",
+        "IsMarkedForDestruction",
+        "ServiceInCorruptedState",
+        "HangsInCreation",
+        "InternalFailure",
+        "IsBeingCreatedByAnotherInstance",
+        "UnableToCreateServiceTag",
+    ];
+    match err {
+        TransportError::Other(text) => TRANSIENT.iter().any(|t| text.contains(t)),
+        _ => false,
+    }
 }
 
 fn other(context: String, err: impl std::fmt::Debug) -> TransportError {

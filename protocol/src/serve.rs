@@ -9,8 +9,12 @@ use crate::bus::Bus;
 use crate::replay::{Script, play};
 use crate::scene::Scene;
 use crate::session::{LoopConfig, NodeError};
-use crate::transport::{Link, Transport};
+use crate::transport::{Link, LinkError, Transport, TransportError};
 use crate::wire::NodeKind;
+
+/// Exit status of a process interrupted by SIGINT, SIGTERM (or, for the coupler, SIGHUP) that
+/// ended cleanly: the shell's 128 + SIGINT.
+pub const EXIT_INTERRUPTED: u8 = 130;
 
 /// What a node binary was asked to run.
 #[derive(Clone, Debug)]
@@ -40,11 +44,15 @@ pub enum ServeError {
 }
 
 impl ServeError {
-    /// Exit code of a node binary: 3 numerical failure, 4 exchange with the coupler failed, 2
-    /// otherwise (bad input, outputs not written).
+    /// Exit code of a node binary: 3 numerical failure, 4 exchange with the coupler failed,
+    /// [`EXIT_INTERRUPTED`] interrupted by SIGINT or SIGTERM, 2 otherwise (bad input, outputs not
+    /// written).
     pub fn exit_code(&self) -> u8 {
         match self {
             ServeError::Node(NodeError::Numerical { .. }) => 3,
+            ServeError::Node(NodeError::Link(LinkError::Transport(
+                TransportError::Interrupted,
+            ))) => EXIT_INTERRUPTED,
             ServeError::Node(NodeError::Link(_)) => 4,
             _ => 2,
         }
@@ -96,6 +104,7 @@ pub fn serve<M>(
         scene_hash: scene.hash(),
         coupled,
         out: opts.out.clone(),
+        initial_output: scene.initial_output(),
     };
     let transport: &mut dyn Transport = &mut bus;
     let mut link = Link::new(transport, opts.timeout);

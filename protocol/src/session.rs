@@ -55,10 +55,18 @@ pub fn run_node<N: NodeModel + ?Sized>(
         capabilities: vec!["checkpoint".into()],
     })?;
     if cfg.coupled {
-        open(node, link)?;
+        match open(node, link) {
+            Err(NodeError::Stopped { .. }) => return finish(node, cfg),
+            other => other?,
+        }
     }
-    // NOTE: after `open`, so the fluid's initial totals already weigh its cells by the fluid
-    // fraction of the initial wet surface.
+    // NOTE: after `open`, so the initial output and the fluid's initial totals already weigh its
+    // cells by the fluid fraction of the initial wet surface.
+    let first_planned = u32::from(cfg.initial_output);
+    if let (true, Some(out)) = (cfg.initial_output, &cfg.out) {
+        node.write_output(0, 0.0, out)
+            .map_err(|source| NodeError::output(out, source))?;
+    }
     link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
     let mut step = 0;
     propose(link, step, node.dt_max())?;
@@ -79,11 +87,15 @@ pub fn run_node<N: NodeModel + ?Sized>(
             }
             Message::StepPlan(plan) => {
                 step = plan.stamp.step;
-                advance(node, link, &plan)?;
+                match advance(node, link, &plan) {
+                    // The coupler ended the run inside the step (Ctrl-C, a failure elsewhere).
+                    Err(NodeError::Stopped { .. }) => break,
+                    other => other?,
+                }
                 let t_end = plan.t + plan.dt;
                 node.record_probes(t_end);
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
-                    node.write_output(k, t_end, out)
+                    node.write_output(k + first_planned, t_end, out)
                         .map_err(|source| NodeError::output(out, source))?;
                 }
                 link.send(&Message::ConservedTotals(
@@ -100,6 +112,11 @@ pub fn run_node<N: NodeModel + ?Sized>(
             }
         }
     }
+    finish(node, cfg)
+}
+
+/// The end of a node's run: the probe files.
+fn finish<N: NodeModel + ?Sized>(node: &mut N, cfg: &LoopConfig) -> Result<(), NodeError> {
     if let Some(out) = &cfg.out {
         node.write_probes(out)
             .map_err(|source| NodeError::output(out, source))?;
@@ -116,6 +133,10 @@ pub struct LoopConfig {
     pub coupled: bool,
     /// Where outputs go (`None`: write nothing).
     pub out: Option<PathBuf>,
+    /// The scene asks for an output at t = 0 ([`crate::scene::Scene::initial_output`]): the
+    /// initial state is written as output 0 before the first step, and the output `k` of a step
+    /// plan is written as output `k + 1`.
+    pub initial_output: bool,
 }
 
 /// How a node's run ended.
@@ -131,6 +152,13 @@ pub enum NodeError {
         step: u64,
         /// Report.
         report: String,
+    },
+    /// The coupler's shutdown arrived inside a step (the run was interrupted or failed
+    /// elsewhere): not a failure of this node, whose loop ends cleanly.
+    #[error("shut down by the coupler inside step {step}")]
+    Stopped {
+        /// The step the node was in.
+        step: u64,
     },
     /// Writing outputs failed.
     #[error("writing outputs to {dir}: {source}")]
@@ -166,8 +194,14 @@ pub fn propose(
     Ok(())
 }
 
-/// The error for a message that does not fit the handshake.
+/// The error for a message that does not fit the handshake; for a `Shutdown` inside a step,
+/// [`NodeError::Stopped`] (the loop ends cleanly).
 pub fn unexpected(msg: &Message, expected: &str) -> NodeError {
+    if let Message::Shutdown(shutdown) = msg {
+        return NodeError::Stopped {
+            step: shutdown.stamp.step,
+        };
+    }
     NodeError::Link(LinkError::Unexpected(format!(
         "{:?} (step {}, iteration {}) while waiting for {expected}",
         msg.kind(),
@@ -187,5 +221,42 @@ pub fn fail(link: &mut Link<'_>, stamp: Stamp, report: String) -> NodeError {
     NodeError::Numerical {
         step: stamp.step,
         report,
+    }
+}
+
+/// Longest deadline a command line accepts for one message, in seconds (11.6 days).
+pub const MAX_TIMEOUT_S: f64 = 1e6;
+
+/// Reads a `--timeout-s` value: a number of seconds in (0, [`MAX_TIMEOUT_S`]]. Negative, zero,
+/// NaN, infinite and absurdly large values are refused with the reason (a `Duration` cannot
+/// hold them).
+pub fn parse_timeout_s(text: &str) -> Result<std::time::Duration, String> {
+    let secs: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number of seconds, found {text:?}"))?;
+    if secs.is_finite() && secs > 0.0 && secs <= MAX_TIMEOUT_S {
+        Ok(std::time::Duration::from_secs_f64(secs))
+    } else {
+        Err(format!(
+            "expected a number of seconds in (0, {MAX_TIMEOUT_S:e}], found {text}"
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timeouts_outside_the_range_are_refused() {
+        assert_eq!(
+            parse_timeout_s("2.5"),
+            Ok(std::time::Duration::from_millis(2500))
+        );
+        for bad in ["-1", "nan", "NaN", "inf", "-inf", "1e30", "0", "ten", ""] {
+            let err = parse_timeout_s(bad).expect_err(bad);
+            assert!(err.contains("seconds"), "{bad}: {err}");
+        }
     }
 }

@@ -400,3 +400,55 @@ fn sending_to_a_killed_peer_with_a_full_queue_fails_instead_of_blocking() {
         killed.elapsed()
     );
 }
+
+/// Issue 11, item 1: sweeps of a run (the stale-run sweep every `coupler-node run` starts with)
+/// running while the run opens and talks must never remove its files: every open and every
+/// exchange succeeds, and the sweeps report the run as live.
+#[test]
+fn sweeps_during_start_up_never_break_a_live_run() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let run = Run::new("race");
+    let stop = Arc::new(AtomicBool::new(false));
+    let sweeper = {
+        let (id, stop) = (run.0.clone(), stop.clone());
+        thread::spawn(move || {
+            let mut sweeps = 0u32;
+            while !stop.load(Ordering::SeqCst) {
+                let _ = cleanup_run(&id);
+                sweeps += 1;
+            }
+            sweeps
+        })
+    };
+    for round in 0..40 {
+        let id = run.0.clone();
+        let fluid = thread::spawn(move || -> Result<Vec<u8>, TransportError> {
+            let mut fluid = Bus::open(&id, NodeKind::Fluid, &[NodeKind::Coupler])?;
+            fluid.send(NodeKind::Coupler, b"hello")?;
+            let welcome = fluid.recv(Some(NodeKind::Coupler), LONG)?.1;
+            fluid.send(NodeKind::Coupler, b"bye")?;
+            Ok(welcome)
+        });
+        let talk = || -> Result<(), TransportError> {
+            let mut coupler = Bus::open(&run.0, NodeKind::Coupler, &[NodeKind::Fluid])?;
+            let (_, frame) = coupler.recv(Some(NodeKind::Fluid), LONG)?;
+            assert_eq!(frame, b"hello");
+            coupler.send(NodeKind::Fluid, b"welcome")?;
+            // Until the fluid has read the welcome (a frame to a peer that never received
+            // before is lost when the sender leaves first).
+            let (_, frame) = coupler.recv(Some(NodeKind::Fluid), LONG)?;
+            assert_eq!(frame, b"bye");
+            Ok(())
+        };
+        let coupler_side = talk();
+        let fluid_side = fluid.join().expect("fluid thread");
+        assert!(
+            coupler_side.is_ok() && fluid_side.is_ok(),
+            "round {round}: coupler {coupler_side:?}, fluid {fluid_side:?}"
+        );
+    }
+    stop.store(true, Ordering::SeqCst);
+    let sweeps = sweeper.join().expect("sweeper");
+    assert!(sweeps > 0);
+}

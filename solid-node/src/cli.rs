@@ -1,4 +1,5 @@
-//! Command line of the `solid-node` binary: args → validated config → the node loop.
+//! Command line of the `solid-node` binary: args → validated config → the node loop, and which
+//! model (the DEM or the prescribed double) a scene's implementation name asks for.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -28,8 +29,8 @@ pub struct Args {
     #[arg(long)]
     pub double: Option<String>,
     /// Deadline for each message from the coupler, in seconds.
-    #[arg(long, default_value_t = 120.0)]
-    pub timeout_s: f64,
+    #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
+    pub timeout_s: Duration,
     /// Tools.
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -63,14 +64,38 @@ fn run(args: Args) -> anyhow::Result<()> {
         scene: args.scene.context("--scene is required")?,
         run_id: args.run_id.context("--run-id is required")?,
         double: args.double,
-        timeout: Duration::from_secs_f64(args.timeout_s),
+        timeout: args.timeout_s,
         out: args.out,
     };
     serve(
         NodeKind::Solid,
         &opts,
-        node::model_from_scene,
+        model_from_scene,
         |mut model, link, cfg| node::run(model.as_mut(), link, cfg),
     )?;
     Ok(())
+}
+
+/// Builds the solid implementation named `implementation` (`real` or `prescribed`) for a scene.
+pub fn model_from_scene(
+    scene: &protocol::scene::Scene,
+    implementation: &str,
+) -> Result<Box<dyn crate::model::SolidModel + Send>, String> {
+    let solid = scene
+        .solid
+        .as_ref()
+        .ok_or("the scene has no [solid] section")?;
+    match implementation {
+        "prescribed" => Ok(Box::new(crate::double::PrescribedDouble::new(
+            scene.dim(),
+            solid
+                .prescribed
+                .as_ref()
+                .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
+        ))),
+        "real" => Ok(Box::new(crate::exchange::RealSolid::from_scene(scene)?)),
+        other => Err(format!(
+            "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
+        )),
+    }
 }

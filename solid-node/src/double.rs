@@ -12,7 +12,7 @@ use protocol::wire::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::node::SolidModel;
+use crate::model::SolidModel;
 
 /// The double's state.
 #[derive(Clone, Debug, Serialize, Deserialize)]

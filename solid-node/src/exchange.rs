@@ -11,7 +11,7 @@ use protocol::wire::{
 };
 
 use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
-use crate::node::SolidModel;
+use crate::model::SolidModel;
 
 /// The real solid.
 pub struct RealSolid {
@@ -119,7 +119,15 @@ impl NodeModel for RealSolid {
     }
 
     fn dt_max(&self) -> (f64, String) {
-        (self.solid.max_dt(self.displacement_cap), "dem".into())
+        let dt = self.solid.max_dt(self.displacement_cap);
+        // Which particle limits the step, so that a collapsing step names it.
+        let (elastic, particle) = self.solid.elastic_dt_limit();
+        let why = if dt >= crate::dem::solid::ELASTIC_SAFETY * elastic {
+            format!("dem elastic bound at particle {}", particle.0)
+        } else {
+            "dem motion bound (a particle moves or turns fast)".to_string()
+        };
+        (dt, why)
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {

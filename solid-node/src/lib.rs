@@ -4,7 +4,9 @@
 //! wires it to the bus.
 //!
 //! - [`dem`]: the pure DEM core (no IO, no clock).
-//! - [`node`]: the node loop over any transport; [`double`]: the prescribed double.
+//! - [`model`]: what the node loop needs from an implementation; [`node`]: the node loop over any
+//!   transport; [`double`]: the prescribed double; `cli` (feature `node`): the binary's command
+//!   line and the choice of model.
 //! - [`output`]: particle CSV and VTK writers.
 
 #![warn(missing_docs)]
@@ -14,5 +16,6 @@ pub mod cli;
 pub mod dem;
 pub mod double;
 pub mod exchange;
+pub mod model;
 pub mod node;
 pub mod output;

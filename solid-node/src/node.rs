@@ -1,27 +1,13 @@
 //! The solid node's loop: receive → convert → advance → convert → send (DESIGN §3 from the
 //! solid's side). Written against [`protocol::transport::Transport`] and [`SolidModel`], so the
-//! same loop runs the DEM and the prescribed double, over the bus or in memory.
+//! same loop runs the DEM and the prescribed double, over the bus or in memory. The model trait
+//! is in [`crate::model`]; which model a scene asks for is decided in `cli.rs`.
 
-use protocol::session::{NodeModel, fail, run_node, unexpected};
+use protocol::session::{fail, run_node, unexpected};
 use protocol::transport::Link;
-use protocol::wire::{Decision, InterfaceLoads, Message, NodeKind, SolidState, Stamp, StepPlan};
+use protocol::wire::{Decision, Message, NodeKind, Stamp, StepPlan};
 
-/// What the loop needs from a solid implementation, beyond what every node gives
-/// ([`NodeModel`]).
-pub trait SolidModel: NodeModel {
-    /// Start of a step (internal forces at `X^n`).
-    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), String>;
-    /// A trial of the step under the given loads (`None`: no fluid); may be called repeatedly.
-    fn trial(
-        &mut self,
-        plan: &StepPlan,
-        loads: Option<&InterfaceLoads>,
-    ) -> Result<SolidState, String>;
-    /// Accepts the last trial.
-    fn commit(&mut self, plan: &StepPlan) -> Result<(), String>;
-    /// The current state and wet surface (at `t^0` before any step).
-    fn state(&self) -> SolidState;
-}
+use crate::model::SolidModel;
 
 pub use protocol::session::{LoopConfig, NodeError};
 
@@ -81,28 +67,4 @@ pub fn run(
         },
         |model, link, plan| advance(model, link, plan, coupled),
     )
-}
-
-/// Builds the solid implementation named `implementation` (`real` or `prescribed`) for a scene.
-pub fn model_from_scene(
-    scene: &protocol::scene::Scene,
-    implementation: &str,
-) -> Result<Box<dyn SolidModel + Send>, String> {
-    let solid = scene
-        .solid
-        .as_ref()
-        .ok_or("the scene has no [solid] section")?;
-    match implementation {
-        "prescribed" => Ok(Box::new(crate::double::PrescribedDouble::new(
-            scene.dim(),
-            solid
-                .prescribed
-                .as_ref()
-                .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
-        ))),
-        "real" => Ok(Box::new(crate::exchange::RealSolid::from_scene(scene)?)),
-        other => Err(format!(
-            "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
-        )),
-    }
 }

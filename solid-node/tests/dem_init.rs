@@ -8,7 +8,7 @@ use protocol::session::NodeModel;
 use protocol::wire::Stamp;
 use solid_node::dem::{ParticleId, ParticleMotion, Solid};
 use solid_node::exchange::RealSolid;
-use solid_node::node::SolidModel;
+use solid_node::model::SolidModel;
 
 fn scene(text: &str) -> Scene {
     Scene::from_toml_str(text, "test").unwrap_or_else(|e| panic!("{e}"))

@@ -3,5 +3,6 @@
 mod coupled;
 mod doubles;
 mod e2e;
+mod issue_11;
 mod issue_11_records;
 mod tidy;

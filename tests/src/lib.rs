@@ -86,17 +86,19 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
                         scene_hash: scene.hash(),
                         coupled: scene.solid.is_some(),
                         out: out.clone(),
+                        initial_output: scene.initial_output(),
                     };
                     fluid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())
                 }
                 _ => {
                     let solid = scene.solid.as_ref().expect("solid section");
-                    let mut model = solid_node::node::model_from_scene(&scene, &solid.node)?;
+                    let mut model = solid_node::cli::model_from_scene(&scene, &solid.node)?;
                     let cfg = solid_node::node::LoopConfig {
                         scene_hash: scene.hash(),
                         coupled: scene.fluid.is_some(),
                         out,
+                        initial_output: scene.initial_output(),
                     };
                     solid_node::node::run(model.as_mut(), &mut link, &cfg)
                         .map_err(|e| e.to_string())
@@ -111,6 +113,7 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
         progress: false,
         name: scene.name.clone(),
         t_end: scene.run.t_end,
+        dt_min: scene.run.dt_min,
     };
     let (summary, error) = driver::drive(
         &mut coupler_end,

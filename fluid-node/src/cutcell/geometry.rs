@@ -123,12 +123,6 @@ impl CutGeometry {
         self.subfaces.iter().map(|s| s.area).sum()
     }
 
-    /// Vertices of sub-face `s`.
-    pub fn subface_polygon(&self, s: &SubFace) -> &[[f64; 3]] {
-        let first = s.first_vertex as usize;
-        &self.subface_vertices[first..first + s.n_vertices as usize]
-    }
-
     /// Heap bytes of the dense outputs: Λ per cell and λ per face of each axis (capacities).
     pub fn dense_bytes(&self) -> usize {
         vec_bytes(&self.solid_fraction) + self.face_fraction.iter().map(vec_bytes).sum::<usize>()

@@ -58,13 +58,6 @@ impl SurfaceMesh {
         }
         acc
     }
-
-    /// Reverses every element (flips every normal).
-    pub fn reverse_orientation(&mut self) {
-        for e in self.elements.chunks_mut(self.dim) {
-            e.swap(0, 1);
-        }
-    }
 }
 
 /// Why a surface file cannot be read.

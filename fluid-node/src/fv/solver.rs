@@ -191,8 +191,9 @@ pub struct FluidSolver {
     pool: rayon::ThreadPool,
     /// `p̄` per active axis, or empty when not kept (see [`FluidSolver::keep_directional_pressures`]).
     pbar: Vec<Vec<f64>>,
-    /// `max_dt` of the current state, once computed (reset whenever the state changes).
-    dt_cache: OnceLock<f64>,
+    /// `max_dt` of the current state and the cell that limits it, once computed (reset whenever
+    /// the state changes).
+    dt_cache: OnceLock<(f64, usize)>,
     n_blocks: usize,
     step: u64,
     time: f64,
@@ -334,45 +335,66 @@ impl FluidSolver {
     /// every directional sweep runs at Courant number ≤ `cfl`. Infinite for a fluid at rest
     /// with zero sound speed everywhere; NaN if a cell is non-finite. Computed once per state.
     pub fn max_dt(&self) -> f64 {
-        *self.dt_cache.get_or_init(|| self.compute_max_dt())
+        self.dt_cache.get_or_init(|| self.compute_max_dt()).0
     }
 
-    fn compute_max_dt(&self) -> f64 {
+    /// The cell that limits [`FluidSolver::max_dt`] (index into the grid; the first such cell,
+    /// or the first non-finite one).
+    pub fn limiting_cell(&self) -> usize {
+        self.dt_cache.get_or_init(|| self.compute_max_dt()).1
+    }
+
+    /// `(max_dt, limiting cell)`; the reduction keeps the largest rate and, among equal ones,
+    /// the lowest cell index, so the cell does not depend on the thread count.
+    fn compute_max_dt(&self) -> (f64, usize) {
         let grid = &self.grid;
         let gamma = self.params.gamma;
         let nvar = self.state.nvar;
         let dim = grid.dim;
-        let rate = self.pool.install(|| {
+        let (rate, cell) = self.pool.install(|| {
             self.state
                 .u
                 .par_chunks(nvar * BLOCK_CELLS)
-                .map(|chunk| {
-                    let mut acc: f64 = 0.0;
-                    for cell in chunk.chunks_exact(nvar) {
+                .enumerate()
+                .map(|(block, chunk)| {
+                    let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
+                    for (k, cell) in chunk.chunks_exact(nvar).enumerate() {
+                        let idx = block * BLOCK_CELLS + k;
                         let w = cell_primitive(cell, dim, gamma);
                         let c = sound_speed(&w, gamma);
                         for a in 0..dim {
                             let r = (w.vel[a].abs() + c) / grid.dx[a];
                             if !r.is_finite() {
-                                return f64::NAN;
+                                return (f64::NAN, idx);
                             }
-                            acc = acc.max(r);
+                            if r > acc.0 {
+                                acc = (r, idx);
+                            }
                         }
                     }
                     acc
                 })
                 .reduce(
-                    || 0.0,
-                    |a, b| {
-                        if a.is_nan() || b.is_nan() {
-                            f64::NAN
-                        } else {
-                            a.max(b)
+                    || (0.0, usize::MAX),
+                    |a, b| match (a.0.is_nan(), b.0.is_nan()) {
+                        (true, true) => {
+                            if a.1 <= b.1 {
+                                a
+                            } else {
+                                b
+                            }
                         }
+                        (true, false) => a,
+                        (false, true) => b,
+                        _ if a.0 > b.0 || (a.0 == b.0 && a.1 <= b.1) => a,
+                        _ => b,
                     },
                 )
         });
-        self.params.cfl / rate
+        (
+            self.params.cfl / rate,
+            cell.min(grid.n_cells().saturating_sub(1)),
+        )
     }
 
     /// Advances by one split step of length `dt` \[s\]: one full-`dt` sweep per active axis, in

@@ -1,0 +1,438 @@
+//! `[fluid]`: the grid, the gas, its boundaries and initial state, the pressure double's
+//! field, and their validation.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{Check, SceneError, check_node_impl, quote_list};
+use super::region::{Region, check_region};
+
+/// `[fluid]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidConfig {
+    /// Which implementation runs the fluid by default: `"real"` (default), `"pressure"`, or
+    /// `"replay:FILE.mcap"`; `coupler-node run --fluid` overrides it.
+    #[serde(default = "default_node_impl")]
+    pub node: String,
+    /// Ratio of specific heats γ [-] (default 1.4).
+    #[serde(default = "default_gamma")]
+    pub gamma: f64,
+    /// CFL number (default 0.5).
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// Numerical flux (default OSMP order 5).
+    #[serde(default)]
+    pub flux: FluxConfig,
+    /// Lower corner of the grid \[m\]; its length (1, 2 or 3) is the dimension.
+    pub lower: Vec<f64>,
+    /// Upper corner of the grid \[m\].
+    pub upper: Vec<f64>,
+    /// Cells along each axis.
+    pub cells: Vec<u32>,
+    /// Boundary conditions per axis (default outflow everywhere).
+    #[serde(default)]
+    pub boundary: BoundaryConfig,
+    /// Vacuum thresholds (default ρ = p = 1e-10).
+    #[serde(default)]
+    pub vacuum: VacuumConfig,
+    /// Initial state, applied in order (a later entry overrides an earlier one).
+    #[serde(default)]
+    pub init: Vec<InitEntry>,
+    /// Settings of the pressure double (`fluid-node --double pressure`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<PressureField>,
+    /// A smooth analytic initial state (verification cases); replaces `init` when present.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile: Option<Profile>,
+}
+
+/// `fluid.profile`: smooth initial states with exact solutions (exact cell averages).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Profile {
+    /// `ρ = 1 + amplitude sin(2π Σ_a wave_a (x_a − lower_a)/L_a)` at uniform velocity and
+    /// pressure: advected unchanged on a periodic grid.
+    DensityWave {
+        /// Amplitude (< 1) [kg/m³].
+        amplitude: f64,
+        /// Integer wave numbers per axis.
+        wave: Vec<f64>,
+        /// Uniform velocity [m/s].
+        velocity: Vec<f64>,
+        /// Uniform pressure \[Pa\].
+        p: f64,
+    },
+    /// Isentropic vortex of Shu (1998), ρ∞ = p∞ = 1, strength `beta`, 2-D only.
+    IsentropicVortex {
+        /// Strength.
+        beta: f64,
+        /// Centre at t = 0 \[m\].
+        center: Vec<f64>,
+        /// Free-stream velocity [m/s].
+        velocity: Vec<f64>,
+    },
+}
+
+pub(super) fn default_node_impl() -> String {
+    "real".to_string()
+}
+fn default_gamma() -> f64 {
+    1.4
+}
+fn default_cfl() -> f64 {
+    0.5
+}
+
+/// `fluid.flux`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluxConfig {
+    /// Flux scheme (only `"osmp"`).
+    pub scheme: FluxScheme,
+    /// Order of the OSMP flux: 3, 5 or 7 (default 5).
+    #[serde(default = "default_order")]
+    pub order: u32,
+}
+
+fn default_order() -> u32 {
+    5
+}
+
+impl Default for FluxConfig {
+    fn default() -> Self {
+        FluxConfig {
+            scheme: FluxScheme::Osmp,
+            order: 5,
+        }
+    }
+}
+
+/// `fluid.flux.scheme`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FluxScheme {
+    /// One-step monotonicity-preserving scheme of Daru & Tenaud (2004).
+    Osmp,
+}
+
+/// `fluid.boundary`: per axis `[low, high]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryConfig {
+    /// x axis (default outflow, outflow).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
+    pub x: Option<[Boundary; 2]>,
+    /// y axis.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
+    pub y: Option<[Boundary; 2]>,
+    /// z axis.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "low_high"
+    )]
+    pub z: Option<[Boundary; 2]>,
+}
+
+/// Reads `[low, high]`, refusing a list of another length (a fixed-size array would drop the
+/// entries after the second without a word).
+fn low_high<'de, D: serde::Deserializer<'de>>(de: D) -> Result<Option<[Boundary; 2]>, D::Error> {
+    let list: Vec<Boundary> = Vec::deserialize(de)?;
+    match list.as_slice() {
+        [low, high] => Ok(Some([*low, *high])),
+        other => Err(serde::de::Error::custom(format!(
+            "expected 2 entries [low, high], found {} ({})",
+            other.len(),
+            quote_list(other)
+        ))),
+    }
+}
+
+impl BoundaryConfig {
+    /// Boundary conditions of `axis` (0, 1, 2), outflow where not given.
+    pub fn axis(&self, axis: usize) -> [Boundary; 2] {
+        let given = match axis {
+            0 => self.x,
+            1 => self.y,
+            _ => self.z,
+        };
+        given.unwrap_or([Boundary::Outflow, Boundary::Outflow])
+    }
+}
+
+/// One side of the domain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Boundary {
+    /// Reflecting slip wall.
+    Wall,
+    /// Periodic (both sides of the axis must say so).
+    Periodic,
+    /// Zero-gradient outflow.
+    Outflow,
+}
+
+/// `fluid.vacuum`: below either threshold a cell is a vacuum cell.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VacuumConfig {
+    /// Density threshold [kg/m³] (default 1e-10).
+    pub rho: f64,
+    /// Pressure threshold \[Pa\] (default 1e-10).
+    pub p: f64,
+}
+
+impl Default for VacuumConfig {
+    fn default() -> Self {
+        VacuumConfig {
+            rho: 1e-10,
+            p: 1e-10,
+        }
+    }
+}
+
+/// One `[[fluid.init]]` entry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitEntry {
+    /// Where it applies (cells whose centre lies in the region).
+    pub region: Region,
+    /// Density [kg/m³].
+    pub rho: f64,
+    /// Pressure \[Pa\].
+    pub p: f64,
+    /// Velocity [m/s], one entry per axis (default zero).
+    #[serde(default)]
+    pub velocity: Vec<f64>,
+}
+
+/// `fluid.pressure`: the field of the pressure double,
+/// `p(x, v) = value + gradient · x + impedance (v · n)`.
+///
+/// The impedance term (default 0) is the acoustic reaction of a gas to a wall moving at normal
+/// velocity `v · n` into it (`Z = ρ c`); it makes the loads depend on the trial motion, so the
+/// semi-implicit fixed point has something to converge.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureField {
+    /// Pressure at the origin \[Pa\].
+    pub value: f64,
+    /// Pressure gradient [Pa/m] (default zero).
+    #[serde(default)]
+    pub gradient: Vec<f64>,
+    /// Acoustic impedance `Z` [Pa s/m] (default 0).
+    #[serde(default)]
+    pub impedance: f64,
+}
+
+impl FluidConfig {
+    /// The `[fluid]` rules.
+    pub(super) fn validate(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
+        let dim = c.dim;
+        check_node_impl("fluid.node", &fluid.node, &["real", "pressure"], c.file)?;
+        c.check_len("fluid.upper", &fluid.upper)?;
+        c.check_len("fluid.lower", &fluid.lower)?;
+        if fluid.cells.len() != dim || fluid.cells.contains(&0) {
+            return Err(c.invalid(
+                "fluid.cells",
+                &format!("{dim} positive cell counts"),
+                quote_list(&fluid.cells),
+            ));
+        }
+        for axis in 0..dim {
+            if fluid.upper[axis] <= fluid.lower[axis] {
+                return Err(c.invalid(
+                    "fluid.upper",
+                    "upper > lower on every axis",
+                    format!(
+                        "{} vs lower {}",
+                        quote_list(&fluid.upper),
+                        quote_list(&fluid.lower)
+                    ),
+                ));
+            }
+            let [lo, hi] = fluid.boundary.axis(axis);
+            if (lo == Boundary::Periodic) != (hi == Boundary::Periodic) {
+                let name = ["x", "y", "z"][axis];
+                return Err(c.invalid(
+                    &format!("fluid.boundary.{name}"),
+                    "periodic on both sides or on neither",
+                    format!("[{lo:?}, {hi:?}]"),
+                ));
+            }
+        }
+        for (axis, name) in ["y", "z"].iter().enumerate() {
+            let given = if axis == 0 {
+                fluid.boundary.y
+            } else {
+                fluid.boundary.z
+            };
+            if given.is_some() && axis + 1 >= dim {
+                return Err(c.invalid(
+                    &format!("fluid.boundary.{name}"),
+                    &format!("no such axis in a {dim}-D scene"),
+                    "a boundary".into(),
+                ));
+            }
+        }
+        c.positive("fluid.gamma", fluid.gamma - 1.0)
+            .map_err(|_| c.invalid("fluid.gamma", "a number > 1", fluid.gamma.to_string()))?;
+        if !(fluid.cfl > 0.0 && fluid.cfl <= 1.0) {
+            return Err(c.invalid("fluid.cfl", "a number in (0, 1]", fluid.cfl.to_string()));
+        }
+        if ![3, 5, 7].contains(&fluid.flux.order) {
+            return Err(c.invalid(
+                "fluid.flux.order",
+                "3, 5 or 7",
+                fluid.flux.order.to_string(),
+            ));
+        }
+        c.positive("fluid.vacuum.rho", fluid.vacuum.rho)?;
+        c.positive("fluid.vacuum.p", fluid.vacuum.p)?;
+        match &fluid.profile {
+            Some(Profile::DensityWave {
+                amplitude,
+                wave,
+                velocity,
+                p,
+            }) => {
+                if !(amplitude.abs() < 1.0 && *p > 0.0) {
+                    return Err(c.invalid(
+                        "fluid.profile.density_wave",
+                        "|amplitude| < 1 and p > 0",
+                        format!("amplitude {amplitude}, p {p}"),
+                    ));
+                }
+                c.check_len("fluid.profile.density_wave.wave", wave)?;
+                c.check_len("fluid.profile.density_wave.velocity", velocity)?;
+            }
+            Some(Profile::IsentropicVortex {
+                beta,
+                center,
+                velocity,
+            }) => {
+                if dim != 2 || !beta.is_finite() {
+                    return Err(c.invalid(
+                        "fluid.profile.isentropic_vortex",
+                        "a 2-D scene and a finite beta",
+                        format!("{dim}-D, beta {beta}"),
+                    ));
+                }
+                c.check_len("fluid.profile.isentropic_vortex.center", center)?;
+                c.check_len("fluid.profile.isentropic_vortex.velocity", velocity)?;
+            }
+            None => {}
+        }
+        if fluid.node == "real" && fluid.init.is_empty() && fluid.profile.is_none() {
+            return Err(c.invalid(
+                "fluid.init",
+                "at least one [[fluid.init]] entry",
+                "none".into(),
+            ));
+        }
+        for (k, init) in fluid.init.iter().enumerate() {
+            let base = format!("fluid.init[{k}]");
+            c.positive(&format!("{base}.rho"), init.rho)?;
+            c.positive(&format!("{base}.p"), init.p)?;
+            if !init.velocity.is_empty() {
+                c.check_len(&format!("{base}.velocity"), &init.velocity)?;
+            }
+            for (name, v) in init.region.vectors() {
+                c.check_len(&format!("{base}.region.{name}"), v)?;
+            }
+            check_region(&format!("{base}.region"), &init.region)
+                .map_err(|(path, expected, found)| c.invalid(&path, &expected, found))?;
+            if !init.region.meets_box(&fluid.lower, &fluid.upper) {
+                return Err(c.invalid(
+                    &format!("{base}.region"),
+                    "a region that meets the domain",
+                    format!(
+                        "a region outside the domain {} to {}",
+                        quote_list(&fluid.lower),
+                        quote_list(&fluid.upper)
+                    ),
+                ));
+            }
+        }
+        if fluid.node == "real"
+            && fluid.profile.is_none()
+            && let Some((cell, centre)) = uncovered_cell(fluid)
+        {
+            return Err(c.invalid(
+                "fluid.init",
+                "[[fluid.init]] entries that cover every cell (or one with region = \"all\")",
+                format!(
+                    "cell {} (centre {}) in none of them",
+                    quote_list(&cell),
+                    quote_list(&centre)
+                ),
+            ));
+        }
+        if let Some(pressure) = &fluid.pressure {
+            if !pressure.value.is_finite() {
+                return Err(c.invalid(
+                    "fluid.pressure.value",
+                    "a finite number",
+                    pressure.value.to_string(),
+                ));
+            }
+            if !pressure.gradient.is_empty() {
+                c.check_len("fluid.pressure.gradient", &pressure.gradient)?;
+            }
+        } else if fluid.node == "pressure" {
+            return Err(c.invalid(
+                "fluid.pressure",
+                "a [fluid.pressure] table for the pressure double",
+                "none".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Largest grid whose coverage by `[[fluid.init]]` is checked cell by cell (cells).
+///
+/// NOTE: about a second of validation; a larger grid without a `region = "all"` entry is left to
+/// the fluid node (and is refused by the memory estimate first when it is too large to run).
+const COVERAGE_CHECK_MAX_CELLS: u64 = 20_000_000;
+
+/// The first cell (index per axis and centre) whose centre no `[[fluid.init]]` region holds;
+/// `None` when every cell is covered, or when an entry covers all of them by itself.
+fn uncovered_cell(fluid: &FluidConfig) -> Option<(Vec<u64>, Vec<f64>)> {
+    if fluid.init.iter().any(|e| e.region == Region::All) {
+        return None;
+    }
+    let n_cells: u64 = fluid.cells.iter().map(|&n| u64::from(n)).product();
+    if n_cells > COVERAGE_CHECK_MAX_CELLS {
+        return None;
+    }
+    let dim = fluid.cells.len();
+    let mut idx = vec![0u64; dim];
+    let mut centre = vec![0.0; dim];
+    for _ in 0..n_cells {
+        for a in 0..dim {
+            let dx = (fluid.upper[a] - fluid.lower[a]) / f64::from(fluid.cells[a]);
+            centre[a] = fluid.lower[a] + (idx[a] as f64 + 0.5) * dx;
+        }
+        if !fluid.init.iter().any(|e| e.region.contains(&centre)) {
+            return Some((idx, centre));
+        }
+        for (i, n) in idx.iter_mut().zip(&fluid.cells) {
+            *i += 1;
+            if *i < u64::from(*n) {
+                break;
+            }
+            *i = 0;
+        }
+    }
+    None
+}

@@ -1,0 +1,205 @@
+//! `[run]`: the time loop and the coupling, and their validation.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::{Check, SceneError};
+
+/// `[run]`: the time loop and the coupling.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// End time \[s\] (default 1.0).
+    pub t_end: f64,
+    /// Coupling scheme (default semi-implicit; ignored when one side is absent).
+    pub scheme: SchemeName,
+    /// Fixed-point criterion of eq. (22) of paper 003 (default 1e-12).
+    pub tolerance: f64,
+    /// Fixed-point iterations allowed per step; exceeding it stops the run (default 50).
+    pub max_iterations: u32,
+    /// Relaxation of the solid positions in the fixed point (default none).
+    pub relaxation: Relaxation,
+    /// Constant relaxation factor of the first iteration of Aitken and IQN-ILS, when no
+    /// earlier information is available (default 0.5).
+    pub relaxation_initial: f64,
+    /// IQN-ILS: steps whose secant columns are kept besides the current step's; 0 = only this
+    /// step's (default 4).
+    pub iqn_reuse: u32,
+    /// IQN-ILS: QR2 filter limit; a column whose part orthogonal to the newer columns is
+    /// shorter than this fraction of its own length is dropped (default 1e-2).
+    pub iqn_filter: f64,
+    /// Predictor of a semi-implicit step's first inputs (default none).
+    pub predictor: Predictor,
+    /// Recording level (default exchange).
+    pub record: RecordLevel,
+    /// Steps between node checkpoints in the record; 0 = none (default 0; `record = "all"`
+    /// checkpoints every step).
+    pub checkpoint_every: u64,
+    /// Optional cap on the coupling step \[s\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_max: Option<f64>,
+    /// Optional cap on the number of steps, at least 1 (the run stops with status
+    /// "max_steps").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_steps: Option<u64>,
+    /// Smallest coupling step a node may impose \[s\]: a step a node limits to less stops the
+    /// run with a report naming the node and what limits it (cell or particle). Default: the
+    /// larger of [`DT_MIN_RELATIVE`] times the smallest step the nodes proposed for the first
+    /// step and [`DT_MIN_OF_T_END`] times `t_end`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
+    /// Worker threads per node for the solver cores (default 1; results do not depend on it).
+    pub threads: u32,
+    /// Largest relative mass error the ledger accepts before it stops the run (default 1e-9;
+    /// checked only when the initial mass is not zero).
+    pub mass_tolerance: f64,
+    /// Largest relative energy error the ledger accepts (default: recorded, not checked).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub energy_tolerance: Option<f64>,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig {
+            t_end: 1.0,
+            scheme: SchemeName::SemiImplicit,
+            tolerance: 1e-12,
+            max_iterations: 50,
+            relaxation: Relaxation::None,
+            relaxation_initial: 0.5,
+            iqn_reuse: 4,
+            iqn_filter: 1e-2,
+            predictor: Predictor::None,
+            record: RecordLevel::Exchange,
+            checkpoint_every: 0,
+            dt_max: None,
+            max_steps: None,
+            dt_min: None,
+            threads: 1,
+            mass_tolerance: 1e-9,
+            energy_tolerance: None,
+        }
+    }
+}
+
+/// Default `run.dt_min` relative to the first step the nodes propose: a step that has collapsed
+/// a millionfold is a run without progress.
+///
+/// NOTE: a shock reflecting from a wall or a body speeding up changes the step by factors of a
+/// few; a millionfold collapse takes hours of steps for nothing.
+pub const DT_MIN_RELATIVE: f64 = 1e-6;
+
+/// Default `run.dt_min` relative to `run.t_end`: a step that would need more than a billion
+/// steps to reach the end is a run without progress, even from the first step.
+///
+/// NOTE: Sod with ρ = 1e-300 on one side proposes 3e-153 s for its first step (the sound speed
+/// of the near-vacuum cells), then 1e-8 s for hours; [`DT_MIN_RELATIVE`] alone, relative to
+/// that first proposal, would never stop it.
+pub const DT_MIN_OF_T_END: f64 = 1e-9;
+
+/// `run.scheme`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeName {
+    /// One pass per step.
+    Explicit,
+    /// Fixed point on the wet-surface position.
+    SemiImplicit,
+}
+
+/// `run.relaxation`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Relaxation {
+    /// Plain fixed point.
+    None,
+    /// Aitken's dynamic relaxation of the solid positions.
+    Aitken,
+    /// Interface quasi-Newton with an inverse Jacobian from a least-squares model (Degroote et
+    /// al. 2009), on the positions and orientations of the particles.
+    IqnIls,
+}
+
+/// `run.predictor`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Predictor {
+    /// Iteration 0 runs on the accepted surface `F^n`, iteration 1 on the relaxation of its
+    /// trial.
+    None,
+    /// Iteration 0 runs on the linear extrapolation of the last two accepted states (sent to
+    /// the fluid right after the step plan) instead of on `F^n`.
+    Linear,
+    /// Iteration 1 starts from iteration 0's trial plus the last step's correction (its
+    /// accepted state minus its first trial).
+    Correction,
+}
+
+/// `run.record`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RecordLevel {
+    /// Every exchanged message, the diagnostics, and a checkpoint of each node at every step
+    /// (so that a replay of any step starts at that step).
+    All,
+    /// Every exchanged message and the diagnostics (hello and welcome included).
+    Exchange,
+    /// The diagnostics channel only.
+    Diagnostics,
+    /// No MCAP file.
+    None,
+}
+
+impl RunConfig {
+    /// The `[run]` rules.
+    pub(super) fn validate(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let run = self;
+        c.positive("run.t_end", run.t_end)?;
+        c.positive("run.tolerance", run.tolerance)?;
+        c.positive("run.mass_tolerance", run.mass_tolerance)?;
+        if let Some(e) = run.energy_tolerance {
+            c.positive("run.energy_tolerance", e)?;
+        }
+        if run.max_iterations == 0 {
+            return Err(c.invalid("run.max_iterations", "at least 1", "0".into()));
+        }
+        if !(run.relaxation_initial > 0.0 && run.relaxation_initial <= 1.0) {
+            return Err(c.invalid(
+                "run.relaxation_initial",
+                "a number in (0, 1]",
+                format!("{}", run.relaxation_initial),
+            ));
+        }
+        if !(run.iqn_filter > 0.0 && run.iqn_filter < 1.0) {
+            return Err(c.invalid(
+                "run.iqn_filter",
+                "a number in (0, 1)",
+                format!("{}", run.iqn_filter),
+            ));
+        }
+        if run.iqn_reuse > 64 {
+            return Err(c.invalid("run.iqn_reuse", "0 to 64", run.iqn_reuse.to_string()));
+        }
+        if let Some(dt) = run.dt_max {
+            c.positive("run.dt_max", dt)?;
+        }
+        if run.threads == 0 || run.threads > 256 {
+            return Err(c.invalid("run.threads", "1 to 256", run.threads.to_string()));
+        }
+        if run.max_steps == Some(0) {
+            return Err(c.invalid("run.max_steps", "at least 1 step", "0".into()));
+        }
+        if let Some(dt_min) = run.dt_min {
+            c.positive("run.dt_min", dt_min)?;
+            if let Some(dt_max) = run.dt_max
+                && dt_min >= dt_max
+            {
+                return Err(c.invalid(
+                    "run.dt_min",
+                    &format!("a step below run.dt_max = {dt_max:e}"),
+                    format!("{dt_min:e}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
