@@ -73,7 +73,7 @@ fn signal_ends_the_run_cleanly(signal: &str, group: bool) {
     assert!(!status.contains("died"), "SIG{signal}: {s}");
     let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
         .expect("readable");
-    assert!(!rec.truncated, "SIG{signal}: the record was not finished");
+    assert!(!rec.truncated(), "SIG{signal}: the record was not finished");
     let deadline = Instant::now() + Duration::from_secs(10);
     while !node_pids(&run_id).is_empty() {
         assert!(Instant::now() < deadline, "SIG{signal}: nodes left running");

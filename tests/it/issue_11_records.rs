@@ -45,7 +45,7 @@ fn issue_11_a_killed_coupler_leaves_a_record_standard_readers_read_to_its_last_s
     let dir = out_dir("issue11-sigkill");
     let scene = long_doubles_scene(&dir);
     let out = dir.join("out");
-    let (mut child, run_id) = start_long_run(&scene, &out, 100_000, false);
+    let (mut child, run_id) = start_long_run(&scene, &out, 100_000, false, false);
     child.kill().expect("SIGKILL the coupler");
     child.wait().expect("reap the coupler");
     // Its nodes notice the coupler is gone; whatever is left after a while is ended here.
