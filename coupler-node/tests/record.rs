@@ -255,7 +255,8 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
     assert_eq!(streamed, rec.messages.len());
 }
 
-/// The Python `mcap` package (`$COSIM_PYTHON`, default `python3`; CI sets it, see `.ci/run`)
+/// The Python `mcap` package (`$COSIM_PYTHON`, else a venv made on first use; see
+/// `tests/py/python-with-mcap.sh`)
 /// reads a finished record, the record of a run killed after step 2 (with `make_reader`, the
 /// standard reader, not a salvaging one), a file cut in the middle of step 3 (streaming reader)
 /// and a recovered file. Always runs: a missing Python or `mcap` package fails it, loudly.
@@ -280,8 +281,20 @@ fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
             vec![],
         ),
     ];
-    let python = std::env::var("COSIM_PYTHON").unwrap_or_else(|_| "python3".into());
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py/check_mcap.py");
+    let py = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py");
+    // `$COSIM_PYTHON`, or a venv with the package made on first use under the target folder.
+    let found = std::process::Command::new("sh")
+        .arg(py.join("python-with-mcap.sh"))
+        .arg(env!("CARGO_TARGET_TMPDIR"))
+        .output()
+        .expect("sh runs");
+    assert!(
+        found.status.success(),
+        "setting up a Python with the mcap package: {}",
+        String::from_utf8_lossy(&found.stderr)
+    );
+    let python = String::from_utf8_lossy(&found.stdout).trim().to_string();
+    let script = py.join("check_mcap.py");
     for (name, data, flags) in samples {
         let path = dir.join(name);
         std::fs::write(&path, &data).unwrap();
@@ -291,9 +304,7 @@ fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
             .arg(&path)
             .args(&flags)
             .output()
-            .unwrap_or_else(|e| {
-                panic!("running {python}: {e} (set COSIM_PYTHON to a python with the mcap package)")
-            });
+            .unwrap_or_else(|e| panic!("running {python}: {e}"));
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(
             out.status.success(),

@@ -60,6 +60,26 @@ pub(crate) fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     output
 }
 
+/// A Python interpreter with the `mcap` package (the independent reader of the records):
+/// `$COSIM_PYTHON`, or a venv under the target folder made on first use
+/// (`tests/py/python-with-mcap.sh`).
+pub(crate) fn python() -> String {
+    let out = Command::new("sh")
+        .arg(workspace().join("tests/py/python-with-mcap.sh"))
+        .arg(env!("CARGO_TARGET_TMPDIR"))
+        .output()
+        .expect("sh runs");
+    assert!(
+        out.status.success(),
+        "setting up a Python with the mcap package: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout)
+        .expect("a path")
+        .trim()
+        .to_string()
+}
+
 /// `coupler-node replay FILE --step STEP --node NODE` prints `identical` and succeeds.
 fn assert_replays_identically(file: &Path, step: &str, node: &str) {
     let r = coupler()
@@ -536,14 +556,12 @@ fn sod_runs_end_to_end_and_matches_the_exact_solution() {
 fn python_mcap_reads_the_record() {
     let out = out_dir("python");
     run_scene(&workspace().join("scenes/backbone-doubles.toml"), &out, &[]);
-    let python = std::env::var("COSIM_PYTHON").unwrap_or_else(|_| "python3".into());
+    let python = python();
     let r = Command::new(&python)
         .arg(workspace().join("tests/py/check_mcap.py"))
         .arg(out.join("exchange.mcap"))
         .output()
-        .unwrap_or_else(|e| {
-            panic!("running {python}: {e} (set COSIM_PYTHON to a python with the mcap package)")
-        });
+        .unwrap_or_else(|e| panic!("running {python}: {e}"));
     let stdout = String::from_utf8_lossy(&r.stdout);
     assert!(
         r.status.success(),

@@ -11,12 +11,8 @@ use coupler_node::record;
 use protocol::mcap_read::End;
 
 use crate::e2e::{
-    coupler, long_doubles_scene, node_pids, out_dir, run_scene, start_long_run, workspace,
+    coupler, long_doubles_scene, node_pids, out_dir, python, run_scene, start_long_run, workspace,
 };
-
-fn python() -> String {
-    std::env::var("COSIM_PYTHON").unwrap_or_else(|_| "python3".into())
-}
 
 /// Runs `tests/py/check_mcap.py FILE FLAGS` and returns its stdout; fails unless it succeeds.
 fn python_check(file: &std::path::Path, flags: &[&str]) -> String {
@@ -25,12 +21,7 @@ fn python_check(file: &std::path::Path, flags: &[&str]) -> String {
         .arg(file)
         .args(flags)
         .output()
-        .unwrap_or_else(|e| {
-            panic!(
-                "running {}: {e} (set COSIM_PYTHON to a python with the mcap package)",
-                python()
-            )
-        });
+        .unwrap_or_else(|e| panic!("running {}: {e}", python()));
     let stdout = String::from_utf8_lossy(&r.stdout).into_owned();
     assert!(
         r.status.success(),
