@@ -114,6 +114,22 @@ pub enum Report {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Error against wall time of coupled runs: the energy error and the probed particle's x
+    /// against a reference run (for example on a grid twice as fine).
+    WorkPrecision {
+        /// The runs' output folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The reference run's output folder.
+        #[arg(long)]
+        reference: PathBuf,
+        /// The particle probe compared.
+        #[arg(long, default_value = "tip")]
+        probe: String,
+        /// The SVG to write (energy error beside it as `*_energy.svg`, the table as CSV).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// The largest pressure deviation over the fluid cells of each output against time, one
     /// curve per run (paper 003 Fig. 5).
     Pressure {
@@ -246,6 +262,21 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
         }) => {
             crate::report::pressure(&runs, reference, &out)?;
             println!("{}", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Report(Report::WorkPrecision {
+            runs,
+            reference,
+            probe,
+            out,
+        }) => {
+            println!("run,group,wall_s,steps,energy_error,displacement_error");
+            for p in crate::report::work_precision(&runs, &reference, &probe, &out)? {
+                println!(
+                    "{},{},{:.3},{},{:.3e},{:.3e}",
+                    p.run, p.group, p.wall_s, p.steps, p.energy_error, p.displacement_error
+                );
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Report(Report::Energy { runs, scale, out }) => {

@@ -12,6 +12,10 @@
 //! - `report pressure RUN... --reference P --out FILE.svg`: the largest |p − P| over the fluid
 //!   cells of each output against its time, one curve per run (Fig. 5: explicit against
 //!   semi-implicit on the rod).
+//! - `report work-precision RUN... --reference REF --probe NAME --out FILE.svg`: for each run its
+//!   wall time, its largest energy error and its largest deviation of the probed particle's x
+//!   from the reference run's (interpolated in time), as a table and as error against wall time
+//!   (log10 both), one curve per grid and scheme.
 //!
 //! Every chart also writes its numbers as CSV beside it.
 
@@ -356,4 +360,172 @@ pub fn pressure(runs: &[PathBuf], reference: f64, out: &Path) -> anyhow::Result<
     )
     .map_err(|e| anyhow::anyhow!(e))?;
     write_csv(&out.with_extension("csv"), "t,error", &series)
+}
+
+/// The probed particle's x of `reference` at time `t`, linear between its samples (`None`
+/// outside them).
+fn interpolate(reference: &[(f64, f64)], t: f64) -> Option<f64> {
+    let i = reference.partition_point(|p| p.0 < t);
+    match (i.checked_sub(1).map(|j| reference[j]), reference.get(i)) {
+        (_, Some(b)) if b.0 == t => Some(b.1),
+        (Some(a), Some(b)) => Some(a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)),
+        _ => None,
+    }
+}
+
+/// One run of a work–precision study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkPoint {
+    /// The run's folder name.
+    pub run: String,
+    /// Grid and scheme, e.g. `400x200 semi-implicit`.
+    pub group: String,
+    /// Wall time of the run \[s\].
+    pub wall_s: f64,
+    /// Steps.
+    pub steps: u64,
+    /// Largest |E − E0| / largest |W| over the run.
+    pub energy_error: f64,
+    /// Largest |x − x_ref| of the probed particle over the run's samples within the
+    /// reference's time span \[m\].
+    pub displacement_error: f64,
+}
+
+/// [`WorkPoint`] of `run` against `reference` for probe `probe`.
+pub fn work_point(run: &Path, reference: &[(f64, f64)], probe: &str) -> anyhow::Result<WorkPoint> {
+    let summary_path = run.join("summary.json");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(&summary_path)
+            .with_context(|| format!("reading {}", summary_path.display()))?,
+    )
+    .with_context(|| format!("parsing {}", summary_path.display()))?;
+    let number = |key: &str| {
+        summary[key]
+            .as_f64()
+            .with_context(|| format!("{}: no number {key}", summary_path.display()))
+    };
+    let scene_path = run.join("scene.toml");
+    let text = std::fs::read_to_string(&scene_path)
+        .with_context(|| format!("reading {}", scene_path.display()))?;
+    let scene = Scene::from_toml_str(&text, &scene_path.display().to_string())
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cells = scene.fluid.as_ref().map_or_else(String::new, |f| {
+        f.cells
+            .iter()
+            .map(u32::to_string)
+            .collect::<Vec<_>>()
+            .join("x")
+    });
+    let scheme = match scene.run.scheme {
+        protocol::scene::SchemeName::Explicit => "explicit",
+        protocol::scene::SchemeName::SemiImplicit => "semi-implicit",
+    };
+    let x = read_table(&run.join(format!("probe_{probe}.csv")))?
+        .pairs("t", "x")
+        .with_context(|| format!("{}: probe {probe} has no t, x", run.display()))?;
+    let displacement_error = x
+        .iter()
+        .filter_map(|(t, x)| Some((x - interpolate(reference, *t)?).abs()))
+        .fold(0.0, f64::max);
+    let energy_error = relative_energy_error(&run_energy(run)?, 1.0)
+        .iter()
+        .map(|p| p.1.abs())
+        .fold(0.0, f64::max);
+    Ok(WorkPoint {
+        run: run.file_name().map_or_else(
+            || run.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
+        group: format!("{cells} {scheme}"),
+        wall_s: number("wall_s")?,
+        steps: number("steps")? as u64,
+        energy_error,
+        displacement_error,
+    })
+}
+
+/// `report work-precision`: [`work_point`] of each run, as `out` (two charts: `out` for the
+/// displacement error, `*_energy.svg` for the energy error) and a CSV table beside it.
+pub fn work_precision(
+    runs: &[PathBuf],
+    reference: &Path,
+    probe: &str,
+    out: &Path,
+) -> anyhow::Result<Vec<WorkPoint>> {
+    let reference = read_table(&reference.join(format!("probe_{probe}.csv")))?
+        .pairs("t", "x")
+        .with_context(|| format!("{}: probe {probe} has no t, x", reference.display()))?;
+    let points: Vec<WorkPoint> = runs
+        .iter()
+        .map(|r| work_point(r, &reference, probe))
+        .collect::<anyhow::Result<_>>()?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let mut table = String::from("run,group,wall_s,steps,energy_error,displacement_error\n");
+    for p in &points {
+        table.push_str(&format!(
+            "{},{},{:e},{},{:e},{:e}\n",
+            p.run, p.group, p.wall_s, p.steps, p.energy_error, p.displacement_error
+        ));
+    }
+    let csv = out.with_extension("csv");
+    std::fs::write(&csv, table).with_context(|| format!("writing {}", csv.display()))?;
+    let curves = |error: fn(&WorkPoint) -> f64| -> Vec<Series> {
+        let mut groups: Vec<String> = points.iter().map(|p| p.group.clone()).collect();
+        groups.dedup();
+        groups.sort();
+        groups.dedup();
+        groups
+            .into_iter()
+            .map(|g| {
+                let mut pts: Vec<(f64, f64)> = points
+                    .iter()
+                    .filter(|p| p.group == g && error(p) > 0.0)
+                    .map(|p| (p.wall_s.log10(), error(p).log10()))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                Series {
+                    label: g,
+                    points: pts,
+                }
+            })
+            .collect()
+    };
+    line_chart(
+        out,
+        &format!("probe {probe}: largest |x - x_ref| against wall time"),
+        "log10 wall time [s]",
+        "log10 |x - x_ref| [m]",
+        &curves(|p| p.displacement_error),
+    )
+    .map_err(|e| anyhow::anyhow!(e))?;
+    let stem = out
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    line_chart(
+        &out.with_file_name(format!("{stem}_energy.svg")),
+        "largest energy error / largest exchange against wall time",
+        "log10 wall time [s]",
+        "log10 |E - E0| / max |W|",
+        &curves(|p| p.energy_error),
+    )
+    .map_err(|e| anyhow::anyhow!(e))?;
+    Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolate;
+
+    #[test]
+    fn the_reference_is_interpolated_linearly_inside_its_samples_only() {
+        let r = [(0.0, 1.0), (1.0, 3.0), (3.0, 3.0)];
+        assert_eq!(interpolate(&r, 0.0), Some(1.0));
+        assert_eq!(interpolate(&r, 0.25), Some(1.5));
+        assert_eq!(interpolate(&r, 1.0), Some(3.0));
+        assert_eq!(interpolate(&r, 2.0), Some(3.0));
+        assert_eq!(interpolate(&r, -0.1), None);
+        assert_eq!(interpolate(&r, 3.5), None);
+    }
 }
