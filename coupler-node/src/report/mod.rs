@@ -31,6 +31,24 @@ use crate::record;
 use data::{Table, energy_history, relative_energy_error, stress_by_angle};
 use plot::{Field, Series, field_png, line_chart};
 
+/// A run's folder name, for legends and tables.
+fn run_name(run: &Path) -> String {
+    run.file_name().map_or_else(
+        || run.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// Creates the folder `out` goes into.
+fn create_parent(out: &Path) -> anyhow::Result<()> {
+    match out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))
+        }
+        None => Ok(()),
+    }
+}
+
 fn read_table(path: &Path) -> anyhow::Result<Table> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -284,10 +302,7 @@ pub fn energy(runs: &[PathBuf], scales: &[f64], out: &Path) -> anyhow::Result<()
     let mut series = Vec::new();
     for (i, run) in runs.iter().enumerate() {
         let scale = scales.get(i).copied().unwrap_or(1.0);
-        let name = run.file_name().map_or_else(
-            || run.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
+        let name = run_name(run);
         series.push(Series {
             label: if scale == 1.0 {
                 name
@@ -297,9 +312,7 @@ pub fn energy(runs: &[PathBuf], scales: &[f64], out: &Path) -> anyhow::Result<()
             points: relative_energy_error(&run_energy(run)?, scale),
         });
     }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    create_parent(out)?;
     line_chart(
         out,
         "energy error / largest exchange",
@@ -341,16 +354,11 @@ pub fn pressure(runs: &[PathBuf], reference: f64, out: &Path) -> anyhow::Result<
     let mut series = Vec::new();
     for run in runs {
         series.push(Series {
-            label: run.file_name().map_or_else(
-                || run.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            ),
+            label: run_name(run),
             points: pressure_error(run, reference)?,
         });
     }
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    create_parent(out)?;
     line_chart(
         out,
         &format!("largest |p - {reference}| over the fluid cells"),
@@ -432,10 +440,7 @@ pub fn work_point(run: &Path, reference: &[(f64, f64)], probe: &str) -> anyhow::
         .map(|p| p.1.abs())
         .fold(0.0, f64::max);
     Ok(WorkPoint {
-        run: run.file_name().map_or_else(
-            || run.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
+        run: run_name(run),
         group: format!("{cells} {scheme}"),
         wall_s: number("wall_s")?,
         steps: number("steps")? as u64,
@@ -459,9 +464,7 @@ pub fn work_precision(
         .iter()
         .map(|r| work_point(r, &reference, probe))
         .collect::<anyhow::Result<_>>()?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    create_parent(out)?;
     let mut table = String::from("run,group,wall_s,steps,energy_error,displacement_error\n");
     for p in &points {
         table.push_str(&format!(
