@@ -165,3 +165,17 @@ fn solid_init_with_an_unknown_key_is_refused() {
         other => panic!("expected a Parse error, got {other:?}"),
     }
 }
+
+#[test]
+fn two_probes_of_one_name_are_refused() {
+    let probes = |second: &str| {
+        scene_2d(&format!(
+            "[[output.probes]]\nname = \"tip\"\nparticle_at = [2.0, 1.0]\n[[output.probes]]\nname = \"{second}\"\nparticle_at = [2.0, 0.0]\n"
+        ))
+    };
+    assert!(probes("base").is_ok());
+    let err = probes("tip").expect_err("a repeated name");
+    let text = err.to_string();
+    assert_eq!(invalid_path(Err(err)), "output.probes[1].name");
+    assert!(text.contains("output.probes[0] has it"), "{text}");
+}

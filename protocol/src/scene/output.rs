@@ -82,6 +82,14 @@ impl OutputConfig {
         }
         for (k, probe) in self.probes.iter().enumerate() {
             let base = format!("output.probes[{k}]");
+            // Each probe writes `probe_<name>.csv`: a repeated name would overwrite another's.
+            if let Some(first) = self.probes[..k].iter().position(|p| p.name == probe.name) {
+                return Err(c.invalid(
+                    &format!("{base}.name"),
+                    &format!("a name no other probe has (output.probes[{first}] has it)"),
+                    format!("{:?}", probe.name),
+                ));
+            }
             let n_targets = usize::from(probe.point.is_some())
                 + usize::from(probe.particle_at.is_some())
                 + usize::from(probe.particle.is_some());
