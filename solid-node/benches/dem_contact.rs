@@ -33,6 +33,7 @@ fn config(shape: Shape, divisions: Vec<u32>, steel: bool, contact: bool) -> Soli
             shape,
             divisions,
             motion: Motion::Free,
+            links: None,
         }],
         constraints: vec![],
         init: vec![],

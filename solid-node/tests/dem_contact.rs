@@ -25,6 +25,7 @@ fn body(center: Vec<f64>, size: Vec<f64>, divisions: Vec<u32>, motion: Motion) -
         shape: Shape::Box { center, size },
         divisions,
         motion,
+        links: None,
     }
 }
 

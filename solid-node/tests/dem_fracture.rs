@@ -203,6 +203,7 @@ fn ring_under_internal_load_fragments_with_closed_wet_surface() {
         },
         divisions: vec![50],
         motion: Motion::Free,
+        links: None,
     }];
     with_fracture(&mut cfg, 0.01);
     let mut solid = build(&cfg, 2, 1);

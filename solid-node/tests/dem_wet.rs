@@ -68,6 +68,7 @@ fn shape_config(shape: Shape, divisions: Vec<u32>, fracture: bool) -> SolidConfi
         shape,
         divisions,
         motion: Motion::Free,
+        links: None,
     }];
     if fracture {
         with_fracture(&mut cfg, 0.1);

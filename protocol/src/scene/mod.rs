@@ -31,8 +31,8 @@ pub use run::{
     DT_MIN_OF_T_END, DT_MIN_RELATIVE, Predictor, RecordLevel, Relaxation, RunConfig, SchemeName,
 };
 pub use solid::{
-    BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FractureConfig, Motion, ParticleSpec,
-    PrescribedConfig, PrescribedMotion, Shape, SolidConfig, SolidInit,
+    BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FractureConfig, LinksConfig, Motion,
+    ParticleSpec, PrescribedConfig, PrescribedMotion, Shape, SolidConfig, SolidInit,
 };
 
 use error::{Check, shorten_lines};

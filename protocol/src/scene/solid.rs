@@ -136,6 +136,42 @@ pub struct BodyConfig {
     /// Motion of the whole body (default free).
     #[serde(default)]
     pub motion: Motion,
+    /// Law of the links between the body's particles; absent: the elastic links of paper 003
+    /// App. A derived from `solid.young` and `solid.poisson`. Left out of the resolved scene
+    /// when absent, so a scene without it hashes as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub links: Option<LinksConfig>,
+}
+
+/// `links = { spring = K }` of a body: every link of the body is a linear spring between the
+/// two particle centres, energy `½ k (|d| − d⁰)²` (paper 003 §5.3, the thin shell), instead of
+/// the elastic link of App. A. The spring exerts no torque and the link has no shear or
+/// volumetric part, so a chain of such links is a discrete string: the particles' rotations are
+/// held only by `rotation`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinksConfig {
+    /// Axial stiffness k > 0 [N/m] (2-D: per unit depth, N/m per m).
+    pub spring: f64,
+    /// Stiffness c ≥ 0 of a rotational spring on the relative rotation of the two particles
+    /// \[N m/rad\] (default 0), energy `c (1 − cos(θ_J − θ_I))` in 2-D (in 3-D the same for a
+    /// rotation about any axis). It does not couple to the centre line (no beam bending); it keeps
+    /// the particles from spinning freely under fluid torques (fixed particles do not rotate).
+    #[serde(default)]
+    pub rotation: f64,
+}
+
+impl LinksConfig {
+    /// The first bad key as `(key, expected, found)`.
+    fn check(&self) -> Result<(), (&'static str, &'static str, f64)> {
+        if !(self.spring.is_finite() && self.spring > 0.0) {
+            return Err(("spring", "a finite number > 0 [N/m]", self.spring));
+        }
+        if !(self.rotation.is_finite() && self.rotation >= 0.0) {
+            return Err(("rotation", "a finite number >= 0 [N m/rad]", self.rotation));
+        }
+        Ok(())
+    }
 }
 
 /// A body's geometry.
@@ -393,6 +429,11 @@ impl SolidConfig {
             }
             if let Motion::Velocity(v) = &body.motion {
                 c.check_len(&format!("{base}.motion.velocity"), v)?;
+            }
+            if let Some(links) = &body.links {
+                links.check().map_err(|(key, expected, v)| {
+                    c.invalid(&format!("{base}.links.{key}"), expected, v.to_string())
+                })?;
             }
         }
         for (k, constraint) in solid.constraints.iter().enumerate() {

@@ -20,6 +20,7 @@ pub(crate) fn lattice(threads: usize) -> Solid {
             },
             divisions: vec![40, 20, 10],
             motion: Motion::Free,
+            links: None,
         }],
         constraints: vec![],
         init: vec![],

@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
-use protocol::scene::{BodyConfig, Motion, Shape};
+use protocol::scene::{BodyConfig, LinksConfig, Motion, Shape};
 
 use crate::dem::geometry::convex_hull_faces;
 
@@ -32,6 +32,8 @@ pub struct ParticleShape {
     pub faces: Vec<Vec<u32>>,
     /// Motion of its body.
     pub motion: Motion,
+    /// Link law of its body (`None`: the elastic links of paper 003 App. A).
+    pub links: Option<LinksConfig>,
 }
 
 /// Deduplicates vertices of one body by their exact quantised coordinates.
@@ -115,6 +117,7 @@ pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, Strin
                 body: body_idx as u32,
                 faces,
                 motion: body.motion.clone(),
+                links: body.links.clone(),
             });
         }
     }

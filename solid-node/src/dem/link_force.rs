@@ -188,3 +188,73 @@ pub fn link_force_2d(
         distance: dist,
     }
 }
+
+/// Axial part of a spring link: force on `i` and energy `½ k (|d| − D⁰)²`, `d = X_I − X_J`.
+#[inline]
+fn spring_axial(link: &LinkKernel, d: &Vector3<f64>) -> (Vector3<f64>, f64, f64) {
+    let dist = d.norm();
+    let stretch = dist - link.d0;
+    (
+        d * (-link.spring * stretch / dist),
+        0.5 * link.spring * stretch * stretch,
+        dist,
+    )
+}
+
+/// Force and torques of a 3-D spring link (`[[solid.bodies]] links`): the central spring
+/// `½ k (|d| − D⁰)²` exerts no torque; the rotational spring `Σ_k c_k (1 − Q_I a_k · Q_J a_k)`,
+/// `c_k = c/2`, is the flexion term of [`link_force_3d`] and gives `c (1 − cos φ)` for a
+/// relative rotation φ about any axis. No volumetric part (`gap` = 0).
+#[inline]
+pub fn spring_force_3d(
+    link: &LinkKernel,
+    xi: &Vector3<f64>,
+    qi: &Matrix3<f64>,
+    xj: &Vector3<f64>,
+    qj: &Matrix3<f64>,
+) -> LinkOut {
+    let (force_i, mut energy, dist) = spring_axial(link, &(xi - xj));
+    let mut torque_i = Vector3::zeros();
+    let mut torque_j = Vector3::zeros();
+    for k in 0..3 {
+        let a_i = qi * link.axes_i[k];
+        let a_j = qj * link.axes_j[k];
+        let t = a_i.cross(&a_j) * link.flex[k];
+        torque_i += t;
+        torque_j -= t;
+        energy += link.flex[k] * (1.0 - a_i.dot(&a_j));
+    }
+    LinkOut {
+        force_i,
+        torque_i,
+        torque_j,
+        energy,
+        gap: 0.0,
+        distance: dist,
+    }
+}
+
+/// Force and torques of a 2-D spring link: central spring plus `c (1 − cos(θ_J − θ_I))`,
+/// `c = flex[0] + flex[1]`, as in [`link_force_2d`].
+#[inline]
+pub fn spring_force_2d(
+    link: &LinkKernel,
+    xi: &Vector2<f64>,
+    ti: f64,
+    xj: &Vector2<f64>,
+    tj: f64,
+) -> LinkOut {
+    let d = xi - xj;
+    let (force_i, axial, dist) = spring_axial(link, &Vector3::new(d.x, d.y, 0.0));
+    let bend = link.flex[0] + link.flex[1];
+    let rel = tj - ti;
+    let flex_torque = bend * rel.sin();
+    LinkOut {
+        force_i,
+        torque_i: Vector3::new(0.0, 0.0, flex_torque),
+        torque_j: Vector3::new(0.0, 0.0, -flex_torque),
+        energy: axial + bend * (1.0 - rel.cos()),
+        gap: 0.0,
+        distance: dist,
+    }
+}

@@ -41,6 +41,10 @@
 //!   `elongation_at_break` as a fraction (000 writes it in percent).
 //! - A link of rest length h stands for the material between two particle centres: a clamp is
 //!   modelled by a fixed particle centred on it (`scenes/cantilever.toml`).
+//! - A body with `links = { spring = k, rotation = c }` (003 §5.3, the thin shell) has, instead,
+//!   linear springs between particle centres, `½ k (|d| − D⁰)² + c (1 − cos θ_rel)`: no shear,
+//!   no volumetric part, no torque from the spring, so a chain is a discrete string whose
+//!   transverse stiffness comes from its tension only ([`link_force::spring_force_2d`]).
 //!
 //! # Wet surface layout
 //!

@@ -80,6 +80,21 @@ pub struct Particle {
     pub vol_energy_coef: f64,
 }
 
+/// The law of a link.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LinkLaw {
+    /// The elastic link of paper 003 App. A (eq. (29)–(30)) from E and ν.
+    Elastic,
+    /// A linear spring between the particle centres, `½ k (|d| − D⁰)²`, plus a rotational
+    /// spring `c (1 − cos θ_rel)` on the relative rotation (`[[solid.bodies]] links`).
+    Spring {
+        /// Axial stiffness k \[N/m\].
+        k: f64,
+        /// Rotational stiffness c \[N m/rad\].
+        rotation: f64,
+    },
+}
+
 /// A link between two particles sharing a face.
 #[derive(Clone, Debug)]
 pub struct Link {
@@ -117,6 +132,8 @@ pub struct Link {
     pub axes_j: [Vector3<f64>; 3],
     /// Face of `i` and face of `j` on the contact surface.
     pub faces: [u32; 2],
+    /// Its law; a spring link has `k_shear = k_vol = 0` and `flex = [c/2; 3]`.
+    pub law: LinkLaw,
 }
 
 /// What the force kernels read of a link (hot data, copied from [`Link`] at build time so
@@ -127,8 +144,12 @@ pub struct LinkKernel {
     pub i: u32,
     /// Second particle.
     pub j: u32,
-    /// Contact surface S_IJ \[m²\].
+    /// Contact surface S_IJ \[m²\], the weight of the link in ε^v (0 for a spring link).
     pub area: f64,
+    /// Axial stiffness k of a spring link \[N/m\] (0: an elastic link).
+    pub spring: f64,
+    /// See [`Link::d0`].
+    pub d0: f64,
     /// See [`Link::k_shear`].
     pub k_shear: f64,
     /// See [`Link::k_vol`].
@@ -148,10 +169,16 @@ pub struct LinkKernel {
 impl LinkKernel {
     /// The hot part of `link`.
     pub fn from_link(link: &Link) -> Self {
+        let (area, spring) = match link.law {
+            LinkLaw::Elastic => (link.area, 0.0),
+            LinkLaw::Spring { k, .. } => (0.0, k),
+        };
         LinkKernel {
             i: link.i,
             j: link.j,
-            area: link.area,
+            area,
+            spring,
+            d0: link.d0,
             k_shear: link.k_shear,
             k_vol: link.k_vol,
             flex: link.flex,
@@ -379,6 +406,23 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                 base * ((3.0 + 2.0 * nu) * i_s - (1.0 + 2.0 * nu) * i_t),
                 base * ((3.0 + 2.0 * nu) * i_t - (1.0 + 2.0 * nu) * i_s),
             ];
+            let law = match &lattice.particles[i as usize].links {
+                None => LinkLaw::Elastic,
+                Some(l) => LinkLaw::Spring {
+                    k: l.spring,
+                    rotation: l.rotation,
+                },
+            };
+            let (k_shear, k_vol, flex) = match law {
+                LinkLaw::Elastic => (
+                    s / d0 * e / (1.0 + nu),
+                    // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
+                    0.5 * s * lambda,
+                    [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
+                ),
+                // Σ_k c/2 (1 − Q_I a_k · Q_J a_k) = c (1 − cos φ) for a relative rotation φ.
+                LinkLaw::Spring { rotation, .. } => (0.0, 0.0, [0.5 * rotation; 3]),
+            };
             let bi = |v: Vector3<f64>| pi.axes0.inverse_transform_vector(&v);
             let bj = |v: Vector3<f64>| pj.axes0.inverse_transform_vector(&v);
             let link_id = links.len() as u32;
@@ -394,15 +438,15 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                 s0: geo.s,
                 t0: geo.t,
                 i_st: [i_s, i_t],
-                k_shear: s / d0 * e / (1.0 + nu),
-                // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
-                k_vol: 0.5 * s * lambda,
-                flex: [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
+                k_shear,
+                k_vol,
+                flex,
                 r_i: bi(geo.centroid - pi.x0),
                 r_j: bj(geo.centroid - pj.x0),
                 axes_i: [bi(geo.normal), bi(geo.s), bi(geo.t)],
                 axes_j: [bj(geo.normal), bj(geo.s), bj(geo.t)],
                 faces: [fi, fj],
+                law,
             });
         }
         k = m;

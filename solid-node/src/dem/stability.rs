@@ -13,10 +13,15 @@
 //! - Flexion–torsion `c_k (1 − a_I·a_J) ≤ ½ c_k |δθ_I − δθ_J|² ≤ c_k (|δθ_I|² + |δθ_J|²)`.
 //!
 //! Summing, `ω_max² ≤ max_I 2 Σ_{J} [(k + k_v)(1/m_I + |r_I|²/I_min,I) + Σ_k |c_k| / I_min,I]`
-//! (Gershgorin-like, per particle). The bound is sharp for the shear–rotation mode of two equal
+//! (Gershgorin-like, per particle). A spring link (`[[solid.bodies]] links`) has no lever arm
+//! and no volumetric part: its Hessian is `k n nᵀ + k (1 − D⁰/D)(1 − n nᵀ)`, at most `k`, so it
+//! adds `2 k / m_I` (and `2 c / I_min,I` for its rotational spring), i.e. `ω = sqrt(2k/m)` per
+//! link; a chain particle with two springs gets `4k/m`, the exact `ω_max²` of a long chain.
+//!
+//! The bound is sharp for the shear–rotation mode of two equal
 //! particles without flexion and is conservative otherwise; `dt_limit = 2/ω_max`.
 
-use crate::dem::model::{Model, ParticleMotion};
+use crate::dem::model::{LinkLaw, Model, ParticleMotion};
 
 /// `(2/ω_max bound, particle that sets it)`; `(∞, 0)` without links.
 pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
@@ -25,7 +30,7 @@ pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
     // C_I = Σ_J S_IJ / (2 V'_I).
     let mut c_sum = vec![0.0; n];
     for (l, link) in model.links.iter().enumerate() {
-        if broken[l] {
+        if broken[l] || link.law != LinkLaw::Elastic {
             continue;
         }
         c_sum[link.i as usize] += link.area * model.particles[link.i as usize].vol_weight;
@@ -36,8 +41,14 @@ pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
         if broken[l] {
             continue;
         }
-        let k = link.k_shear
-            + 0.5 * lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]);
+        let (k, arms) = match link.law {
+            LinkLaw::Elastic => (
+                link.k_shear
+                    + 0.5 * lambda * link.area * (c_sum[link.i as usize] + c_sum[link.j as usize]),
+                1.0,
+            ),
+            LinkLaw::Spring { k, .. } => (k, 0.0),
+        };
         let flex = if model.dim == 3 {
             link.flex.iter().map(|c| c.abs()).sum::<f64>()
         } else {
@@ -50,11 +61,12 @@ pub fn elastic_limit(model: &Model, broken: &[bool]) -> (f64, u32) {
             } else {
                 part.inertia[0]
             };
-            let r2 = if model.dim == 3 {
-                r.norm_squared()
-            } else {
-                r.x * r.x + r.y * r.y
-            };
+            let r2 = arms
+                * if model.dim == 3 {
+                    r.norm_squared()
+                } else {
+                    r.x * r.x + r.y * r.y
+                };
             omega2[p as usize] += 2.0 * (k * (1.0 / part.mass + r2 / i_min) + flex / i_min);
         }
     }

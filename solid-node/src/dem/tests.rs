@@ -50,6 +50,7 @@ fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
             shape: Shape::Box { center, size },
             divisions,
             motion: Motion::Free,
+            links: None,
         }],
         constraints: vec![],
         init: vec![],
@@ -86,7 +87,11 @@ fn rotate_particle(solid: &mut Solid, dim: usize, p: usize, axis: usize, angle: 
 /// Forces and torques are the exact negative gradient of the elastic energy (eq. (29)–(30)
 /// read as in `link_force.rs`), ν ≠ 0 included, away from the rest state.
 fn check_gradient(dim: usize, divisions: Vec<u32>) {
-    let mut solid = Solid::from_scene(&box_config(dim, divisions, 0.3), dim, 1).unwrap();
+    check_gradient_of(&box_config(dim, divisions, 0.3), dim);
+}
+
+fn check_gradient_of(cfg: &SolidConfig, dim: usize) {
+    let mut solid = Solid::from_scene(cfg, dim, 1).unwrap();
     let mut seed = 0x9E37_79B9_7F4A_7C15u64;
     let n = solid.n_particles();
     for p in 0..n {
@@ -147,6 +152,20 @@ fn link_forces_are_the_energy_gradient_3d() {
 #[test]
 fn link_forces_are_the_energy_gradient_2d() {
     check_gradient(2, vec![3, 2]);
+}
+
+/// Spring links (`links = { spring, rotation }`): forces and torques are the gradient of
+/// `½ k (|d| − D⁰)² + c (1 − cos φ)`, with ν ≠ 0 (no volumetric part may leak in).
+#[test]
+fn spring_link_forces_are_the_energy_gradient() {
+    for (dim, divisions) in [(2, vec![3, 2]), (3, vec![3, 2, 2])] {
+        let mut cfg = box_config(dim, divisions, 0.3);
+        cfg.bodies[0].links = Some(protocol::scene::LinksConfig {
+            spring: 3e4,
+            rotation: 20.0,
+        });
+        check_gradient_of(&cfg, dim);
+    }
 }
 
 #[test]

@@ -32,6 +32,7 @@ pub fn box_config(
             shape: Shape::Box { center, size },
             divisions,
             motion: Motion::Free,
+            links: None,
         }],
         constraints: vec![],
         init: vec![],

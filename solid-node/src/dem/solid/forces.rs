@@ -3,7 +3,10 @@
 
 use nalgebra::{Matrix3, Vector2, Vector3};
 
-use crate::dem::link_force::{LinkOut, link_force_2d, link_force_3d, link_gap_2d, link_gap_3d};
+use crate::dem::link_force::{
+    LinkOut, link_force_2d, link_force_3d, link_gap_2d, link_gap_3d, spring_force_2d,
+    spring_force_3d,
+};
 use crate::dem::model::Model;
 use crate::dem::solid::{par_fill, quat};
 
@@ -51,10 +54,10 @@ pub(super) fn internal_forces(
     let with_volume = model.material.poisson != 0.0;
     if with_volume {
         par_fill(pool, gaps, |l| {
-            if broken[l] {
+            let link = &model.kernels[l];
+            if broken[l] || link.spring != 0.0 {
                 return 0.0;
             }
-            let link = &model.kernels[l];
             let (i, j) = (link.i as usize, link.j as usize);
             if dim == 3 {
                 link_gap_3d(
@@ -96,7 +99,25 @@ pub(super) fn internal_forces(
         } else {
             0.0
         };
-        if dim == 3 {
+        if link.spring != 0.0 {
+            if dim == 3 {
+                spring_force_3d(
+                    link,
+                    &Vector3::from(x[i]),
+                    &rotation[i],
+                    &Vector3::from(x[j]),
+                    &rotation[j],
+                )
+            } else {
+                spring_force_2d(
+                    link,
+                    &Vector2::new(x[i][0], x[i][1]),
+                    rot[i][0],
+                    &Vector2::new(x[j][0], x[j][1]),
+                    rot[j][0],
+                )
+            }
+        } else if dim == 3 {
             link_force_3d(
                 link,
                 &Vector3::from(x[i]),
