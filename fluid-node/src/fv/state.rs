@@ -31,7 +31,7 @@ pub struct FluidParams {
 }
 
 /// One side of the domain (mirror of `protocol::scene::Boundary`, kept serializable here).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum BoundaryKind {
     /// Reflecting slip wall: mirror ghosts, normal momentum negated.
     Wall,
@@ -39,14 +39,49 @@ pub enum BoundaryKind {
     Periodic,
     /// Zero-gradient outflow.
     Outflow,
+    /// Non-reflecting characteristic outflow relaxed toward the far-field pressure
+    /// (`sweep::characteristic_ghost`).
+    Characteristic {
+        /// Far-field pressure \[Pa\] the incoming characteristic relaxes toward.
+        p_far: f64,
+        /// Poinsot–Lele relaxation coefficient σ [-] (scenes: `sweep::CHARACTERISTIC_SIGMA`;
+        /// 0 gives the zero-gradient outflow).
+        sigma: f64,
+    },
 }
 
 impl From<Boundary> for BoundaryKind {
+    /// The scene's kind; a characteristic side gets σ = `CHARACTERISTIC_SIGMA` and
+    /// `p_far = 0` here, set from the initial state by [`from_scene`].
     fn from(b: Boundary) -> Self {
         match b {
             Boundary::Wall => BoundaryKind::Wall,
             Boundary::Periodic => BoundaryKind::Periodic,
             Boundary::Outflow => BoundaryKind::Outflow,
+            Boundary::Characteristic => BoundaryKind::Characteristic {
+                p_far: 0.0,
+                sigma: crate::fv::sweep::CHARACTERISTIC_SIGMA,
+            },
+        }
+    }
+}
+
+/// Sets the far-field pressure of every characteristic side to the mean initial pressure of
+/// the cells along that side (the layer of cells touching it), summed in index order.
+pub fn set_far_pressures(grid: &Grid, params: &mut FluidParams, state: &FluidState) {
+    for axis in 0..grid.dim {
+        for side in 0..2 {
+            if let BoundaryKind::Characteristic { p_far, .. } = &mut params.boundary[axis][side] {
+                let layer = if side == 0 { 0 } else { grid.cells[axis] - 1 };
+                let (mut sum, mut count) = (0.0, 0usize);
+                for idx in 0..grid.n_cells() {
+                    if grid.ijk(idx)[axis] == layer {
+                        sum += state.primitive(idx, params.gamma).2;
+                        count += 1;
+                    }
+                }
+                *p_far = sum / count.max(1) as f64;
+            }
         }
     }
 }
@@ -211,6 +246,8 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
                 );
             }
         }
+        let mut params = params;
+        set_far_pressures(&grid, &mut params, &state);
         return Ok((grid, params, state));
     }
     for idx in 0..grid.n_cells() {
@@ -227,5 +264,7 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
         vel[..entry.velocity.len()].copy_from_slice(&entry.velocity);
         state.set_primitive(idx, entry.rho, vel, entry.p, params.gamma);
     }
+    let mut params = params;
+    set_far_pressures(&grid, &mut params, &state);
     Ok((grid, params, state))
 }

@@ -102,6 +102,73 @@ fn from_local(s: &State, dim: usize, fr: &[Option<usize>; 3], cell: &mut [f64]) 
     cell[dim + 1] = s[4];
 }
 
+/// Poinsot–Lele relaxation coefficient σ a scene's characteristic outflow gets [-] (Poinsot & Lele
+/// 1992 use σ ≈ 0.25; Rudy & Strikwerda 1980 found 0.27 best): small enough that the side
+/// stays nearly non-reflecting, non-zero so that the mean pressure cannot drift away from
+/// the far field.
+pub const CHARACTERISTIC_SIGMA: f64 = 0.25;
+
+/// Ghost state of a characteristic outflow side, in the sweep frame, from the boundary cell
+/// `s`; `sigma` is the relaxation coefficient σ, `outward` the sign of the outward normal (−1 low side, +1 high side), `n` the cells
+/// along the axis (so the domain length is `L = n dx`).
+///
+/// Linearised about the boundary cell (ρ, u_n outward, p, c), the characteristic variables are
+/// `w± = p ± ρc u_n` (speeds `u_n ± c`), the entropy `ρ − p/c²` and the tangential velocities.
+/// Outgoing ones are extrapolated at zero order (ghost = cell). In subsonic outflow or inflow
+/// the incoming `w−` gets a jump `Δw = −σ (1 + M) (p − p_far) / n`: the Riemann problem at the
+/// boundary face then sends into the cell, per step, the pressure change of the LODI
+/// relaxation `L_in = K (p − p_far)` with `K = σ (1 − M²) c / L` (Poinsot & Lele 1992, eq. 40),
+/// since the incoming wave of speed `c − u_n` covers the fraction `(c − u_n) dt / dx` of the
+/// cell. `Δw = 0` (p = p_far) or `|u_n| ≥ c` give the cell itself, bit for bit; so does a
+/// non-physical or vacuum cell. With σ = 0 this is the zero-gradient outflow, which is already
+/// non-reflecting for waves leaving along the axis in this characteristic-wise scheme
+/// (LeVeque 2002 §7.3.1); the relaxation is what keeps the far-field pressure.
+#[inline]
+pub fn characteristic_ghost(
+    s: &State,
+    outward: f64,
+    p_far: f64,
+    sigma: f64,
+    gamma: f64,
+    n: usize,
+) -> State {
+    let rho = s[0];
+    if rho.is_nan() || rho <= 0.0 {
+        return *s;
+    }
+    let vel = [s[1] / rho, s[2] / rho, s[3] / rho];
+    let ke = 0.5 * rho * (vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2]);
+    let p = (gamma - 1.0) * (s[4] - ke);
+    if p.is_nan() || p <= 0.0 {
+        return *s;
+    }
+    let c = (gamma * p / rho).sqrt();
+    let un = outward * vel[0];
+    let mach = un / c;
+    if mach.is_nan() || mach.abs() >= 1.0 {
+        return *s;
+    }
+    let dw = -sigma * (1.0 + mach) * (p - p_far) / n as f64;
+    if dw == 0.0 {
+        return *s;
+    }
+    let p_g = p + 0.5 * dw;
+    let rho_g = rho + 0.5 * dw / (c * c);
+    let un_g = un - 0.5 * dw / (rho * c);
+    if !(p_g > 0.0 && rho_g > 0.0) {
+        return *s;
+    }
+    let v_g = [outward * un_g, vel[1], vel[2]];
+    let ke_g = 0.5 * rho_g * (v_g[0] * v_g[0] + v_g[1] * v_g[1] + v_g[2] * v_g[2]);
+    [
+        rho_g,
+        rho_g * v_g[0],
+        rho_g * v_g[1],
+        rho_g * v_g[2],
+        p_g / (gamma - 1.0) + ke_g,
+    ]
+}
+
 /// Fills the line of pencil `p` (interior and ghosts) from `u`.
 #[allow(clippy::too_many_arguments)]
 fn gather(
@@ -113,6 +180,7 @@ fn gather(
     ng: usize,
     fr: &[Option<usize>; 3],
     bc: [BoundaryKind; 2],
+    gamma: f64,
 ) {
     let dim = nvar - 2;
     let n = pencils.n;
@@ -125,17 +193,27 @@ fn gather(
         s[1] = -s[1];
         s
     };
+    let far = |side: usize, s: State, outward: f64| match bc[side] {
+        BoundaryKind::Characteristic { p_far, sigma } => {
+            characteristic_ghost(&s, outward, p_far, sigma, gamma, n)
+        }
+        _ => s,
+    };
+    let ghost_lo = far(0, line[ng], -1.0);
+    let ghost_hi = far(1, line[ng + n - 1], 1.0);
     for g in 0..ng {
         // Low side: ghost ng−1−g.
         line[ng - 1 - g] = match bc[0] {
             BoundaryKind::Periodic => line[ng + (n - 1 - g % n)],
             BoundaryKind::Outflow => line[ng],
+            BoundaryKind::Characteristic { .. } => ghost_lo,
             BoundaryKind::Wall => mirror(line[ng + g.min(n - 1)]),
         };
         // High side: ghost ng+n+g.
         line[ng + n + g] = match bc[1] {
             BoundaryKind::Periodic => line[ng + g % n],
             BoundaryKind::Outflow => line[ng + n - 1],
+            BoundaryKind::Characteristic { .. } => ghost_hi,
             BoundaryKind::Wall => mirror(line[ng + n - 1 - g.min(n - 1)]),
         };
     }
@@ -245,7 +323,17 @@ pub fn sweep_axis(
             line.resize(n, ng);
             for (k, rep) in rep_block.iter_mut().enumerate() {
                 let p = block * BLOCK_PENCILS + k;
-                gather(&mut line.u, u_in, nvar, &pencils, p, ng, &fr, bc);
+                gather(
+                    &mut line.u,
+                    u_in,
+                    nvar,
+                    &pencils,
+                    p,
+                    ng,
+                    &fr,
+                    bc,
+                    params.gamma,
+                );
                 let stats = advance_line(line, &setup);
                 let dst = &mut out_block[k * n * nvar..(k + 1) * n * nvar];
                 let base = pencils.base(p);

@@ -178,6 +178,11 @@ pub enum Boundary {
     Periodic,
     /// Zero-gradient outflow.
     Outflow,
+    /// Non-reflecting characteristic outflow (Thompson 1987 / Poinsot & Lele 1992, in ghost-cell
+    /// form): the outgoing characteristics are extrapolated, the incoming one is held with a
+    /// weak relaxation (`σ = 0.25`) toward the far-field pressure, which is the mean initial
+    /// pressure of the cells along that side.
+    Characteristic,
 }
 
 /// `fluid.vacuum`: below either threshold a cell is a vacuum cell.
