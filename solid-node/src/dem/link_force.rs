@@ -100,14 +100,7 @@ pub fn link_force_3d(
     let mut torque_i = p.cross(&arm_i);
     let mut torque_j = arm_j.cross(&p);
     let mut energy = 0.5 * link.k_shear * du.norm_squared();
-    for k in 0..3 {
-        let a_i = qi * link.axes_i[k];
-        let a_j = qj * link.axes_j[k];
-        let t = a_i.cross(&a_j) * link.flex[k];
-        torque_i += t;
-        torque_j -= t;
-        energy += link.flex[k] * (1.0 - a_i.dot(&a_j));
-    }
+    add_flexure_3d(link, qi, qj, &mut torque_i, &mut torque_j, &mut energy);
     LinkOut {
         force_i,
         torque_i,
@@ -216,14 +209,7 @@ pub fn spring_force_3d(
     let (force_i, mut energy, dist) = spring_axial(link, &(xi - xj));
     let mut torque_i = Vector3::zeros();
     let mut torque_j = Vector3::zeros();
-    for k in 0..3 {
-        let a_i = qi * link.axes_i[k];
-        let a_j = qj * link.axes_j[k];
-        let t = a_i.cross(&a_j) * link.flex[k];
-        torque_i += t;
-        torque_j -= t;
-        energy += link.flex[k] * (1.0 - a_i.dot(&a_j));
-    }
+    add_flexure_3d(link, qi, qj, &mut torque_i, &mut torque_j, &mut energy);
     LinkOut {
         force_i,
         torque_i,
@@ -256,5 +242,26 @@ pub fn spring_force_2d(
         energy: axial + bend * (1.0 - rel.cos()),
         gap: 0.0,
         distance: dist,
+    }
+}
+
+/// Adds the flexural-torsional part of a 3-D link (its axes' misalignment) to the torques and
+/// the energy, in place so the sums keep their order (the Monasse–Mariotti and spring links
+/// share it).
+fn add_flexure_3d(
+    link: &LinkKernel,
+    qi: &Matrix3<f64>,
+    qj: &Matrix3<f64>,
+    torque_i: &mut Vector3<f64>,
+    torque_j: &mut Vector3<f64>,
+    energy: &mut f64,
+) {
+    for k in 0..3 {
+        let a_i = qi * link.axes_i[k];
+        let a_j = qj * link.axes_j[k];
+        let t = a_i.cross(&a_j) * link.flex[k];
+        *torque_i += t;
+        *torque_j -= t;
+        *energy += link.flex[k] * (1.0 - a_i.dot(&a_j));
     }
 }
