@@ -153,3 +153,85 @@ fn the_fluid_keeps_the_surface_from_crossing_more_than_one_cell_per_step() {
         f64::INFINITY
     );
 }
+
+/// A wall thinner than two stencils between gases at rest at different pressures (50:1):
+/// each side keeps its own state exactly. The split sweeps cut their pencils at the wall, so
+/// no order-5 stencil on one side reads the gas on the other.
+/// `mid`: a point of the wall's mid-line and its normal towards the low-pressure side.
+fn thin_wall_keeps_two_gases_at_rest(wall: &[[f64; 2]], mid: ([f64; 2], [f64; 2])) {
+    let ((x0, y0), (nx, ny)) = ((mid.0[0], mid.0[1]), (mid.1[0], mid.1[1]));
+    let toml = format!(
+        r#"
+        name = "thin-wall"
+        [fluid]
+        flux = {{ scheme = "osmp", order = 5 }}
+        lower = [0.0, 0.0]
+        upper = [1.0, 1.0]
+        cells = [40, 40]
+        boundary = {{ x = ["wall", "wall"], y = ["wall", "wall"] }}
+        [[fluid.init]]
+        region = "all"
+        rho = 1.4
+        p = 1.0
+        [[fluid.init]]
+        region = {{ half_space = {{ point = [{x0}, {y0}], normal = [{nx}, {ny}] }} }}
+        rho = 70.0
+        p = 50.0
+    "#
+    );
+    let mut solver = solver(&toml);
+    let body = polygon_2d(wall, [0.0, 0.0], 0.0);
+    let mut embedded = Embedded::new(&solver, body.clone()).unwrap();
+    let thinnest = (0..solver.grid().cells[1])
+        .map(|j| {
+            (0..solver.grid().cells[0])
+                .filter(|&i| embedded.solid_fraction()[solver.grid().index(i, j, 0)] >= 1.0)
+                .count()
+        })
+        .min()
+        .unwrap();
+    assert!(
+        (1..6).contains(&thinnest),
+        "the wall is {thinnest} covered cells thick along x somewhere: not thin for order 5"
+    );
+    for n in 0..30 {
+        let dt = solver.max_dt();
+        step(&mut solver, &mut embedded, dt, body.clone(), n);
+    }
+    let lambda = embedded.solid_fraction();
+    let (mut du, mut dp) = (0.0f64, 0.0f64);
+    for (c, &l) in lambda.iter().enumerate() {
+        if l >= 1.0 {
+            continue;
+        }
+        let x = solver.grid().cell_center(solver.grid().ijk(c));
+        let left = (x[0] - x0) * nx + (x[1] - y0) * ny <= 0.0;
+        let p0 = if left { 50.0 } else { 1.0 };
+        let (_, u, p) = solver.primitive(c);
+        du = du.max(u[0].abs()).max(u[1].abs());
+        dp = dp.max((p - p0).abs() / p0);
+    }
+    println!("thin wall ({thinnest} cells): max |u| = {du:e}, max |p - p0| / p0 = {dp:e}");
+    // Round-off is ~2e-14; a stencil reaching through the wall gave 5e-12 (vertical wall) and
+    // a non-physical state (tilted wall).
+    assert!(du <= 1e-13, "max |u| = {du:e}");
+    assert!(dp <= 1e-13, "max |p - p0| / p0 = {dp:e}");
+}
+
+#[test]
+fn a_wall_one_cell_thick_keeps_two_gases_at_rest() {
+    // x in [0.4875, 0.5375] on 40 cells: one covered cell, two half cells.
+    thin_wall_keeps_two_gases_at_rest(
+        &[[0.4875, 0.0], [0.5375, 0.0], [0.5375, 1.0], [0.4875, 1.0]],
+        ([0.5125, 0.0], [1.0, 0.0]),
+    );
+}
+
+#[test]
+fn a_tilted_wall_two_cells_thick_keeps_two_gases_at_rest() {
+    // 0.06 wide along x (2.4 cells of 0.025), leaning by 0.1 over the height.
+    thin_wall_keeps_two_gases_at_rest(
+        &[[0.44, 0.0], [0.50, 0.0], [0.60, 1.0], [0.54, 1.0]],
+        ([0.47, 0.0], [1.0, -0.1]),
+    );
+}

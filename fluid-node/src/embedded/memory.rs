@@ -37,10 +37,11 @@ impl Embedded {
             + vec_bytes(&self.saved)
             + self.face_slots.iter().map(vec_bytes).sum::<usize>()
             + h.ghosts.iter().map(vec_bytes).sum::<usize>()
+            + h.walls.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&h.pressure_cells)
             + h.pressures.iter().map(vec_bytes).sum::<usize>()
             + h.taps.iter().map(tap_bytes).sum::<usize>()
-            + vec_bytes(&self.wall_velocity)
+            + vec_bytes(&self.near_walls)
             + vec_bytes(&self.content)
             + vec_bytes(&self.kind);
         let sparse_geometry = self.geom.memory_bytes() + self.trial.memory_bytes() - dense_geometry

@@ -51,7 +51,7 @@ use crate::cutcell::{
 };
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
-use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport};
+use crate::fv::{FluidSolver, GhostFill, SplitHooks, StepReport, Wall, WallRun};
 use crate::grid::Grid;
 
 pub use memory::EmbeddedMemory;
@@ -62,6 +62,13 @@ pub const NEAR_RADIUS: usize = 2;
 
 /// Fluid fraction under which a cut cell is mixed with a neighbour (paper 003 §2.3: Λ > 0.5).
 pub const MIX_BELOW: f64 = 0.5;
+
+/// Rings of neighbours a mixing group may take in when its mixture is not physical.
+pub const WIDEN_RINGS: usize = 2;
+
+/// Largest defect of identity (3) (solid-fraction change against swept volume) a cell may show,
+/// relative to its volume: round-off is ~1e-15.
+pub const SWEPT_TOLERANCE: f64 = 1e-10;
 
 /// A cell is covered (a ghost cell) when its solid fraction is at least `1 − COVERED_TOLERANCE`.
 pub const COVERED_TOLERANCE: f64 = 1e-12;
@@ -240,6 +247,10 @@ pub struct CorrectReport {
     pub uncovered_cells: usize,
     /// Energy the fluid received through the interface in this step \[J\].
     pub work_received: f64,
+    /// Mixing groups that had to take in neighbours to become physical.
+    pub widened_groups: usize,
+    /// Cells those groups took in.
+    pub widened_cells: usize,
     /// Largest round-off residue dropped from a covered cell (content per unit volume, any
     /// component; at most 1e-13 of that cell's state).
     pub dropped: f64,
@@ -274,8 +285,8 @@ pub struct Embedded {
     face_slots: [Vec<(u32, u32)>; 3],
     hooks: SplitHooks,
     budget: InterfaceBudget,
-    /// Wall velocity per near cell holding sub-faces of `F^n` (area-weighted), else zero.
-    wall_velocity: Vec<[f64; 3]>,
+    /// The wall in each near cell (sub-faces of `F^n`), for the ghost states.
+    near_walls: Vec<NearWall>,
     /// Scratch of the correct: content `(1 − Λ) U` per near cell and classification.
     content: Vec<[f64; NQ]>,
     kind: Vec<CellKind>,
@@ -291,6 +302,33 @@ enum CellKind {
     Updated,
     /// Updated by eq. (12), then mixed into a neighbour.
     Mixed,
+}
+
+/// The wet surface of `F^n` inside one near cell, as its ghost states see it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct NearWall {
+    /// Area of its sub-faces.
+    area: f64,
+    /// Area-averaged velocity of its sub-faces [m/s].
+    velocity: [f64; 3],
+    /// Per sweep axis `a`: `Σ A |ν_a| ν` over its sub-faces (unnormalised), the normal the sweep
+    /// along `a` sees: sub-faces parallel to the axis do not count, so a box's corner cell
+    /// shows each sweep the face across it.
+    normal: [[f64; 3]; 3],
+}
+
+impl NearWall {
+    /// The wall a sweep along `axis` sees; normal to the axis if no sub-face faces it.
+    fn along(&self, axis: usize) -> Wall {
+        let n = self.normal[axis];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let mut wall = Wall::at_rest(axis);
+        wall.velocity = self.velocity;
+        if len > 0.0 {
+            wall.normal = n.map(|x| x / len);
+        }
+        wall
+    }
 }
 
 impl Embedded {
@@ -319,7 +357,7 @@ impl Embedded {
             face_slots: Default::default(),
             hooks: SplitHooks::default(),
             budget: InterfaceBudget::default(),
-            wall_velocity: Vec::new(),
+            near_walls: Vec::new(),
             content: Vec::new(),
             kind: Vec::new(),
             last_loads: Loads::default(),
@@ -436,22 +474,25 @@ impl Embedded {
         for (k, &c) in self.near.iter().enumerate() {
             self.slot_of[c as usize] = k as u32 + 1;
         }
-        // Wall velocity of the near cells that hold sub-faces.
-        self.wall_velocity.clear();
-        self.wall_velocity.resize(self.near.len(), [0.0; 3]);
-        let mut area = vec![0.0; self.near.len()];
+        // The wall of the near cells that hold sub-faces.
+        self.near_walls.clear();
+        self.near_walls.resize(self.near.len(), NearWall::default());
         for s in &self.geom.subfaces {
             let k = self.slot_of[s.cell as usize] as usize - 1;
             let w = self.current.point_velocity(s.particle as usize, s.centroid);
+            let nw = &mut self.near_walls[k];
             for a in 0..3 {
-                self.wall_velocity[k][a] += s.area * w[a];
+                nw.velocity[a] += s.area * w[a];
+                for b in 0..3 {
+                    nw.normal[a][b] += s.area * s.normal[a].abs() * s.normal[b];
+                }
             }
-            area[k] += s.area;
+            nw.area += s.area;
         }
-        for (w, a) in self.wall_velocity.iter_mut().zip(&area) {
-            if *a > 0.0 {
-                for x in w.iter_mut() {
-                    *x /= a;
+        for nw in &mut self.near_walls {
+            if nw.area > 0.0 {
+                for x in nw.velocity.iter_mut() {
+                    *x /= nw.area;
                 }
             }
         }
@@ -493,6 +534,7 @@ impl Embedded {
         // Ghost fills per axis.
         for axis in 0..3 {
             self.hooks.ghosts[axis].clear();
+            self.hooks.walls[axis].clear();
         }
         for axis in 0..dim {
             self.ghost_fills(axis);
@@ -510,12 +552,27 @@ impl Embedded {
         }
     }
 
+    /// The ghost states of the covered near cells for the sweep along `axis`, and the walls
+    /// thinner than `2 ng` cells where that sweep cuts its pencils.
     fn ghost_fills(&mut self, axis: usize) {
         let grid = &self.grid;
         let lambda = &self.geom.solid_fraction;
         let n = grid.cells[axis] as isize;
         let ng = self.ng as isize;
         let fills = &mut self.hooks.ghosts[axis];
+        let walls = &mut self.hooks.walls[axis];
+        let stride: usize = grid.cells[..axis].iter().product();
+        // The wall seen along the axis from `fluid` beside the covered cell `covered`: the fluid
+        // cell's sub-faces, else the covered cell's, else a wall at rest normal to the axis.
+        let wall_seen = |fluid: usize, covered: usize| -> Wall {
+            [fluid, covered]
+                .into_iter()
+                .map(|c| self.slot_of[c] as usize)
+                .filter(|&k| k > 0)
+                .map(|k| &self.near_walls[k - 1])
+                .find(|w| w.area > 0.0)
+                .map_or(Wall::at_rest(axis), |w| w.along(axis))
+        };
         for &c in &self.near {
             let c = c as usize;
             if lambda[c] < 1.0 - COVERED_TOLERANCE {
@@ -542,24 +599,23 @@ impl Embedded {
                     len += 1;
                 }
                 let closed = len < 2 * ng && at(m0 + dir * len).is_some();
+                let wall = wall_seen(fluid, c);
+                if closed && dir == 1 {
+                    let far = at(m0 + len).expect("closed");
+                    let last = at(m0 + len - 1).expect("in the run");
+                    walls.push(WallRun {
+                        pencil: (c % stride + (c / (stride * n as usize)) * stride) as u32,
+                        lo: m0 as u32,
+                        hi: (m0 + len) as u32,
+                        walls: [wall, wall_seen(far, last)],
+                    });
+                }
                 let count = if closed {
                     if dir == 1 { (len + 1) / 2 } else { len / 2 }
                 } else {
                     len.min(ng)
                 }
                 .min(ng);
-                let wall = {
-                    let k = self.slot_of[fluid] as usize;
-                    let kc = self.slot_of[c] as usize;
-                    let w = if k > 0 && self.wall_velocity[k - 1] != [0.0; 3] {
-                        self.wall_velocity[k - 1]
-                    } else if kc > 0 {
-                        self.wall_velocity[kc - 1]
-                    } else {
-                        [0.0; 3]
-                    };
-                    w[axis]
-                };
                 let mut src = fluid;
                 for m in 0..count {
                     let dst = at(m0 + dir * m).expect("inside the run");
@@ -571,11 +627,12 @@ impl Embedded {
                     fills.push(GhostFill {
                         cell: dst as u32,
                         mirror_of: src as u32,
-                        wall_velocity: wall,
+                        wall,
                     });
                 }
             }
         }
+        walls.sort_unstable_by_key(|w| (w.pencil, w.lo));
     }
 
     fn pressure_of(&self, cell: u32, axis: usize) -> Option<f64> {
@@ -685,6 +742,7 @@ impl Embedded {
                 self.swept.n_skipped_subfaces
             ));
         }
+        self.check_swept(step)?;
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
         // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
@@ -886,6 +944,45 @@ impl Embedded {
         Ok(report)
     }
 
+    /// Identity (3) of the sub-face prisms, cell by cell: what they sweep in a near cell is the
+    /// change of its solid volume. It fails where Λ was clamped into `[0, 1]`, i.e. where the
+    /// accepted surface folds over itself (an element turned inside out): the swept amounts
+    /// would then create or destroy fluid.
+    fn check_swept(&mut self, step: u64) -> Result<(), String> {
+        let volume = self.grid.cell_volume();
+        let sums = &mut self.content;
+        sums.clear();
+        sums.resize(self.near.len(), [0.0; NQ]);
+        for e in &self.swept.entries {
+            match self.slot_of[e.cell as usize] {
+                0 => {
+                    return Err(format!(
+                        "step {step}: {}",
+                        self.outside_near("a swept prism", e.cell)
+                    ));
+                }
+                k => sums[k as usize - 1][0] += e.volume,
+            }
+        }
+        let (new, old) = (&self.trial.solid_fraction, &self.geom.solid_fraction);
+        for (k, &c) in self.near.iter().enumerate() {
+            let c = c as usize;
+            let defect = (new[c] - old[c]) * volume - sums[k][0];
+            if defect.abs() > SWEPT_TOLERANCE * volume {
+                let ijk = self.grid.ijk(c);
+                return Err(format!(
+                    "step {step}: the accepted wet surface folds over itself in cell {ijk:?} at {:?}: its solid fraction went from {} to {} but the swept prisms give {:+e} (a defect of {:e} of the cell; an element turned inside out, e.g. particles rotated too far relative to their neighbours)",
+                    self.grid.cell_center(ijk),
+                    old[c],
+                    new[c],
+                    sums[k][0] / volume,
+                    defect / volume
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Whether the state `content / alpha` is acceptable (see [`state_ok`]).
     fn physical(&self, content: &[f64; NQ], alpha: f64) -> bool {
         let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
@@ -1047,6 +1144,10 @@ impl Embedded {
             groups.push((root, k));
         }
         groups.sort_unstable();
+        let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
+        roots.dedup();
+        // Cells taken into a widened group (ascending).
+        let mut claimed: Vec<usize> = Vec::new();
         let u = &mut solver.state_mut().u;
         // Updated, unmixed cells: U = content / α.
         for (k, &c) in self.near.iter().enumerate() {
@@ -1100,6 +1201,70 @@ impl Embedded {
                     grid.ijk(root)
                 ));
             }
+            // NOTE: at high Mach numbers the internal energy is a small part of the total, and a
+            // small cell's content can hold less of it than its kinetic energy (a deficit the
+            // one target cannot cover). The group then takes in rings of free neighbours until
+            // the mixture is physical: conservative, and the mixture's internal energy is at
+            // least the sum of its members' (the kinetic energy of a sum of momenta is at most
+            // the sum of their kinetic energies), so each physical member helps.
+            let mut members: Vec<usize> = std::iter::once(root)
+                .chain(groups[i..j].iter().map(|g| self.near[g.1] as usize))
+                .collect();
+            members.sort_unstable();
+            members.dedup();
+            let mut extra: Vec<usize> = Vec::new();
+            let mut rings = 0;
+            while !self.physical(&sum, vol) && rings < WIDEN_RINGS {
+                rings += 1;
+                let mut ring: Vec<usize> = Vec::new();
+                for &c in members.iter().chain(&extra) {
+                    let ijk = grid.ijk(c);
+                    for d in &span {
+                        let Some(q) = shifted(grid, ijk, *d) else {
+                            continue;
+                        };
+                        let q = grid.index(q[0], q[1], q[2]);
+                        if alpha(q) > COVERED_TOLERANCE
+                            && old_lambda[q] < 1.0 - COVERED_TOLERANCE
+                            && is_source(q).is_none()
+                            && roots.binary_search(&q).is_err()
+                            && claimed.binary_search(&q).is_err()
+                            && members.binary_search(&q).is_err()
+                            && !extra.contains(&q)
+                        {
+                            ring.push(q);
+                        }
+                    }
+                }
+                ring.sort_unstable();
+                ring.dedup();
+                if ring.is_empty() {
+                    break;
+                }
+                for &q in &ring {
+                    let kq = self.slot_of[q] as usize;
+                    if kq > 0 && self.kind[kq - 1] != CellKind::Predicted {
+                        for x in 0..nvar {
+                            sum[x] += self.content[kq - 1][x];
+                        }
+                    } else {
+                        let a = alpha(q);
+                        for x in 0..nvar {
+                            sum[x] += a * u[q * nvar + x];
+                        }
+                    }
+                    vol += alpha(q);
+                }
+                extra.extend_from_slice(&ring);
+            }
+            if !extra.is_empty() {
+                report.widened_groups += 1;
+                report.widened_cells += extra.len();
+                for &q in &extra {
+                    let pos = claimed.partition_point(|&x| x < q);
+                    claimed.insert(pos, q);
+                }
+            }
             for q in 0..nvar {
                 u[root * nvar + q] = sum[q] / vol;
             }
@@ -1112,6 +1277,15 @@ impl Embedded {
                 }
                 self.kind[g.1] = CellKind::Mixed;
                 mixed += 1;
+            }
+            for &c in &extra {
+                for q in 0..nvar {
+                    u[c * nvar + q] = sum[q] / vol;
+                }
+                let k = self.slot_of[c] as usize;
+                if k > 0 {
+                    self.kind[k - 1] = CellKind::Mixed;
+                }
             }
             if root_k > 0 {
                 self.kind[root_k - 1] = CellKind::Updated;

@@ -118,6 +118,11 @@ pub struct LineScratch {
     kind: Vec<FaceFlux>,
     left: Vec<State>,
     right: Vec<State>,
+    /// A whole pencil's input, states and faces while its segments are updated one by one
+    /// (pencils cut at thin walls, `sweep.rs`).
+    pub(crate) pencil: Vec<State>,
+    pub(crate) pencil_new: Vec<State>,
+    pub(crate) pencil_face: Vec<State>,
 }
 
 /// What the cells of a line give the interfaces: primitives and their Roe-average sides.

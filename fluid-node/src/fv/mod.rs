@@ -81,4 +81,4 @@ pub use solver::{
     FluidSolver, GhostFill, SplitHooks, StepReport, Totals, Trouble, TroubleKind, sweep_order,
 };
 pub use state::{BoundaryKind, FluidParams, FluidState, from_scene};
-pub use sweep::FaceTap;
+pub use sweep::{FaceTap, Wall, WallRun, mirror};

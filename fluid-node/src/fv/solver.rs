@@ -10,7 +10,10 @@ use protocol::scene::FluidConfig;
 use crate::fv::euler::{NQ, Primitive, sound_speed};
 use crate::fv::line::{FluxKind, LineScratch, state_ok};
 use crate::fv::state::{FluidParams, FluidState, from_scene};
-use crate::fv::sweep::{FaceTap, PencilOut, Pencils, pencil_to_cells, sweep_axis};
+use crate::fv::sweep::{
+    FaceTap, PencilOut, Pencils, Wall, WallRun, frame, from_local, mirror, pencil_to_cells,
+    sweep_axis, to_local,
+};
 use crate::grid::Grid;
 use crate::memory::vec_bytes;
 
@@ -105,17 +108,17 @@ impl StepReport {
     }
 }
 
-/// A ghost state written into a cell the solid covers before a sweep: the state of a fluid cell
-/// mirrored about the wall along the sweep axis, relative to the wall (paper 003 §2.3, numerics
-/// §2.6: `ρ, p` and the tangential velocity kept, `u_axis → 2 w_axis − u_axis`).
+/// A ghost state written into a cell the solid covers before a sweep: the state of the fluid
+/// cell at the mirror position along the sweep line, its velocity reflected about the wall
+/// relative to the wall's (paper 003 §2.3, numerics §2.6; see [`mirror`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GhostFill {
     /// The covered cell written.
     pub cell: u32,
     /// The fluid cell mirrored into it.
     pub mirror_of: u32,
-    /// Wall velocity along the sweep axis [m/s].
-    pub wall_velocity: f64,
+    /// The wall between them (storage axes).
+    pub wall: Wall,
 }
 
 /// What a coupled step asks of the split sweeps besides the update (paper 003 §3.4 step 1):
@@ -133,6 +136,9 @@ pub struct SplitHooks {
     pub pressures: [Vec<f64>; 3],
     /// Per axis: the faces whose fluxes are kept.
     pub taps: [FaceTap; 3],
+    /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
+    /// by pencil and position.
+    pub walls: [Vec<WallRun>; 3],
 }
 
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
@@ -460,9 +466,14 @@ impl FluidSolver {
             let params = &self.params;
             let (u, buffer) = (&self.state.u, &mut self.buffer);
             let (scratch, pencil_out) = (&self.scratch, &mut self.pencil_out);
-            let tap = hooks.as_mut().map(|(h, _)| &mut h.taps[axis]);
+            let (tap, walls) = match hooks.as_mut() {
+                Some((h, _)) => (Some(&mut h.taps[axis]), &h.walls[axis][..]),
+                None => (None, &[][..]),
+            };
             self.pool.install(|| {
-                sweep_axis(grid, params, axis, dt, u, buffer, scratch, pencil_out, tap);
+                sweep_axis(
+                    grid, params, axis, dt, u, buffer, scratch, pencil_out, tap, walls,
+                );
             });
             if axis == 0 {
                 std::mem::swap(&mut self.state.u, &mut self.buffer);
@@ -528,21 +539,13 @@ impl FluidSolver {
     pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
+        let fr = frame(dim, axis);
         for g in fills {
             let src = g.mirror_of as usize * nvar;
-            let mut cell = [0.0; NQ];
-            cell[..nvar].copy_from_slice(&self.state.u[src..src + nvar]);
-            let rho = cell[0];
-            let m = cell[1 + axis];
-            if rho > 0.0 {
-                let mirrored = rho * 2.0 * g.wall_velocity - m;
-                cell[1 + axis] = mirrored;
-                cell[dim + 1] += 0.5 * (mirrored * mirrored - m * m) / rho;
-            } else {
-                cell[1 + axis] = -m;
-            }
+            let local = to_local(&self.state.u[src..src + nvar], dim, &fr);
+            let ghost = mirror(&local, &g.wall.in_frame(&fr));
             let dst = g.cell as usize * nvar;
-            self.state.u[dst..dst + nvar].copy_from_slice(&cell[..nvar]);
+            from_local(&ghost, dim, &fr, &mut self.state.u[dst..dst + nvar]);
         }
     }
 

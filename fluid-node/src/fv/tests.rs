@@ -310,3 +310,40 @@ fn branch_free_minmod_is_minmod() {
     }
     assert_eq!(checked, values.len().pow(4));
 }
+
+#[test]
+fn a_mirror_state_reverses_the_velocity_normal_to_the_wall_only() {
+    use crate::fv::sweep::{Wall, mirror};
+    let gamma = 1.4;
+    let w = Primitive {
+        rho: 1.3,
+        vel: [0.7, -1.9, 0.4],
+        p: 2.5,
+    };
+    let s = conserved(&w, gamma);
+    let len = (0.36f64 + 0.64 + 0.25).sqrt();
+    let wall = Wall {
+        velocity: [0.2, 0.1, -0.3],
+        normal: [0.6 / len, 0.8 / len, -0.5 / len],
+    };
+    let g = primitive(&mirror(&s, &wall), gamma);
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let rel = |v: [f64; 3]| std::array::from_fn(|a| v[a] - wall.velocity[a]);
+    let (r0, r1) = (rel(w.vel), rel(g.vel));
+    assert_eq!(g.rho, w.rho);
+    assert!((g.p - w.p).abs() <= 1e-14 * w.p, "p {} -> {}", w.p, g.p);
+    let (n0, n1) = (dot(r0, wall.normal), dot(r1, wall.normal));
+    assert!((n0 + n1).abs() <= 1e-14, "normal {n0} -> {n1}");
+    for a in 0..3 {
+        let (t0, t1) = (r0[a] - n0 * wall.normal[a], r1[a] - n1 * wall.normal[a]);
+        assert!((t0 - t1).abs() <= 1e-14, "tangential {a}: {t0} -> {t1}");
+    }
+    // A wall normal to the sweep axis: `m → 2 ρ w − m` exactly, as along the sweep line.
+    let axis = Wall {
+        velocity: [0.2, 5.0, 5.0],
+        normal: [-1.0, 0.0, 0.0],
+    };
+    let g = mirror(&s, &axis);
+    assert_eq!(g[1], s[0] * 2.0 * 0.2 - s[1]);
+    assert_eq!([g[0], g[2], g[3]], [s[0], s[2], s[3]]);
+}
