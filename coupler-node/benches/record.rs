@@ -30,8 +30,9 @@ fn frame(len: usize) -> Vec<u8> {
 fn record<W: std::io::Write + std::io::Seek>(writer: W, frame: &[u8]) -> W {
     let mut rec = Recorder::new(writer, RecordLevel::Exchange, "bench", "").expect("recorder");
     for i in 0..FRAMES_PER_ITER {
-        let step = (i / 4) as u64;
-        rec.record_frame(NodeKind::Fluid, NodeKind::Coupler, step, 0, frame)
+        // Steps of 1 µs of simulated time.
+        let t = (i / 4) as f64 * 1e-6;
+        rec.record_frame(NodeKind::Fluid, NodeKind::Coupler, t, 0, frame)
             .expect("record");
         if i % 4 == 3 {
             rec.end_step().expect("end step");

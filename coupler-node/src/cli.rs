@@ -68,16 +68,20 @@ pub enum Command {
         #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
         timeout_s: Duration,
     },
-    /// List the steps of a record, export one step's arrays, or recover a killed run's file.
+    /// List the steps of a record, export one step's arrays, export every number as one tidy
+    /// CSV table, or recover a killed run's file.
     Inspect {
         /// The record.
         file: PathBuf,
-        /// Step to export.
+        /// Step to export (`--export json` needs it; `--export csv` without it exports every
+        /// step).
         #[arg(long)]
         step: Option<u64>,
-        /// Export format: `json` or `csv`.
-        #[arg(long, default_value = "json")]
-        export: String,
+        /// Export format: `json` (one step's messages) or `csv` (one tidy table,
+        /// `step,iteration,channel,field,index,value`, one row per number). Default with
+        /// `--step`: json.
+        #[arg(long)]
+        export: Option<String>,
         /// Rewrite a killed or damaged record into FILE.recovered.mcap: keeps every chunk that
         /// verifies, says what it dropped, and lists the recovered record.
         #[arg(long)]
@@ -317,16 +321,26 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     )
                 })?
             };
-            match step {
-                Some(step) => {
-                    let format = match export.as_str() {
-                        "json" => crate::inspect::ExportFormat::Json,
-                        "csv" => crate::inspect::ExportFormat::Csv,
-                        other => anyhow::bail!("--export {other:?}: expected json or csv"),
-                    };
+            let format = match export.as_deref() {
+                None => None,
+                Some("json") => Some(crate::inspect::ExportFormat::Json),
+                Some("csv") => Some(crate::inspect::ExportFormat::Csv),
+                Some(other) => anyhow::bail!("--export {other:?}: expected json or csv"),
+            };
+            match (step, format) {
+                (Some(step), format) => {
+                    let format = format.unwrap_or(crate::inspect::ExportFormat::Json);
                     print!("{}", crate::inspect::export_step(&rec, step, format)?);
                 }
-                None => {
+                (None, Some(crate::inspect::ExportFormat::Csv)) => {
+                    print!("{}", crate::inspect::export_table(&rec, None)?);
+                }
+                (None, Some(crate::inspect::ExportFormat::Json)) => {
+                    anyhow::bail!(
+                        "--export json exports one step: add --step N (--export csv without --step exports them all)"
+                    )
+                }
+                (None, None) => {
                     if !recover && let Some(end) = crate::inspect::describe_end(&rec.end) {
                         eprintln!(
                             "coupler-node: {}: {end}; --recover rewrites it whole",

@@ -1,7 +1,7 @@
 //! `coupler-node replay FILE --step N --node coupler`: re-run the coupler's state machine on the
 //! recorded node messages and compare every frame it sends with the record.
 //!
-//! The coupler resumes from its nearest checkpoint at or before step N (`checkpoint/coupler`:
+//! The coupler resumes from its nearest checkpoint at or before step N (`/checkpoint/coupler`:
 //! the accepted states the predictors extrapolate, IQN-ILS's columns, the ledger), or starts
 //! fresh at the greeting when there is none. From there every recorded node → coupler frame and
 //! node checkpoint is fed to it in file order, and each frame it sends (and each checkpoint of
@@ -56,7 +56,7 @@ pub fn replay(rec: &Recording, scene: &Scene, step: u64) -> anyhow::Result<Outco
     let frames: Vec<(Leg, u64, &[u8])> = rec
         .messages
         .iter()
-        .filter_map(|m| Some((leg(&m.topic)?, m.log_time, m.data.as_slice())))
+        .filter_map(|m| Some((leg(&m.topic)?, m.step, m.data.as_slice())))
         .collect();
     let last_step = frames
         .iter()
@@ -81,14 +81,14 @@ pub fn replay(rec: &Recording, scene: &Scene, step: u64) -> anyhow::Result<Outco
             let checkpoint = match codec::decode(frame) {
                 Ok((_, Message::Checkpoint(c))) if c.node == NodeKind::Coupler => c,
                 Ok((_, other)) => {
-                    anyhow::bail!("checkpoint/coupler of step {s} holds a {:?}", other.kind())
+                    anyhow::bail!("/checkpoint/coupler of step {s} holds a {:?}", other.kind())
                 }
-                Err(e) => anyhow::bail!("checkpoint/coupler of step {s} does not decode: {e}"),
+                Err(e) => anyhow::bail!("/checkpoint/coupler of step {s} does not decode: {e}"),
             };
             let state: CouplerCheckpoint = codec::decode_blob(&checkpoint.bytes)
-                .map_err(|e| anyhow::anyhow!("checkpoint/coupler of step {s}: {e}"))?;
+                .map_err(|e| anyhow::anyhow!("/checkpoint/coupler of step {s}: {e}"))?;
             let coupler = Coupler::restore(cfg, &state)
-                .map_err(|e| anyhow::anyhow!("checkpoint/coupler of step {s}: {e}"))?;
+                .map_err(|e| anyhow::anyhow!("/checkpoint/coupler of step {s}: {e}"))?;
             (coupler, at + 1, *s)
         }
         None => (Coupler::new(cfg), 0, 0),
@@ -137,7 +137,7 @@ pub fn replay(rec: &Recording, scene: &Scene, step: u64) -> anyhow::Result<Outco
                 )));
             };
             let channel = match to {
-                Leg::Own => "checkpoint/coupler",
+                Leg::Own => "/checkpoint/coupler",
                 Leg::Out(node) => record::frame_topic(NodeKind::Coupler, node).unwrap_or("?"),
                 Leg::In(_) => unreachable!("only frames the coupler sends are compared"),
             };

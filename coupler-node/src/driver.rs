@@ -14,16 +14,20 @@ use protocol::transport::{Transport, TransportError};
 use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
 use serde::Serialize;
 
+use crate::ledger::LedgerEntry;
+use crate::record::Diagnostics;
 use crate::scheme::{Action, Coupler, Finish, StepReport};
 
-/// Where the loop writes what it sees.
+/// Where the loop writes what it sees. `t` is the simulated time a message belongs to \[s\]
+/// (a frame's: the start of its step; diagnostics: the end of the step), a function of the
+/// run; `wall_ns` the wall clock.
 pub trait RecordSink {
     /// A frame that crossed the coupler (`from` → `to`), as bytes.
     fn frame(
         &mut self,
         from: NodeKind,
         to: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), String>;
@@ -31,12 +35,17 @@ pub trait RecordSink {
     fn checkpoint(
         &mut self,
         node: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), String>;
     /// One step's diagnostics as a JSON object.
-    fn diagnostics(&mut self, step: u64, wall_ns: u64, json: &[u8]) -> Result<(), String>;
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String>;
+    /// The ledger entry of an accepted step, before its `end_step` (`ledger.csv`); the
+    /// default keeps nothing.
+    fn ledger(&mut self, _entry: &LedgerEntry) -> Result<(), String> {
+        Ok(())
+    }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), String>;
 }
@@ -45,13 +54,13 @@ pub trait RecordSink {
 pub struct NoRecord;
 
 impl RecordSink for NoRecord {
-    fn frame(&mut self, _: NodeKind, _: NodeKind, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn frame(&mut self, _: NodeKind, _: NodeKind, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
         Ok(())
     }
-    fn checkpoint(&mut self, _: NodeKind, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn checkpoint(&mut self, _: NodeKind, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
         Ok(())
     }
-    fn diagnostics(&mut self, _: u64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
         Ok(())
     }
     fn end_step(&mut self) -> Result<(), String> {
@@ -76,16 +85,9 @@ pub struct DriverConfig {
     pub dt_min: Option<f64>,
 }
 
-/// Busy seconds per role.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct Busy {
-    /// Waiting for the fluid's answers (its compute time plus transport).
-    pub fluid: f64,
-    /// Waiting for the solid's answers.
-    pub solid: f64,
-    /// The coupler's own work (state machine, encoding, recording).
-    pub coupler: f64,
-}
+/// Busy seconds per role: `fluid` and `solid` the waits for their answers (compute plus
+/// transport), `coupler` its own work (state machine, encoding, recording).
+pub type Busy = crate::record::BusySeconds;
 
 /// Iteration statistics.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -242,16 +244,22 @@ pub fn drive(
             }) = &err
             {
                 // The failed step's diagnostics, so the record shows its residual history too.
-                let json = serde_json::to_vec(&serde_json::json!({
-                    "step": step,
-                    "t": t,
-                    "iterations": iterations,
-                    "residuals": residuals,
-                    "converged": false,
-                }))
+                let json = serde_json::to_vec(&Diagnostics {
+                    step: *step,
+                    t: *t,
+                    dt: coupler
+                        .planned_end()
+                        .map_or(0.0, |end| end - coupler.time()),
+                    iterations: *iterations,
+                    residuals: residuals.clone(),
+                    converged: false,
+                    busy_s: busy.clone(),
+                    ..Diagnostics::default()
+                })
                 .expect("diagnostics serialize");
-                let _ = sink.diagnostics(*step, wall_ns(), &json);
+                let _ = sink.diagnostics(*t, wall_ns(), &json);
             }
+            let t = coupler.time();
             for node in [NodeKind::Fluid, NodeKind::Solid] {
                 let present = match node {
                     NodeKind::Fluid => coupler.config().fluid,
@@ -265,7 +273,7 @@ pub fn drive(
                             reason: ShutdownReason::Failure(reason.clone()),
                         }),
                     );
-                    let _ = sink.frame(NodeKind::Coupler, node, stamp.step, wall_ns(), &frame);
+                    let _ = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame);
                     let _ = transport.send(node, &frame);
                 }
             }
@@ -296,23 +304,31 @@ pub fn drive(
     (summary, error)
 }
 
-/// Diagnostics of one step as written to the record (topic `diagnostics`).
-#[derive(Serialize)]
-struct Diagnostics<'a> {
-    step: u64,
-    t: f64,
-    dt: f64,
-    limiter: &'a str,
-    iterations: u32,
-    residuals: &'a [f64],
-    relaxation: &'a [f64],
-    columns: &'a [u32],
-    columns_dropped: u32,
-    predicted: bool,
-    converged: bool,
-    output: Option<u32>,
-    ledger: &'a crate::ledger::LedgerEntry,
-    busy_s: &'a Busy,
+/// The start time of each step the loop has seen \[s\], so that a frame's log time is the
+/// start of *its* step (from its stamp), whatever step the coupler is at when it arrives: a
+/// node may answer for step n + 1 before the other node's totals close step n.
+#[derive(Default)]
+struct StepStarts(std::collections::BTreeMap<u64, f64>);
+
+impl StepStarts {
+    /// Notes what the coupler knows: the start of its current step and, once the step size is
+    /// agreed, the start of the next.
+    fn observe(&mut self, coupler: &Coupler) {
+        self.0.insert(coupler.step(), coupler.time());
+        if let Some(end) = coupler.planned_end() {
+            self.0.insert(coupler.step() + 1, end);
+        }
+        // Only the last few steps are ever asked for.
+        while self.0.len() > 8 {
+            self.0.pop_first();
+        }
+    }
+
+    /// Start time of `step`; a step the loop has not seen (a frame from a confused node, which
+    /// the coupler then refuses) gets the latest known.
+    fn of(&self, step: u64, coupler: &Coupler) -> f64 {
+        self.0.get(&step).copied().unwrap_or_else(|| coupler.time())
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -332,7 +348,9 @@ fn drive_inner(
     let mut out = Vec::new();
     // The smallest step the nodes proposed for step 0, for the default `run.dt_min`.
     let mut first_proposal = f64::INFINITY;
+    let mut starts = StepStarts::default();
     loop {
+        starts.observe(coupler);
         let waiting_since = Instant::now();
         let (from, frame) = loop {
             if let Some(reason) = abort.check() {
@@ -372,10 +390,11 @@ fn drive_inner(
             Err(source) => return Err(DriverError::Decode { from, source }),
         };
         let now = wall_ns();
+        let t = starts.of(header.stamp.step, coupler);
         let record = if header.kind == MessageKind::Checkpoint {
-            sink.checkpoint(from, header.stamp.step, now, &frame)
+            sink.checkpoint(from, t, now, &frame)
         } else {
-            sink.frame(from, NodeKind::Coupler, header.stamp.step, now, &frame)
+            sink.frame(from, NodeKind::Coupler, t, now, &frame)
         };
         record.map_err(DriverError::Record)?;
         if let Message::DtProposal(p) = &msg
@@ -386,19 +405,21 @@ fn drive_inner(
             first_proposal = first_proposal.min(p.dt_max);
         }
         let actions = coupler.on_message(from, msg)?;
+        starts.observe(coupler);
         for action in actions {
             match action {
                 Action::Send(to, msg) => {
                     codec::encode_into(NodeKind::Coupler, &msg, &mut out);
-                    sink.frame(NodeKind::Coupler, to, msg.stamp().step, wall_ns(), &out)
+                    let t = starts.of(msg.stamp().step, coupler);
+                    sink.frame(NodeKind::Coupler, to, t, wall_ns(), &out)
                         .map_err(DriverError::Record)?;
                     transport.send(to, &out)?;
                 }
                 Action::Checkpoint(_) => {}
                 Action::CouplerCheckpoint(c) => {
-                    let step = c.stamp.step;
+                    let t = starts.of(c.stamp.step, coupler);
                     codec::encode_into(NodeKind::Coupler, &Message::Checkpoint(c), &mut out);
-                    sink.checkpoint(NodeKind::Coupler, step, wall_ns(), &out)
+                    sink.checkpoint(NodeKind::Coupler, t, wall_ns(), &out)
                         .map_err(DriverError::Record)?;
                 }
                 Action::StepDone(report) => {
@@ -407,21 +428,22 @@ fn drive_inner(
                         step: report.step,
                         t: report.t,
                         dt: report.dt,
-                        limiter: &report.limiter,
+                        limiter: report.limiter.clone(),
                         iterations: report.iterations,
-                        residuals: &report.residuals,
-                        relaxation: &report.relaxation,
-                        columns: &report.columns,
+                        residuals: report.residuals.clone(),
+                        relaxation: report.relaxation.clone(),
+                        columns: report.columns.clone(),
                         columns_dropped: report.columns_dropped,
                         predicted: report.predicted,
                         converged: true,
                         output: report.output,
-                        ledger: &report.ledger,
-                        busy_s: busy,
+                        ledger: Some(report.ledger.clone()),
+                        busy_s: busy.clone(),
                     })
                     .expect("diagnostics serialize");
-                    sink.diagnostics(report.step, wall_ns(), &json)
+                    sink.diagnostics(report.t, wall_ns(), &json)
                         .map_err(DriverError::Record)?;
+                    sink.ledger(&report.ledger).map_err(DriverError::Record)?;
                     sink.end_step().map_err(DriverError::Record)?;
                     progress.update(&report);
                     if let Some(k) = report.output {

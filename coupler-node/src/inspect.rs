@@ -1,5 +1,6 @@
-//! `coupler-node inspect`: pure functions over a [`Recording`]: a table of the recorded steps
-//! and a dump of the arrays exchanged at one step (JSON or CSV).
+//! `coupler-node inspect`: pure functions over a [`Recording`]: a table of the recorded steps,
+//! a dump of the arrays exchanged at one step (JSON), and a tidy CSV table of every number in
+//! the record or one step ([`export_table`]).
 //!
 //! Step data come from the diagnostics JSON messages (see [`crate::record`]); a step without
 //! them (level `exchange` runs cut short, older files) falls back to decoding the bincode frames
@@ -21,10 +22,13 @@ use crate::record::{DIAGNOSTICS_TOPIC, RecordError, Recorded, Recording};
 pub enum ExportFormat {
     /// One JSON document: `{"step": n, "messages": [{topic, sequence, kind, ...fields}]}`.
     Json,
-    /// One section per message: a `# topic ...` comment line, a `field,index,value` header
-    /// line, then one row per array element (scalars have index 0).
+    /// One tidy table ([`export_table`]): header `step,iteration,channel,field,index,value`,
+    /// one row per numeric scalar.
     Csv,
 }
+
+/// Header of the tidy table of [`export_table`].
+pub const TABLE_HEADER: &str = "step,iteration,channel,field,index,value";
 
 /// What is known about one step.
 #[derive(Default)]
@@ -35,6 +39,7 @@ struct StepRow {
     residuals: Vec<f64>,
     ledger: BTreeMap<String, f64>,
     from_diagnostics: bool,
+    converged: bool,
 }
 
 /// A table of the recorded steps: step, t, dt, iterations, residual history and ledger totals.
@@ -42,12 +47,9 @@ pub fn list_steps(rec: &Recording) -> Result<String, RecordError> {
     let mut rows: BTreeMap<u64, StepRow> = BTreeMap::new();
     for m in rec.topic(DIAGNOSTICS_TOPIC) {
         let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
-        let step = value
-            .get("step")
-            .and_then(Value::as_u64)
-            .unwrap_or(m.log_time);
-        let row = rows.entry(step).or_default();
+        let row = rows.entry(m.step).or_default();
         row.from_diagnostics = true;
+        row.converged = value.get("converged").and_then(Value::as_bool) == Some(true);
         row.t = value.get("t").and_then(Value::as_f64);
         row.dt = value.get("dt").and_then(Value::as_f64);
         row.iterations = value.get("iterations").and_then(Value::as_u64);
@@ -67,10 +69,16 @@ pub fn list_steps(rec: &Recording) -> Result<String, RecordError> {
     // Fallback: decode the frames of steps the diagnostics do not cover.
     for m in rec.messages.iter().filter(|m| is_frame_topic(&m.topic)) {
         let (_, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
-        let row = rows.entry(m.log_time).or_default();
-        if row.from_diagnostics {
+        // Only the messages of a step that started: a hello, the proposals of the step after
+        // the last one, or the shutdown make no row (the count is the run's `steps`).
+        if !matches!(
+            msg,
+            Message::StepPlan(_) | Message::FixedPointDecision(_) | Message::ConservedTotals(_)
+        ) || rows.get(&m.step).is_some_and(|r| r.from_diagnostics)
+        {
             continue;
         }
+        let row = rows.entry(m.step).or_default();
         match msg {
             Message::StepPlan(plan) => {
                 row.t = Some(plan.t);
@@ -124,10 +132,22 @@ pub fn list_steps(rec: &Recording) -> Result<String, RecordError> {
         )
         .expect("writing to a String");
     }
+    // Completed: the steps whose diagnostics say so (as many as the run's `summary.steps`);
+    // a record without diagnostics counts the steps it lists.
+    let completed = if rows.values().any(|r| r.from_diagnostics) {
+        rows.values().filter(|r| r.converged).count()
+    } else {
+        rows.len()
+    };
+    let others = rows.len() - completed;
     writeln!(
         out,
-        "{} steps, {} messages{}",
-        rows.len(),
+        "{completed} steps completed{}, {} messages{}",
+        if others > 0 {
+            format!(" ({others} more listed: started, failed or without diagnostics)")
+        } else {
+            String::new()
+        },
         rec.messages.len(),
         match describe_end(&rec.end) {
             Some(end) => format!(" ({end})"),
@@ -162,23 +182,18 @@ pub fn describe_end(end: &End) -> Option<String> {
 }
 
 /// Dumps what was exchanged at `step`: every recorded frame (decoded) and diagnostics message
-/// whose log time is `step`.
+/// of that coupling step.
 pub fn export_step(
     rec: &Recording,
     step: u64,
     format: ExportFormat,
 ) -> Result<String, RecordError> {
-    let at_step: Vec<&Recorded> = rec.messages.iter().filter(|m| m.log_time == step).collect();
+    let at_step: Vec<&Recorded> = rec.messages.iter().filter(|m| m.step == step).collect();
     if at_step.is_empty() {
-        let mut steps: Vec<u64> = rec.messages.iter().map(|m| m.log_time).collect();
-        steps.sort_unstable();
-        steps.dedup();
-        return Err(RecordError::NoSuchStep {
-            step,
-            n_steps: steps.len(),
-            first: steps.first().copied().unwrap_or(0),
-            last: steps.last().copied().unwrap_or(0),
-        });
+        return Err(no_such_step(rec, step));
+    }
+    if format == ExportFormat::Csv {
+        return table(&at_step);
     }
     let mut entries = Vec::new();
     for m in at_step {
@@ -212,22 +227,102 @@ pub fn export_step(
                 reason: e.to_string(),
             })
         }
-        ExportFormat::Csv => {
-            let mut out = String::new();
-            for entry in &entries {
-                writeln!(
-                    out,
-                    "# topic={} sequence={} kind={} step={step}",
-                    entry["topic"].as_str().unwrap_or(""),
-                    entry["sequence"],
-                    entry["kind"].as_str().unwrap_or(""),
-                )
-                .expect("writing to a String");
-                out.push_str("field,index,value\n");
-                csv_rows(&mut out, "", &entry["fields"]);
-                out.push('\n');
+        ExportFormat::Csv => unreachable!("handled above"),
+    }
+}
+
+fn no_such_step(rec: &Recording, step: u64) -> RecordError {
+    let mut steps: Vec<u64> = rec.messages.iter().map(|m| m.step).collect();
+    steps.sort_unstable();
+    steps.dedup();
+    RecordError::NoSuchStep {
+        step,
+        n_steps: steps.len(),
+        first: steps.first().copied().unwrap_or(0),
+        last: steps.last().copied().unwrap_or(0),
+    }
+}
+
+/// The whole record (or one step of it) as one tidy table that `numpy.genfromtxt(names=True)`
+/// or any CSV reader loads: header [`TABLE_HEADER`], then one row per numeric scalar of every
+/// frame and diagnostics message, in record order.
+///
+/// - `step`: the coupling step; `iteration`: the frame's fixed-point iteration (0 for the
+///   diagnostics, one message per step);
+/// - `channel`: the topic (`/fluid-to-coupler`, `/diagnostics`, ...);
+/// - `field`: the field's path, nested names joined with `.` (`surface.vertices`,
+///   `ledger.fluid_mass`), elements of arrays of objects as `name[i]`;
+/// - `index`: the element of an array field (0 for a scalar); `value`: the number (booleans as
+///   1 and 0). Strings (limiter, sender, reasons) and checkpoint bytes are left out: the JSON
+///   export has them.
+pub fn export_table(rec: &Recording, step: Option<u64>) -> Result<String, RecordError> {
+    let messages: Vec<&Recorded> = rec
+        .messages
+        .iter()
+        .filter(|m| step.is_none_or(|s| m.step == s))
+        .collect();
+    if let Some(step) = step
+        && messages.is_empty()
+    {
+        return Err(no_such_step(rec, step));
+    }
+    table(&messages)
+}
+
+fn table(messages: &[&Recorded]) -> Result<String, RecordError> {
+    let mut out = String::from(TABLE_HEADER);
+    out.push('\n');
+    for m in messages {
+        let (iteration, fields) = if m.topic == DIAGNOSTICS_TOPIC {
+            let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
+            (0, value)
+        } else if is_frame_topic(&m.topic) {
+            let (header, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
+            let fields = message_fields(&msg).map_err(|e| decode_err(m, e))?;
+            (header.stamp.iteration, fields)
+        } else {
+            continue;
+        };
+        let prefix = format!("{},{iteration},{}", m.step, m.topic);
+        table_rows(&mut out, &prefix, "", &fields);
+    }
+    Ok(out)
+}
+
+/// Appends `prefix,field,index,value` rows for the numeric scalars in `value`.
+fn table_rows(out: &mut String, prefix: &str, name: &str, value: &Value) {
+    let number = |v: &Value| match v {
+        Value::Number(n) => Some(n.to_string()),
+        Value::Bool(b) => Some(u8::from(*b).to_string()),
+        _ => None,
+    };
+    match value {
+        Value::Object(map) => {
+            for (key, v) in map {
+                let child = if name.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{name}.{key}")
+                };
+                table_rows(out, prefix, &child, v);
             }
-            Ok(out)
+        }
+        Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
+            for (i, v) in items.iter().enumerate() {
+                if let Some(x) = number(v) {
+                    writeln!(out, "{prefix},{name},{i},{x}").expect("writing to a String");
+                }
+            }
+        }
+        Value::Array(items) => {
+            for (i, v) in items.iter().enumerate() {
+                table_rows(out, prefix, &format!("{name}[{i}]"), v);
+            }
+        }
+        scalar => {
+            if let Some(x) = number(scalar) {
+                writeln!(out, "{prefix},{name},0,{x}").expect("writing to a String");
+            }
         }
     }
 }
@@ -249,44 +344,6 @@ fn message_fields(msg: &Message) -> Result<Value, serde_json::Error> {
     Ok(fields)
 }
 
-/// Flattens a JSON value into `field,index,value` rows (nested objects join names with `.`).
-fn csv_rows(out: &mut String, name: &str, value: &Value) {
-    match value {
-        Value::Object(map) => {
-            for (key, v) in map {
-                let child = if name.is_empty() {
-                    key.clone()
-                } else {
-                    format!("{name}.{key}")
-                };
-                csv_rows(out, &child, v);
-            }
-        }
-        Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
-            for (i, v) in items.iter().enumerate() {
-                writeln!(out, "{name},{i},{}", csv_scalar(v)).expect("writing to a String");
-            }
-        }
-        Value::Array(items) => {
-            for (i, v) in items.iter().enumerate() {
-                csv_rows(out, &format!("{name}[{i}]"), v);
-            }
-        }
-        scalar => writeln!(out, "{name},0,{}", csv_scalar(scalar)).expect("writing to a String"),
-    }
-}
-
-fn csv_scalar(value: &Value) -> String {
-    match value {
-        Value::String(s) if s.contains([',', '"', '\n']) => {
-            format!("\"{}\"", s.replace('"', "\"\""))
-        }
-        Value::String(s) => s.clone(),
-        Value::Null => String::new(),
-        other => other.to_string(),
-    }
-}
-
 fn is_frame_topic(topic: &str) -> bool {
     topic != DIAGNOSTICS_TOPIC
 }
@@ -298,7 +355,7 @@ fn opt<T>(value: Option<T>, show: impl Fn(T) -> String) -> String {
 fn decode_err(m: &Recorded, err: impl std::fmt::Display) -> RecordError {
     RecordError::Decode {
         topic: m.topic.clone(),
-        step: m.log_time,
+        step: m.step,
         reason: err.to_string(),
     }
 }

@@ -24,9 +24,9 @@ use protocol::scene::{RecordLevel, Scene};
 use protocol::transport::{Transport, TransportError};
 use protocol::wire::NodeKind;
 
-use crate::driver::{self, Abort, DriverConfig, NoRecord, RecordSink, Summary};
+use crate::driver::{self, Abort, DriverConfig, RecordSink, Summary};
 use crate::scheme::{Coupler, CouplerConfig};
-use crate::sink::FileSink;
+use crate::sink::{FileSink, LedgerCsv, RunSink};
 
 /// Options of `coupler-node run`.
 #[derive(Clone, Debug)]
@@ -237,15 +237,15 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let supervisor = Supervisor::start(children, abort.clone(), hung_up.clone())?;
 
     let record_path = opts.out.join("exchange.mcap");
-    let mut file_sink = match scene.run.record {
+    let file_sink = match scene.run.record {
         RecordLevel::None => None,
         level => Some(FileSink::create(&record_path, level, &scene)?),
     };
-    let mut no_record = NoRecord;
-    let sink: &mut dyn RecordSink = match file_sink.as_mut() {
-        Some(s) => s,
-        None => &mut no_record,
+    let mut run_sink = RunSink {
+        record: file_sink,
+        ledger: LedgerCsv::create(&opts.out.join("ledger.csv"))?,
     };
+    let sink: &mut dyn RecordSink = &mut run_sink;
     let cfg = CouplerConfig::from_scene(&scene);
     let mut coupler = match resume {
         Some(resume) => Coupler::resuming(cfg, resume).map_err(|e| anyhow::anyhow!(e))?,
@@ -260,7 +260,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     };
     let transport: &mut dyn Transport = &mut bus;
     let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);
-    let finished = file_sink.as_mut().map_or(Ok(()), FileSink::finish);
+    let finished = run_sink.record.as_mut().map_or(Ok(()), FileSink::finish);
     let exits = supervisor.stop(Duration::from_secs(2));
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);

@@ -11,9 +11,11 @@ use protocol::wire::ConservedTotals;
 use serde::{Deserialize, Serialize};
 
 /// One step's balance.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LedgerEntry {
-    /// Step just completed.
+    /// The step just completed, counted from 0 as everywhere else (the `step` of the
+    /// diagnostics and of the frames' stamps): the entry of the n-th step has `step` n − 1.
+    /// The initial balance, taken before step 0, also has `step` 0 and is not recorded.
     pub step: u64,
     /// Time at its end \[s\].
     pub t: f64,
@@ -21,8 +23,12 @@ pub struct LedgerEntry {
     pub fluid_mass: f64,
     /// Fluid total energy \[J\].
     pub fluid_energy: f64,
-    /// Solid kinetic + elastic energy \[J\].
+    /// Solid kinetic + potential (elastic, contact, gravity) energy \[J\].
     pub solid_energy: f64,
+    /// Kinetic part of `solid_energy` (translation + rotation) \[J\].
+    pub solid_kinetic: f64,
+    /// Energy dissipated by the solid's broken links \[J\].
+    pub solid_dissipated: f64,
     /// Energy dissipated by broken links \[J\].
     pub dissipated: f64,
     /// |mass now − mass at start| / mass at start (0 when there is no mass).
@@ -38,6 +44,34 @@ pub struct LedgerEntry {
     pub work_solid: f64,
     /// Links broken so far.
     pub links_broken: u64,
+}
+
+/// Header line of `ledger.csv` (DESIGN §7), without the newline.
+pub const CSV_HEADER: &str = "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,\
+solid_dissipated,interface_work,mass_rel_err,energy_rel_err";
+
+impl LedgerEntry {
+    /// The entry as one `ledger.csv` row (with its newline), in the columns of [`CSV_HEADER`]:
+    /// `solid_elastic` is the potential part of the solid's energy (`solid_energy` −
+    /// `solid_kinetic`: elastic links, contacts, gravity), `interface_work` the work the solid
+    /// received through the interface (`work_solid`; the fluid's side is `work_fluid` in the
+    /// diagnostics). Numbers print in Rust's shortest round-trip form, so they parse back to
+    /// the same bits.
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+            self.t,
+            self.step,
+            self.fluid_mass,
+            self.fluid_energy,
+            self.solid_kinetic,
+            self.solid_energy - self.solid_kinetic,
+            self.solid_dissipated,
+            self.work_solid,
+            self.mass_rel_err,
+            self.energy_rel_err
+        )
+    }
 }
 
 /// Running ledger.
@@ -113,6 +147,8 @@ impl Ledger {
             fluid_mass: fluid.map_or(0.0, |f| f.mass),
             fluid_energy: fluid.map_or(0.0, |f| f.energy),
             solid_energy: solid.map_or(0.0, |s| s.energy),
+            solid_kinetic: solid.map_or(0.0, |s| s.kinetic),
+            solid_dissipated: solid.map_or(0.0, |s| s.dissipated),
             dissipated: fluid.map_or(0.0, |f| f.dissipated) + solid.map_or(0.0, |s| s.dissipated),
             mass_rel_err,
             energy_rel_err,
@@ -145,6 +181,7 @@ mod tests {
             boundary_mass_out: out_m,
             boundary_energy_out: out_e,
             links_broken: 0,
+            kinetic: 0.0,
             energy_scale: energy.abs(),
         }
     }
@@ -163,6 +200,35 @@ mod tests {
             "{}",
             e.energy_rel_err
         );
+    }
+
+    #[test]
+    fn a_csv_row_has_the_header_columns_and_parses_back_to_the_same_bits() {
+        let mut ledger = Ledger::default();
+        let mut s = totals(NodeKind::Solid, 3.0, 7.25, 0.0, 0.0);
+        s.kinetic = 1.0 / 3.0;
+        s.dissipated = 0.125;
+        s.interface_work = -2.5e-7;
+        s.t = 1.1e-4;
+        let mut f = totals(NodeKind::Fluid, 2.0, 10.0, 0.0, 0.0);
+        f.t = s.t;
+        let e = ledger.update(4, Some(&f), Some(&s));
+        let row = e.csv_row();
+        let cells: Vec<&str> = row.trim_end().split(',').collect();
+        let names: Vec<&str> = CSV_HEADER.split(',').collect();
+        assert_eq!(cells.len(), names.len(), "{row}");
+        let value = |name: &str| -> f64 {
+            let i = names.iter().position(|n| *n == name).expect(name);
+            cells[i].parse().expect(name)
+        };
+        assert_eq!(value("step"), 4.0);
+        assert_eq!(value("t").to_bits(), 1.1e-4_f64.to_bits());
+        assert_eq!(value("solid_kinetic").to_bits(), (1.0_f64 / 3.0).to_bits());
+        // Potential = total − kinetic, to the rounding of one subtraction.
+        assert!((value("solid_elastic") - (7.25 - 1.0 / 3.0)).abs() <= 1e-15 * 7.25);
+        assert_eq!(value("solid_dissipated"), 0.125);
+        assert_eq!(value("interface_work"), -2.5e-7);
+        assert_eq!(value("fluid_mass"), 2.0);
     }
 
     #[test]

@@ -75,7 +75,7 @@ fn script(rec: &Recording, node: NodeKind) -> Vec<(Dir, u64, Vec<u8>)> {
             } else {
                 return None;
             };
-            Some((dir, m.log_time, m.data.clone()))
+            Some((dir, m.step, m.data.clone()))
         })
         .collect()
 }

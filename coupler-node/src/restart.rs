@@ -35,10 +35,10 @@ pub fn load(file: &Path, step: u64, scene: &Scene) -> anyhow::Result<Resume> {
     );
     let checkpoint = |node: NodeKind| -> anyhow::Result<Checkpoint> {
         let topic = record::checkpoint_topic(node).expect("every node has a checkpoint topic");
-        let Some(m) = rec.topic(topic).find(|m| m.log_time == step) else {
+        let Some(m) = rec.topic(topic).find(|m| m.step == step) else {
             let steps: Vec<u64> = rec
                 .topic(record::checkpoint_topic(NodeKind::Coupler).expect("a topic"))
-                .map(|m| m.log_time)
+                .map(|m| m.step)
                 .collect();
             anyhow::bail!(
                 "{}: the record has no {topic} at that step (steps with a coupler checkpoint: {steps:?}; `run.checkpoint_every` sets them)",
@@ -55,7 +55,7 @@ pub fn load(file: &Path, step: u64, scene: &Scene) -> anyhow::Result<Resume> {
     };
     let own = checkpoint(NodeKind::Coupler)?;
     let coupler: CouplerCheckpoint = codec::decode_blob(&own.bytes)
-        .map_err(|e| anyhow::anyhow!("{}: checkpoint/coupler: {e}", what()))?;
+        .map_err(|e| anyhow::anyhow!("{}: /checkpoint/coupler: {e}", what()))?;
     let mut nodes = Vec::new();
     for (node, present) in [
         (NodeKind::Fluid, scene.fluid.is_some()),

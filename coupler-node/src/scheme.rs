@@ -439,6 +439,14 @@ impl Coupler {
         self.t
     }
 
+    /// Time at the end of the current step once its size is agreed \[s\] (`None` before).
+    pub fn planned_end(&self) -> Option<f64> {
+        self.plan.as_ref().map(|(dt, output, _)| match output {
+            Some(k) => self.cfg.outputs[*k as usize],
+            None => self.t + dt,
+        })
+    }
+
     /// The ledger so far.
     pub fn ledger(&self) -> &Ledger {
         &self.ledger
@@ -932,12 +940,9 @@ impl Coupler {
     ) -> Result<(), CouplerError> {
         let fluid = got.iter().find(|t| t.node == NodeKind::Fluid);
         let solid = got.iter().find(|t| t.node == NodeKind::Solid);
-        let entry = self.ledger.update(self.step + 1, fluid, solid);
+        let entry = self.ledger.update(self.step, fluid, solid);
+        let t_end_of_step = self.planned_end().expect("a plan precedes the totals");
         let (dt, output, limiter) = self.plan.take().expect("a plan precedes the totals");
-        let t_end_of_step = match output {
-            Some(k) => self.cfg.outputs[k as usize],
-            None => self.t + dt,
-        };
         let iterations = self.residuals.len() as u32;
         let account = self.acceleration.take_account();
         self.iteration_total += u64::from(iterations);

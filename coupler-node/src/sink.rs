@@ -1,4 +1,5 @@
-//! The MCAP recorder as the driver's [`RecordSink`], writing `exchange.mcap`.
+//! The run's files the loop writes as it goes: the MCAP record `exchange.mcap` and the
+//! conservation history `ledger.csv`, both durable at the end of every step.
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -9,6 +10,7 @@ use protocol::scene::{RecordLevel, Scene};
 use protocol::wire::NodeKind;
 
 use crate::driver::RecordSink;
+use crate::ledger::{CSV_HEADER, LedgerEntry};
 use crate::record::Recorder;
 
 /// A recorder writing to a file.
@@ -51,7 +53,7 @@ impl RecordSink for FileSink {
         &mut self,
         from: NodeKind,
         to: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), String> {
@@ -59,14 +61,14 @@ impl RecordSink for FileSink {
             return Ok(());
         }
         self.recorder()?
-            .record_frame(from, to, step, wall_ns, frame)
+            .record_frame(from, to, t, wall_ns, frame)
             .map_err(|e| e.to_string())
     }
 
     fn checkpoint(
         &mut self,
         node: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), String> {
@@ -74,17 +76,100 @@ impl RecordSink for FileSink {
             return Ok(());
         }
         self.recorder()?
-            .record_checkpoint(node, step, wall_ns, frame)
+            .record_checkpoint(node, t, wall_ns, frame)
             .map_err(|e| e.to_string())
     }
 
-    fn diagnostics(&mut self, step: u64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
         self.recorder()?
-            .record_diagnostics(step, wall_ns, json)
+            .record_diagnostics(t, wall_ns, json)
             .map_err(|e| e.to_string())
     }
 
     fn end_step(&mut self) -> Result<(), String> {
         self.recorder()?.end_step().map_err(|e| e.to_string())
+    }
+}
+
+/// `ledger.csv`: one row per accepted step ([`LedgerEntry::csv_row`]), each written whole with
+/// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
+pub struct LedgerCsv {
+    file: File,
+    path: std::path::PathBuf,
+}
+
+impl LedgerCsv {
+    /// Creates `path` and writes the header line.
+    pub fn create(path: &Path) -> anyhow::Result<LedgerCsv> {
+        use std::io::Write;
+        let mut file =
+            File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        file.write_all(format!("{CSV_HEADER}\n").as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        Ok(LedgerCsv {
+            file,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Appends the row of one step.
+    pub fn row(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+        use std::io::Write;
+        self.file
+            .write_all(entry.csv_row().as_bytes())
+            .map_err(|e| format!("writing {}: {e}", self.path.display()))
+    }
+}
+
+/// What `coupler-node run` writes as it goes: the record (none at level `none`) and
+/// `ledger.csv` (always).
+pub struct RunSink {
+    /// The MCAP record.
+    pub record: Option<FileSink>,
+    /// The conservation history.
+    pub ledger: LedgerCsv,
+}
+
+impl RunSink {
+    fn record(&mut self) -> Option<&mut FileSink> {
+        self.record.as_mut()
+    }
+}
+
+impl RecordSink for RunSink {
+    fn frame(
+        &mut self,
+        from: NodeKind,
+        to: NodeKind,
+        t: f64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String> {
+        self.record()
+            .map_or(Ok(()), |r| r.frame(from, to, t, wall_ns, frame))
+    }
+
+    fn checkpoint(
+        &mut self,
+        node: NodeKind,
+        t: f64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String> {
+        self.record()
+            .map_or(Ok(()), |r| r.checkpoint(node, t, wall_ns, frame))
+    }
+
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
+        self.record()
+            .map_or(Ok(()), |r| r.diagnostics(t, wall_ns, json))
+    }
+
+    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+        self.ledger.row(entry)
+    }
+
+    fn end_step(&mut self) -> Result<(), String> {
+        self.record().map_or(Ok(()), |r| r.end_step())
     }
 }

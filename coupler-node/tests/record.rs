@@ -7,9 +7,11 @@ use std::cell::RefCell;
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::rc::Rc;
 
-use coupler_node::inspect::{ExportFormat, export_step, list_steps};
+use coupler_node::inspect::{ExportFormat, TABLE_HEADER, export_step, export_table, list_steps};
+use coupler_node::ledger::LedgerEntry;
 use coupler_node::record::{
-    DIAGNOSTICS_TOPIC, Diagnostics, RecordError, Recorder, Recording, read_recording, recover,
+    DIAGNOSTICS_TOPIC, Diagnostics, RecordError, Recorder, Recording, diagnostics_schema,
+    read_recording, recover,
 };
 use proptest::prelude::*;
 use protocol::codec;
@@ -103,8 +105,14 @@ fn record_step<W: Write + Seek>(
         ));
     }
     for (from, to, frame) in &frames {
-        rec.record_frame(*from, *to, step, 1_700_000_000_000_000_000 + step, frame)
-            .unwrap();
+        rec.record_frame(
+            *from,
+            *to,
+            step_start(step),
+            1_700_000_000_000_000_000 + step,
+            frame,
+        )
+        .unwrap();
     }
     if step.is_multiple_of(2) {
         let cp = Message::Checkpoint(Checkpoint {
@@ -114,7 +122,7 @@ fn record_step<W: Write + Seek>(
         });
         rec.record_checkpoint(
             NodeKind::Fluid,
-            step,
+            step_start(step),
             0,
             &codec::encode(NodeKind::Fluid, &cp),
         )
@@ -127,15 +135,16 @@ fn record_step<W: Write + Seek>(
         iterations: 2,
         residuals,
         converged: true,
-        ledger: [
-            ("mass_rel_err".to_string(), 1e-15),
-            ("fluid_mass".to_string(), 1.5),
-        ]
-        .into_iter()
-        .collect(),
+        ledger: Some(LedgerEntry {
+            step,
+            t: step_start(step + 1),
+            mass_rel_err: 1e-15,
+            fluid_mass: 1.5,
+            ..LedgerEntry::default()
+        }),
         ..Diagnostics::default()
     };
-    rec.record_diagnostics(step, 0, &serde_json::to_vec(&diag).unwrap())
+    rec.record_diagnostics(step_start(step + 1), 0, &serde_json::to_vec(&diag).unwrap())
         .unwrap();
     frames
 }
@@ -190,7 +199,12 @@ fn record_run_with_snapshots(n_steps: u64, level: RecordLevel) -> (Vec<u8>, Fram
 }
 
 fn frame_topic(from: NodeKind, to: NodeKind) -> String {
-    format!("{from}-to-{to}")
+    format!("/{from}-to-{to}")
+}
+
+/// Start time of `step` in these records \[s\]: steps of 1 ms.
+fn step_start(step: u64) -> f64 {
+    step as f64 * 1e-3
 }
 
 #[test]
@@ -216,13 +230,26 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
         assert_eq!(got.topic, frame_topic(*from, *to));
         assert_eq!(&got.data, frame);
         let (header, _) = codec::decode(&got.data).unwrap();
-        assert_eq!(got.log_time, header.stamp.step);
+        // The step comes from the payload; the log time is the step's start in ns (1 ms steps).
+        assert_eq!(got.step, header.stamp.step);
+        assert_eq!(got.log_time, header.stamp.step * 1_000_000);
+        assert_eq!(
+            got.publish_time,
+            1_700_000_000_000_000_000 + header.stamp.step
+        );
     }
     // Sequence numbers count per channel from 0.
-    let seqs: Vec<u32> = rec.topic("coupler-to-fluid").map(|m| m.sequence).collect();
+    let seqs: Vec<u32> = rec.topic("/coupler-to-fluid").map(|m| m.sequence).collect();
     assert_eq!(seqs, (0..seqs.len() as u32).collect::<Vec<_>>());
-    assert_eq!(rec.topic("checkpoint/fluid").count(), 2);
-    assert_eq!(rec.topic(DIAGNOSTICS_TOPIC).count(), 3);
+    assert_eq!(rec.topic("/checkpoint/fluid").count(), 2);
+    // Diagnostics: the step from the JSON, the log time the step's end.
+    let diag: Vec<(u64, u64)> = rec
+        .topic(DIAGNOSTICS_TOPIC)
+        .map(|m| (m.step, m.log_time))
+        .collect();
+    assert_eq!(diag, [(0, 1_000_000), (1, 2_000_000), (2, 3_000_000)]);
+    assert!(rec.messages.iter().all(|m| m.topic.starts_with('/')));
+    assert_eq!(rec.metadata["run"]["record_layout"], "2");
     assert_eq!(rec.metadata["scene"]["toml"], SCENE);
     assert_eq!(rec.metadata["scene"]["name"], "unit-scene");
     assert_eq!(
@@ -360,7 +387,7 @@ fn a_file_cut_after_a_step_reads_up_to_that_step_and_recovers() {
         let expected: Vec<_> = complete
             .messages
             .iter()
-            .filter(|m| m.log_time < steps_done)
+            .filter(|m| m.step < steps_done)
             .cloned()
             .collect();
         let frames_expected: usize = per_step[..=k].iter().map(Vec::len).sum();
@@ -475,7 +502,7 @@ fn list_steps_reads_diagnostics_and_falls_back_to_frames() {
     );
     assert!(table.contains("1.00e-3 1.00e-9"), "{table}");
     assert!(table.contains("mass_rel_err=1.0"), "{table}");
-    assert!(table.contains("3 steps"), "{table}");
+    assert!(table.contains("\n3 steps completed, "), "{table}");
     // Without diagnostics, the frames give t, dt and the residuals.
     let frames_only = Recording {
         messages: rec
@@ -493,7 +520,8 @@ fn list_steps_reads_diagnostics_and_falls_back_to_frames() {
     let mut sparse = frames_only.clone();
     sparse.messages.push(coupler_node::record::Recorded {
         topic: DIAGNOSTICS_TOPIC.into(),
-        log_time: 9,
+        step: 9,
+        log_time: 10_000_000,
         publish_time: 0,
         sequence: 0,
         data: br#"{"step": 9}"#.to_vec(),
@@ -517,20 +545,24 @@ fn export_step_dumps_the_exchanged_arrays() {
         .find(|m| m["kind"] == "InterfaceLoads")
         .expect("loads at step 1");
     assert_eq!(loads["fields"]["force"][1], 1.5);
-    assert_eq!(loads["topic"], "fluid-to-coupler");
+    assert_eq!(loads["topic"], "/fluid-to-coupler");
     let state = messages.iter().find(|m| m["kind"] == "SolidState").unwrap();
     assert_eq!(state["fields"]["position"][1], 3.0);
     assert_eq!(state["fields"]["surface"]["vertices"][2], 1.0);
     let csv = export_step(&rec, 1, ExportFormat::Csv).unwrap();
+    assert_eq!(csv, export_table(&rec, Some(1)).unwrap());
     assert!(
-        csv.contains("# topic=fluid-to-coupler sequence=2 kind=InterfaceLoads step=1"),
+        csv.starts_with("step,iteration,channel,field,index,value\n"),
         "{csv}"
     );
     assert!(
-        csv.contains("field,index,value\ndim,0,3\nforce,0,1.0\nforce,1,1.5"),
+        csv.contains("\n1,0,/fluid-to-coupler,dim,0,3\n1,0,/fluid-to-coupler,force,0,1.0\n1,0,/fluid-to-coupler,force,1,1.5\n"),
         "{csv}"
     );
-    assert!(csv.contains("surface.vertices,2,1.0"), "{csv}");
+    assert!(
+        csv.contains("\n1,1,/solid-to-coupler,surface.vertices,2,1.0\n"),
+        "{csv}"
+    );
     let err = export_step(&rec, 99, ExportFormat::Json).unwrap_err();
     assert!(err.to_string().contains("step 99"), "{err}");
 }
@@ -567,7 +599,8 @@ fn issue_11_a_killed_run_reads_with_standard_readers_up_to_its_last_completed_st
             .collect::<Result<_, _>>()
             .unwrap_or_else(|e| panic!("step {step}: {e}"));
         assert_eq!(streamed.len(), n_expected, "step {step}");
-        assert_eq!(streamed.last().unwrap().log_time, step);
+        // The last message is the step's diagnostics, at the step's end time (1 ms steps).
+        assert_eq!(streamed.last().unwrap().log_time, (step + 1) * 1_000_000);
         assert!(mcap::Summary::read(&killed).unwrap().is_none());
         let ours = read_recording(&killed).unwrap();
         assert_eq!(ours.end, End::Unfinished);
@@ -767,12 +800,196 @@ fn issue_11_a_damaged_file_is_not_called_a_killed_run() {
         fixed
             .recording
             .topic(DIAGNOSTICS_TOPIC)
-            .any(|m| m.log_time == 2)
+            .any(|m| m.step == 2)
     );
     assert!(
         !fixed
             .recording
             .topic(DIAGNOSTICS_TOPIC)
-            .any(|m| m.log_time == 0)
+            .any(|m| m.step == 0)
     );
+}
+
+/// Issue 15, item 6: `inspect --export csv` is one tidy table, one row per number, that reads
+/// back in Rust (and with numpy's `genfromtxt(names=True)` where numpy is installed).
+#[test]
+fn the_tidy_table_has_one_row_per_number_and_reads_back() {
+    let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
+    let rec = read_recording(&bytes).unwrap();
+    let csv = export_table(&rec, None).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some(TABLE_HEADER));
+    type Row = (u64, u32, String, String, u64, f64);
+    let rows: Vec<Row> = lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            assert_eq!(c.len(), 6, "{l}");
+            (
+                c[0].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[1].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[2].to_string(),
+                c[3].to_string(),
+                c[4].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[5].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+            )
+        })
+        .collect();
+    let pick = |step: u64, iteration: u32, channel: &str, field: &str| -> Vec<f64> {
+        rows.iter()
+            .filter(|r| r.0 == step && r.1 == iteration && r.2 == channel && r.3 == field)
+            .map(|r| r.5)
+            .collect()
+    };
+    // The loads of step 2, iteration 1: force[i] = 0.5 i + step, 12 numbers, exact.
+    let force = pick(2, 1, "/fluid-to-coupler", "force");
+    assert_eq!(force.len(), 12);
+    for (i, f) in force.iter().enumerate() {
+        assert!(
+            (f - (0.5 * i as f64 + 2.0)).abs() <= 1e-15,
+            "force[{i}] = {f}"
+        );
+    }
+    // Diagnostics: residuals and the ledger, iteration 0.
+    assert_eq!(pick(1, 0, "/diagnostics", "residuals"), [1e-3, 1e-9]);
+    assert_eq!(pick(1, 0, "/diagnostics", "ledger.fluid_mass"), [1.5]);
+    assert_eq!(pick(1, 0, "/diagnostics", "ledger.step"), [1.0]);
+    assert_eq!(pick(1, 0, "/diagnostics", "converged"), [1.0]);
+    // Every frame and diagnostics message contributes its stamp / step.
+    assert_eq!(
+        rows.iter().filter(|r| r.3 == "stamp.step").count() + rec.topic(DIAGNOSTICS_TOPIC).count(),
+        rec.messages.len()
+    );
+    // Checkpoint bytes (a placeholder string) and strings are not rows.
+    assert!(rows.iter().all(|r| r.3 != "bytes" && r.3 != "sender"));
+    // One step only, and a step that is not there.
+    let one = export_table(&rec, Some(1)).unwrap();
+    assert!(one.lines().skip(1).all(|l| l.starts_with("1,")), "{one}");
+    let err = export_table(&rec, Some(7)).unwrap_err().to_string();
+    assert!(err.contains("step 7") && err.contains("0 to 2"), "{err}");
+
+    // numpy, when the Python of the tests has it (COSIM_PYTHON; numpy is not required).
+    let Ok(python) = std::env::var("COSIM_PYTHON") else {
+        eprintln!("COSIM_PYTHON unset: numpy check not run");
+        return;
+    };
+    let has_numpy = std::process::Command::new(&python)
+        .args(["-c", "import numpy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_numpy {
+        eprintln!("{python} has no numpy: numpy check not run");
+        return;
+    }
+    let path = std::env::temp_dir().join(format!("cosim-table-{}.csv", std::process::id()));
+    std::fs::write(&path, &csv).unwrap();
+    let script = "import sys, numpy as np\n\
+        a = np.genfromtxt(sys.argv[1], delimiter=',', names=True, dtype=None, encoding='utf-8')\n\
+        m = (a['step'] == 2) & (a['iteration'] == 1) & (a['channel'] == '/fluid-to-coupler') & (a['field'] == 'force')\n\
+        print(len(a), repr(float(a['value'][m].sum())))\n";
+    let out = std::process::Command::new(&python)
+        .arg("-c")
+        .arg(script)
+        .arg(&path)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut it = text.split_whitespace();
+    assert_eq!(it.next(), Some(rows.len().to_string().as_str()), "{text}");
+    let sum: f64 = it.next().unwrap().parse().unwrap();
+    // Σ (0.5 i + 2), i < 12 = 33 + 24.
+    assert!((sum - 57.0).abs() <= 1e-12, "{text}");
+}
+
+/// Issue 15, item 5: the diagnostics schema is derived from the type: every key of a fully
+/// filled diagnostics object, nested ones included, is a property of the schema at its level,
+/// and the nested types are inlined (Foxglove resolves no `$ref`).
+#[test]
+fn the_diagnostics_schema_names_every_field_written() {
+    let schema: serde_json::Value = serde_json::from_str(&diagnostics_schema()).unwrap();
+    assert_eq!(schema["title"], "cosim.Diagnostics");
+    assert!(!diagnostics_schema().contains("$ref"), "{schema:#}");
+    let full = Diagnostics {
+        output: Some(3),
+        ledger: Some(LedgerEntry::default()),
+        ..Diagnostics::default()
+    };
+    let value = serde_json::to_value(&full).unwrap();
+    fn check(value: &serde_json::Value, schema: &serde_json::Value, path: &str, n: &mut usize) {
+        let Some(object) = value.as_object() else {
+            return;
+        };
+        // An optional struct is `anyOf: [{object}, {null}]` (or a type list).
+        let props = schema.get("properties").or_else(|| {
+            schema["anyOf"]
+                .as_array()
+                .and_then(|a| a.iter().find_map(|s| s.get("properties")))
+        });
+        let props = props.unwrap_or_else(|| panic!("{path}: no properties in {schema:#}"));
+        for (key, v) in object {
+            let sub = props
+                .get(key)
+                .unwrap_or_else(|| panic!("{path}.{key} is written but not in the schema"));
+            *n += 1;
+            check(v, sub, &format!("{path}.{key}"), n);
+        }
+    }
+    let mut n = 0;
+    check(&value, &schema, "", &mut n);
+    // 14 top-level fields, 14 of the ledger entry, 3 busy seconds.
+    assert_eq!(n, 14 + 14 + 3, "{value:#}");
+}
+
+/// Issue 15, item 5: a record of the older layout (topics without '/', log time = step) is
+/// refused by every reader with an error naming both layouts and protocol versions.
+#[test]
+fn a_record_of_the_old_layout_is_refused_with_its_versions() {
+    let mut w = mcap::WriteOptions::new()
+        .profile("")
+        .create(Cursor::new(Vec::new()))
+        .unwrap();
+    w.write_metadata(&mcap::records::Metadata {
+        name: "run".into(),
+        metadata: [("protocol_version".to_string(), "2".to_string())].into(),
+    })
+    .unwrap();
+    let schema = w
+        .add_schema("protocol::wire::Message", "bincode-serde", b"")
+        .unwrap();
+    let ch = w
+        .add_channel(schema, "fluid-to-coupler", "bincode", &Default::default())
+        .unwrap();
+    w.write_to_known_channel(
+        &mcap::records::MessageHeader {
+            channel_id: ch,
+            sequence: 0,
+            log_time: 0,
+            publish_time: 0,
+        },
+        &codec::encode(NodeKind::Fluid, &loads(0, 0, 1)),
+    )
+    .unwrap();
+    w.finish().unwrap();
+    let old = w.into_inner().into_inner();
+    for err in [
+        read_recording(&old).unwrap_err().to_string(),
+        recover(&old).unwrap_err().to_string(),
+        protocol::replay::Script::from_mcap(&old, NodeKind::Fluid)
+            .unwrap_err()
+            .to_string(),
+    ] {
+        assert!(
+            err.contains("layout 1")
+                && err.contains("protocol version 2")
+                && err.contains(&format!(
+                    "record layout 2 and protocol version {PROTOCOL_VERSION}"
+                )),
+            "{err}"
+        );
+    }
 }

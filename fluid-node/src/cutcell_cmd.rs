@@ -13,7 +13,6 @@
 //! λ > 0), `subfaces.vtk` (clipped polygons or segments), `cells.csv`, `faces.csv`,
 //! `subfaces.csv`, and with `--to` `swept.csv`.
 
-use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -131,39 +130,54 @@ pub fn run_to_json(args: &CutCellsArgs) -> anyhow::Result<String> {
         &per_cell_swept,
     )?;
 
-    let mut json = String::from("{");
-    let _ = write!(
-        json,
-        "\"dim\":{},\"cells\":{},\"elements\":{},\"solid_volume\":{},\"wet_area\":{},\"cut_cells\":{},\"compute_s\":{}",
-        grid.dim,
-        grid.n_cells(),
-        before.n_elements(),
-        number(geometry.solid_volume(&grid)),
-        number(geometry.wet_area()),
-        geometry.cut_cells.len(),
-        number(compute_s),
-    );
-    let _ = write!(
-        json,
-        ",\"skipped_elements\":{},\"open_surface_defect\":{}",
-        geometry.diagnostics.n_skipped_elements,
-        number(geometry.diagnostics.max_uncut_defect)
-    );
-    if let Some((geometry_to, swept)) = &moved {
-        let _ = write!(
-            json,
-            ",\"solid_volume_to\":{},\"swept_volume\":{},\"max_cell_residual\":{}",
-            number(geometry_to.solid_volume(&grid)),
-            number(swept.total()),
-            number(max_cell_residual)
-        );
-    }
-    let _ = write!(
-        json,
-        ",\"out\":\"{}\"}}",
-        escape(&args.out.display().to_string())
-    );
-    Ok(json)
+    let (solid_volume_to, swept_volume, max_cell_residual) = match &moved {
+        Some((geometry_to, swept)) => (
+            Some(geometry_to.solid_volume(&grid)),
+            Some(swept.total()),
+            Some(max_cell_residual),
+        ),
+        None => (None, None, None),
+    };
+    let line = CutCellsLine {
+        dim: grid.dim,
+        cells: grid.n_cells(),
+        elements: before.n_elements(),
+        solid_volume: geometry.solid_volume(&grid),
+        wet_area: geometry.wet_area(),
+        cut_cells: geometry.cut_cells.len(),
+        compute_s,
+        skipped_elements: geometry.diagnostics.n_skipped_elements,
+        open_surface_defect: geometry.diagnostics.max_uncut_defect,
+        solid_volume_to,
+        swept_volume,
+        max_cell_residual,
+        out: args.out.display().to_string(),
+    };
+    // NOTE: serde_json escapes every string (a tab or quote in a path stays valid JSON) and
+    // writes a non-finite number as null.
+    serde_json::to_string(&line).context("serializing the JSON line")
+}
+
+/// The JSON line `cut-cells` prints (keys in this order; the `*_to`, swept and residual keys
+/// only with `--to`).
+#[derive(serde::Serialize)]
+struct CutCellsLine {
+    dim: usize,
+    cells: usize,
+    elements: usize,
+    solid_volume: f64,
+    wet_area: f64,
+    cut_cells: usize,
+    compute_s: f64,
+    skipped_elements: usize,
+    open_surface_defect: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    solid_volume_to: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    swept_volume: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_cell_residual: Option<f64>,
+    out: String,
 }
 
 fn read_surface(path: &Path, dim: usize) -> anyhow::Result<SurfaceMesh> {
@@ -177,19 +191,6 @@ fn read_surface(path: &Path, dim: usize) -> anyhow::Result<SurfaceMesh> {
         parse_loops_csv(text)
     };
     mesh.with_context(|| format!("parsing surface {}", path.display()))
-}
-
-/// A JSON number (`null` when not finite).
-fn number(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:e}")
-    } else {
-        "null".to_string()
-    }
-}
-
-fn escape(s: &str) -> String {
-    s.replace('\\', "\\\\").replace('"', "\\\"")
 }
 
 fn create(dir: &Path, name: &str) -> anyhow::Result<std::io::BufWriter<std::fs::File>> {

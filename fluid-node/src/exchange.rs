@@ -158,6 +158,7 @@ impl NodeModel for RealFluid {
             boundary_mass_out: totals.outflow_mass,
             boundary_energy_out: totals.outflow_energy,
             links_broken: 0,
+            kinetic: 0.0,
             energy_scale: totals.energy.abs(),
         }
     }

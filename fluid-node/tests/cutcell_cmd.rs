@@ -167,5 +167,19 @@ p = 1.0
     args.to = Some(dir.join("short.csv"));
     let err = run_to_json(&args).unwrap_err();
     assert!(format!("{err:#}").contains("same elements"), "{err:#}");
+    // An output folder whose name holds a tab, a quote and a backslash: the line is still JSON
+    // (a JSON parser reads it), and gives the path back unchanged.
+    args.to = None;
+    args.out = dir.join("out\tquote\"back\\slash");
+    let json = run_to_json(&args).unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_str(&json).unwrap_or_else(|e| panic!("{e}: {json}"));
+    assert_eq!(doc["out"], args.out.display().to_string());
+    let solid = doc["solid_volume"].as_f64().expect("a number");
+    assert!((solid - area).abs() <= 1e-12 * area, "{solid}");
+    assert!(
+        doc.get("swept_volume").is_none(),
+        "no --to, no swept volume: {json}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

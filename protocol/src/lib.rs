@@ -6,6 +6,7 @@
 //! - [`scene`]: the scene file schema and its validation.
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
+//! - [`topics`]: topic names and log-time convention of the MCAP record.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
 //! - `mcap_read` (feature `replay`): bounded, CRC-checked reading of MCAP bytes.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
@@ -19,6 +20,7 @@
 pub mod codec;
 pub mod scene;
 pub mod session;
+pub mod topics;
 pub mod transport;
 pub mod wire;
 

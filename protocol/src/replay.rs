@@ -10,6 +10,7 @@ use std::time::Duration;
 
 use crate::codec;
 use crate::mcap_read::{self, End, Mode, ScanError};
+use crate::topics;
 use crate::transport::{Transport, TransportError};
 use crate::wire::{Message, MessageKind, NodeKind};
 
@@ -38,6 +39,9 @@ pub enum ReplayError {
     /// `source`: the message already holds it, and error chains would print it twice.
     #[error("not a readable MCAP record: {0}")]
     Mcap(ScanError),
+    /// The record was written with an older layout (topic names, log-time convention).
+    #[error("{0}")]
+    Layout(String),
     /// The record holds nothing for this node.
     #[error(
         "the record holds no messages of the {0} node (was it recorded with record = \"exchange\" or \"all\"?)"
@@ -65,22 +69,33 @@ impl From<ScanError> for ReplayError {
 impl Script {
     /// Reads the frames exchanged with `node` from MCAP bytes (complete or truncated).
     pub fn from_mcap(bytes: &[u8], node: NodeKind) -> Result<Script, ReplayError> {
-        let from_topic = format!("{}-to-coupler", node.name());
-        let to_topic = format!("coupler-to-{}", node.name());
-        let checkpoint_topic = format!("checkpoint/{}", node.name());
+        let from_topic = topics::frame(node, NodeKind::Coupler).unwrap_or_default();
+        let to_topic = topics::frame(NodeKind::Coupler, node).unwrap_or_default();
+        let checkpoint_topic = topics::checkpoint(node);
         // NOTE: a bounded, CRC-checked read: a damaged record is an error naming the chunk and
         // offset, never a panic or a huge allocation (the mcap crate's MessageStream has no
         // limit on the lengths inside a chunk).
         let scan = mcap_read::scan(bytes, Mode::Strict)?;
+        let version = scan
+            .metadata
+            .iter()
+            .find(|(name, _)| name == "run")
+            .and_then(|(_, run)| run.get("protocol_version"))
+            .map(String::as_str);
+        if let Some(why) =
+            topics::legacy_layout(scan.channels.values().map(|c| c.topic.as_str()), version)
+        {
+            return Err(ReplayError::Layout(why));
+        }
         let mut script = Script {
             frames: Vec::new(),
             truncated: !matches!(scan.end, End::Finished { .. }),
         };
         for msg in scan.messages {
             let topic = &scan.channels[&msg.channel_id].topic;
-            let dir = if *topic == from_topic || *topic == checkpoint_topic {
+            let dir = if topic == from_topic || topic == checkpoint_topic {
                 Direction::FromNode
-            } else if *topic == to_topic {
+            } else if topic == to_topic {
                 Direction::ToNode
             } else {
                 continue;

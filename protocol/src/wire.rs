@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 2;
+pub const PROTOCOL_VERSION: u32 = 3;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -292,6 +292,10 @@ pub struct ConservedTotals {
     pub boundary_energy_out: f64,
     /// Links broken since the start (solid only).
     pub links_broken: u64,
+    /// Kinetic part of `energy` \[J\] (solid: translation + rotation; the fluid reports 0, its
+    /// energy is not split). The rest of a solid's `energy` is potential (elastic links,
+    /// contacts, gravity).
+    pub kinetic: f64,
     /// Magnitude of the energies involved \[J\]: the sum of the absolute values of the parts of
     /// `energy` (kinetic, elastic, gravity, internal ...), so the ledger can state an energy
     /// error relative to something even when the parts cancel.

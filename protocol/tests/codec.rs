@@ -82,6 +82,7 @@ fn every_message() -> Vec<Message> {
             boundary_mass_out: 0.0,
             boundary_energy_out: 1e-9,
             links_broken: 12,
+            kinetic: 3.5,
             energy_scale: 11.0,
         }),
         Message::CheckpointRequest(CheckpointRequest { stamp }),

@@ -155,7 +155,7 @@ impl NodeModel for PrescribedDouble {
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
-        let (mass, energy) = match self.motion() {
+        let (mass, energy, kinetic) = match self.motion() {
             PrescribedMotion::Spring { mass, stiffness } => {
                 let v2: f64 = self.v.iter().map(|v| v * v).sum();
                 let dx2: f64 = self
@@ -164,10 +164,11 @@ impl NodeModel for PrescribedDouble {
                     .zip(&self.x0)
                     .map(|(x, x0)| (x - x0) * (x - x0))
                     .sum();
-                (*mass, 0.5 * mass * v2 + 0.5 * stiffness * dx2)
+                let kinetic = 0.5 * mass * v2;
+                (*mass, kinetic + 0.5 * stiffness * dx2, kinetic)
             }
             // NOTE: a kinematic motion is driven from outside: what it receives is absorbed.
-            _ => (0.0, self.work),
+            _ => (0.0, self.work, 0.0),
         };
         ConservedTotals {
             stamp,
@@ -182,6 +183,7 @@ impl NodeModel for PrescribedDouble {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: 0,
+            kinetic,
             energy_scale: energy.abs(),
         }
     }

@@ -148,6 +148,7 @@ impl NodeModel for RealSolid {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: self.links_broken,
+            kinetic: e.kinetic_translation + e.kinetic_rotation,
             energy_scale: e.kinetic_translation
                 + e.kinetic_rotation
                 + e.elastic.abs()

@@ -118,6 +118,148 @@ fn frames_by_topic(path: &Path) -> Vec<(String, Vec<Vec<u8>>)> {
     topics
 }
 
+/// What is deterministic in a record besides the frames: the log times (simulated time) per
+/// topic, and the diagnostics without their wall-clock `busy_s`.
+fn times_and_diagnostics(path: &Path) -> (Vec<(String, Vec<u64>)>, Vec<serde_json::Value>) {
+    let rec = record::read_recording(&std::fs::read(path).expect("record")).expect("readable");
+    let mut times: Vec<(String, Vec<u64>)> = Vec::new();
+    for m in &rec.messages {
+        match times.iter_mut().find(|(t, _)| *t == m.topic) {
+            Some((_, v)) => v.push(m.log_time),
+            None => times.push((m.topic.clone(), vec![m.log_time])),
+        }
+    }
+    times.sort();
+    let diagnostics = rec
+        .topic(record::DIAGNOSTICS_TOPIC)
+        .map(|m| {
+            let mut v: serde_json::Value = serde_json::from_slice(&m.data).expect("json");
+            v.as_object_mut().expect("an object").remove("busy_s");
+            v
+        })
+        .collect();
+    (times, diagnostics)
+}
+
+/// Issue 15, items 5 and 6 on a finished run: `ledger.csv` has the exact header and one row
+/// per step, its last row is the run's last ledger entry (the record's diagnostics) and its
+/// maxima are the summary's errors; the record's log time is simulated time; `inspect` counts
+/// the run's steps.
+fn check_ledger_csv_and_record(out: &Path) {
+    let scene = std::fs::read_to_string(out.join("scene.toml")).expect("scene.toml");
+    let mass_tolerance = protocol::scene::Scene::from_toml_str(&scene, "the run's scene")
+        .expect("scene")
+        .run
+        .mass_tolerance;
+    let s = summary(out);
+    let steps = s["steps"].as_u64().expect("steps");
+    let text = std::fs::read_to_string(out.join("ledger.csv")).expect("ledger.csv");
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,solid_dissipated,interface_work,mass_rel_err,energy_rel_err"
+        )
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or_else(|e| panic!("{l}: {e}")))
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len() as u64, steps, "one row per step");
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row.len(), 10);
+        assert_eq!(
+            row[1], k as f64,
+            "steps count from 0, as the diagnostics' step"
+        );
+    }
+    let last = rows.last().expect("rows");
+    // Same numbers as the run (printed in shortest round-trip form: equal to 1e-15).
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-15 * a.abs().max(b.abs()).max(1e-300);
+    assert!(
+        close(last[0], s["t_end"].as_f64().expect("t_end")),
+        "{last:?} {s}"
+    );
+    let max = |col: usize| rows.iter().map(|r| r[col]).fold(0.0, f64::max);
+    assert!(
+        close(max(8), s["mass_rel_err"].as_f64().expect("mass")),
+        "{s}"
+    );
+    assert!(
+        close(max(9), s["energy_rel_err"].as_f64().expect("energy")),
+        "{s}"
+    );
+    assert!(
+        max(8) < mass_tolerance,
+        "mass error {} vs tolerance {mass_tolerance}",
+        max(8)
+    );
+    let rec = record::read_recording(&std::fs::read(out.join("exchange.mcap")).expect("record"))
+        .expect("readable");
+    let diag = rec
+        .topic(record::DIAGNOSTICS_TOPIC)
+        .last()
+        .expect("diagnostics");
+    let d: serde_json::Value = serde_json::from_slice(&diag.data).expect("json");
+    let ledger = &d["ledger"];
+    assert_eq!(d["step"], ledger["step"], "one step numbering: {d}");
+    assert_eq!(d["step"].as_u64(), Some(steps - 1));
+    for (col, key) in [
+        (2, "fluid_mass"),
+        (3, "fluid_energy"),
+        (4, "solid_kinetic"),
+        (8, "mass_rel_err"),
+    ] {
+        assert!(
+            close(last[col], ledger[key].as_f64().expect(key)),
+            "{key}: {last:?} {ledger}"
+        );
+    }
+    let elastic =
+        ledger["solid_energy"].as_f64().expect("e") - ledger["solid_kinetic"].as_f64().expect("k");
+    assert!(close(last[5], elastic), "{last:?} {ledger}");
+    // Log time = simulated time in ns: the last diagnostics at t_end, to the ns.
+    let t_end_ns = s["t_end"].as_f64().expect("t_end") * 1e9;
+    assert!(
+        (diag.log_time as f64 - t_end_ns).abs() <= 1.0,
+        "{} vs {t_end_ns}",
+        diag.log_time
+    );
+    assert!(rec.messages.iter().all(|m| m.topic.starts_with('/')));
+    // `inspect` counts the steps the run did.
+    let r = coupler()
+        .arg("inspect")
+        .arg(out.join("exchange.mcap"))
+        .output()
+        .expect("inspect");
+    let table = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        table.contains(&format!("\n{steps} steps completed, ")),
+        "{table}"
+    );
+    // And its tidy export has one `ledger.step` row per step.
+    let r = coupler()
+        .args(["inspect", "--export", "csv"])
+        .arg(out.join("exchange.mcap"))
+        .output()
+        .expect("inspect --export csv");
+    let csv = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        csv.starts_with("step,iteration,channel,field,index,value\n"),
+        "{}",
+        &csv[..200.min(csv.len())]
+    );
+    let ledger_rows = csv
+        .lines()
+        .filter(|l| l.contains(",/diagnostics,ledger.step,0,"))
+        .count();
+    assert_eq!(ledger_rows as u64, steps);
+}
+
 #[test]
 fn doubles_over_the_bus_are_recorded_and_deterministic() {
     let scene = workspace().join("scenes/backbone-doubles.toml");
@@ -136,13 +278,13 @@ fn doubles_over_the_bus_are_recorded_and_deterministic() {
     assert_eq!(
         topics,
         [
-            "checkpoint/coupler",
-            "checkpoint/fluid",
-            "checkpoint/solid",
-            "coupler-to-fluid",
-            "coupler-to-solid",
-            "fluid-to-coupler",
-            "solid-to-coupler"
+            "/checkpoint/coupler",
+            "/checkpoint/fluid",
+            "/checkpoint/solid",
+            "/coupler-to-fluid",
+            "/coupler-to-solid",
+            "/fluid-to-coupler",
+            "/solid-to-coupler"
         ]
     );
     assert!(fa == fb, "two runs recorded different payload bytes");
@@ -161,7 +303,7 @@ fn doubles_over_the_bus_are_recorded_and_deterministic() {
         .collect();
     let bus_solid = &fa
         .iter()
-        .find(|(t, _)| t == "solid-to-coupler")
+        .find(|(t, _)| t == "/solid-to-coupler")
         .expect("topic")
         .1;
     assert_eq!(mem_solid.len(), bus_solid.len());
@@ -196,9 +338,9 @@ fn replay_is_identical_and_names_an_altered_value() {
     let mut changed = None;
     for m in &rec.messages {
         let mut data = m.data.clone();
-        if m.topic == "solid-to-coupler"
+        if m.topic == "/solid-to-coupler"
             && changed.is_none()
-            && m.log_time == 125
+            && m.step == 125
             && let Ok((_, Message::SolidState(mut s))) = codec::decode(&data)
         {
             let old = s.position[0];
@@ -207,25 +349,27 @@ fn replay_is_identical_and_names_an_altered_value() {
             data = codec::encode(NodeKind::Solid, &Message::SolidState(s));
         }
         let topic = m.topic.as_str();
+        // The log time back in seconds (exact: whole ns below 2^53).
+        let t = m.log_time as f64 * 1e-9;
         let result = match topic {
-            "diagnostics" => recorder.record_diagnostics(m.log_time, m.publish_time, &data),
-            "checkpoint/fluid" => {
-                recorder.record_checkpoint(NodeKind::Fluid, m.log_time, m.publish_time, &data)
+            "/diagnostics" => recorder.record_diagnostics(t, m.publish_time, &data),
+            "/checkpoint/fluid" => {
+                recorder.record_checkpoint(NodeKind::Fluid, t, m.publish_time, &data)
             }
-            "checkpoint/solid" => {
-                recorder.record_checkpoint(NodeKind::Solid, m.log_time, m.publish_time, &data)
+            "/checkpoint/solid" => {
+                recorder.record_checkpoint(NodeKind::Solid, t, m.publish_time, &data)
             }
-            "checkpoint/coupler" => {
-                recorder.record_checkpoint(NodeKind::Coupler, m.log_time, m.publish_time, &data)
+            "/checkpoint/coupler" => {
+                recorder.record_checkpoint(NodeKind::Coupler, t, m.publish_time, &data)
             }
             _ => {
-                let (from, to) = topic.split_once("-to-").expect("a frame topic");
+                let (from, to) = topic[1..].split_once("-to-").expect("a frame topic");
                 let kind = |n: &str| match n {
                     "fluid" => NodeKind::Fluid,
                     "solid" => NodeKind::Solid,
                     _ => NodeKind::Coupler,
                 };
-                recorder.record_frame(kind(from), kind(to), m.log_time, m.publish_time, &data)
+                recorder.record_frame(kind(from), kind(to), t, m.publish_time, &data)
             }
         };
         result.expect("re-record");
@@ -297,7 +441,7 @@ fn replay_of_an_iqn_ils_run_is_identical_for_both_nodes_and_the_coupler() {
     let own = rec
         .messages
         .iter_mut()
-        .rfind(|m| m.topic == "checkpoint/coupler" && m.log_time == 120)
+        .rfind(|m| m.topic == "/checkpoint/coupler" && m.step == 120)
         .expect("a coupler checkpoint at step 120");
     let Ok((_, Message::Checkpoint(mut c))) = codec::decode(&own.data) else {
         panic!("the coupler checkpoint is a Checkpoint frame");
@@ -596,10 +740,10 @@ fn a_recorded_node_replays_as_a_double_the_coupler_cannot_tell() {
         v.iter().find(|(n, _)| n == t).map(|(_, f)| f.clone())
     };
     for topic in [
-        "fluid-to-coupler",
-        "solid-to-coupler",
-        "coupler-to-solid",
-        "coupler-to-fluid",
+        "/fluid-to-coupler",
+        "/solid-to-coupler",
+        "/coupler-to-solid",
+        "/coupler-to-fluid",
     ] {
         assert!(pick(&a, topic) == pick(&b, topic), "{topic} differs");
     }
@@ -864,14 +1008,21 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     );
     assert!(fa.len() >= 6, "{} topics", fa.len());
     assert!(fa == fb, "1 and 2 threads recorded different payload bytes");
+    // Log times (simulated time) and the diagnostics but their wall-clock part are the same.
+    let (ta, da) = times_and_diagnostics(&a.join("exchange.mcap"));
+    let (tb, db) = times_and_diagnostics(&b.join("exchange.mcap"));
+    assert!(ta == tb, "1 and 2 threads recorded different log times");
+    assert_eq!(da.len() as u64, s["steps"].as_u64().expect("steps"));
+    assert!(da == db, "1 and 2 threads recorded different diagnostics");
+    check_ledger_csv_and_record(&a);
     // The bus carries exactly what the in-process run exchanges, on every channel.
     let text = std::fs::read_to_string(coupled_scene(&dir, 1)).expect("scene");
     let scene = protocol::scene::Scene::from_toml_str(&text, "coupled").expect("scene");
     let mem = cosim_tests::run_in_process(&scene);
     assert_eq!(mem.error, None);
     for (from, to, topic) in [
-        (NodeKind::Solid, NodeKind::Coupler, "solid-to-coupler"),
-        (NodeKind::Fluid, NodeKind::Coupler, "fluid-to-coupler"),
+        (NodeKind::Solid, NodeKind::Coupler, "/solid-to-coupler"),
+        (NodeKind::Fluid, NodeKind::Coupler, "/fluid-to-coupler"),
     ] {
         let mem_frames: Vec<&Vec<u8>> = mem
             .sink
@@ -952,10 +1103,10 @@ fn assert_restart_continues_identically(run: &Path, step: u64, out: &Path) {
         let rec = record::read_recording(&std::fs::read(path).expect("record")).expect("read");
         rec.messages
             .into_iter()
-            .filter(|m| m.log_time >= step && m.topic != "diagnostics")
+            .filter(|m| m.step >= step && m.topic != "/diagnostics")
             .filter(|m| {
                 !(skip_restores
-                    && m.topic.starts_with("coupler-to-")
+                    && m.topic.starts_with("/coupler-to-")
                     && codec::decode_header(&m.data)
                         .is_ok_and(|h| h.kind == protocol::wire::MessageKind::Checkpoint))
             })
@@ -1015,7 +1166,7 @@ fn a_restart_refuses_another_scene_and_a_step_without_checkpoints() {
     // checkpoint_every = 20: steps 20, 40, ... have checkpoints, 30 has none.
     let err = restart(&run.join("scene.toml"), "30");
     assert!(
-        err.contains("no checkpoint/coupler at that step") && err.contains("[20, 40, 60"),
+        err.contains("no /checkpoint/coupler at that step") && err.contains("[20, 40, 60"),
         "{err}"
     );
     let other = dir.join("other.toml");

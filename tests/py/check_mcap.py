@@ -6,9 +6,12 @@ usage: check_mcap.py FILE.mcap [--truncated | --unfinished] [--allow-gaps]
 Opens the file, reads every message, and checks that
   - every channel is a known topic with the expected message encoding and schema
     (bus and checkpoint channels: "bincode", schema "protocol::wire::Message"/"bincode-serde";
-    "diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object),
-  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 2,
-  - every diagnostics message parses as a JSON object with an integer "step" equal to log_time,
+    "/diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object);
+    topics are '/'-rooted (record layout 2),
+  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 3,
+  - every diagnostics message parses as a JSON object with an integer "step", and its log time
+    is its "t" (the step's end) in nanoseconds (log time = simulated time),
+  - log times never decrease within a channel (frames: the start time of their step),
   - sequence numbers count up from 0 per channel (with --allow-gaps, as in a record recovered
     from a damaged one, they only increase), and the metadata "scene" and "run" exist,
   - the file has a summary whose message count matches (unless --truncated: then the file is
@@ -26,16 +29,16 @@ from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 
 FRAME_TOPICS = {
-    "fluid-to-coupler",
-    "coupler-to-fluid",
-    "solid-to-coupler",
-    "coupler-to-solid",
-    "checkpoint/fluid",
-    "checkpoint/solid",
-    "checkpoint/coupler",
+    "/fluid-to-coupler",
+    "/coupler-to-fluid",
+    "/solid-to-coupler",
+    "/coupler-to-solid",
+    "/checkpoint/fluid",
+    "/checkpoint/solid",
+    "/checkpoint/coupler",
 }
-DIAGNOSTICS = "diagnostics"
-PROTOCOL_VERSION = 2
+DIAGNOSTICS = "/diagnostics"
+PROTOCOL_VERSION = 3
 
 
 class CheckError(Exception):
@@ -63,9 +66,14 @@ def check_channel(channel, schema):
 
 
 ALLOW_GAPS = False
+LAST_LOG_TIME = {}
 
 
 def check_message(channel, message, next_seq):
+    """Checks one message; returns its coupling step (from the payload)."""
+    if message.log_time < LAST_LOG_TIME.get(channel.id, 0):
+        raise CheckError(f"{channel.topic} seq {message.sequence}: log time {message.log_time} goes back")
+    LAST_LOG_TIME[channel.id] = message.log_time
     want = next_seq.get(channel.id, 0)
     if ALLOW_GAPS and message.sequence > want:
         want = message.sequence
@@ -77,14 +85,18 @@ def check_message(channel, message, next_seq):
         value = json.loads(data)
         if not isinstance(value, dict) or not isinstance(value.get("step"), int):
             raise CheckError(f"diagnostics at log_time {message.log_time}: not an object with an integer step")
-        if value["step"] != message.log_time:
-            raise CheckError(f"diagnostics step {value['step']} != log_time {message.log_time}")
+        t = value.get("t")
+        if not isinstance(t, (int, float)) or abs(message.log_time - round(t * 1e9)) > 1:
+            raise CheckError(f"diagnostics step {value['step']}: log_time {message.log_time} is not t = {t} s in ns")
+        return value["step"]
     else:
         if len(data) < 24 or data[:4] != b"FSI\x00":
             raise CheckError(f"{channel.topic} seq {message.sequence}: not a frame (magic {data[:4]!r})")
         (version,) = struct.unpack_from("<I", data, 4)
         if version != PROTOCOL_VERSION:
             raise CheckError(f"{channel.topic} seq {message.sequence}: protocol version {version}")
+        (step,) = struct.unpack_from("<Q", data, 12)
+        return step
 
 
 def check_complete(path, unfinished=False):
@@ -108,10 +120,10 @@ def check_complete(path, unfinished=False):
         last = None
         for schema, channel, message in reader.iter_messages(log_time_order=False):
             check_channel(channel, schema)
-            check_message(channel, message, next_seq)
+            step = check_message(channel, message, next_seq)
             n += 1
             if channel.topic == DIAGNOSTICS:
-                last = message.log_time
+                last = step
         if summary is not None and summary.statistics is not None and summary.statistics.message_count != n:
             raise CheckError(f"summary counts {summary.statistics.message_count} messages, read {n}")
         return n, last
@@ -134,10 +146,10 @@ def check_truncated(path):
                 elif isinstance(record, Message):
                     channel = channels[record.channel_id]
                     check_channel(channel, schemas.get(channel.schema_id))
-                    check_message(channel, record, next_seq)
+                    step = check_message(channel, record, next_seq)
                     n += 1
                     if channel.topic == DIAGNOSTICS:
-                        last = record.log_time
+                        last = step
         except CheckError:
             raise
         except Exception as e:  # the streaming reader ends with an error where the file was cut

@@ -23,18 +23,18 @@ impl RecordSink for MemorySink {
         &mut self,
         from: NodeKind,
         to: NodeKind,
-        _: u64,
+        _: f64,
         _: u64,
         f: &[u8],
     ) -> Result<(), String> {
         self.frames.push((from, to, f.to_vec()));
         Ok(())
     }
-    fn checkpoint(&mut self, node: NodeKind, _: u64, _: u64, f: &[u8]) -> Result<(), String> {
+    fn checkpoint(&mut self, node: NodeKind, _: f64, _: u64, f: &[u8]) -> Result<(), String> {
         self.frames.push((node, NodeKind::Coupler, f.to_vec()));
         Ok(())
     }
-    fn diagnostics(&mut self, _: u64, _: u64, json: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, _: f64, _: u64, json: &[u8]) -> Result<(), String> {
         self.diagnostics.push(json.to_vec());
         Ok(())
     }

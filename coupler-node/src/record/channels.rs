@@ -1,11 +1,13 @@
 //! The channels of a record: topics, schemas, encodings, and the diagnostics JSON object.
 
-use std::collections::BTreeMap;
-
 use protocol::PROTOCOL_VERSION;
 use protocol::scene::RecordLevel;
+use protocol::topics;
 use protocol::wire::NodeKind;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+
+use crate::ledger::LedgerEntry;
 
 /// Schema name of the bincode frames.
 pub const FRAME_SCHEMA_NAME: &str = "protocol::wire::Message";
@@ -14,75 +16,64 @@ pub const FRAME_SCHEMA_ENCODING: &str = "bincode-serde";
 /// Message encoding of the bincode frames.
 pub const FRAME_MESSAGE_ENCODING: &str = "bincode";
 /// Topic of the diagnostics channel.
-pub const DIAGNOSTICS_TOPIC: &str = "diagnostics";
+pub const DIAGNOSTICS_TOPIC: &str = topics::DIAGNOSTICS;
+/// Schema name of the diagnostics channel.
+pub const DIAGNOSTICS_SCHEMA_NAME: &str = "cosim.Diagnostics";
 
-/// JSON schema of the diagnostics messages.
-pub const DIAGNOSTICS_SCHEMA: &str = r#"{
-  "$schema": "https://json-schema.org/draft/2020-12/schema",
-  "title": "cosim.Diagnostics",
-  "description": "Per-step diagnostics of the fluid-structure coupler",
-  "type": "object",
-  "required": ["step"],
-  "properties": {
-    "step": {"type": "integer", "minimum": 0, "description": "coupling step n"},
-    "t": {"type": "number", "description": "time at the end of the step [s]"},
-    "dt": {"type": "number", "description": "step size [s]"},
-    "iterations": {"type": "integer", "minimum": 0, "description": "fixed-point iterations"},
-    "residuals": {"type": "array", "items": {"type": "number"}, "description": "residual of each iteration"},
-    "converged": {"type": "boolean"},
-    "ledger": {
-      "type": "object",
-      "description": "conservation ledger at the end of the step",
-      "properties": {
-        "fluid_mass": {"type": "number"},
-        "fluid_energy": {"type": "number"},
-        "solid_mass": {"type": "number"},
-        "solid_energy": {"type": "number"},
-        "dissipated": {"type": "number"},
-        "interface_work": {"type": "number"},
-        "boundary_mass_out": {"type": "number"},
-        "boundary_energy_out": {"type": "number"},
-        "mass_rel_err": {"type": "number"},
-        "energy_rel_err": {"type": "number"}
-      },
-      "additionalProperties": {"type": "number"}
-    },
-    "busy_s": {
-      "type": "object",
-      "description": "seconds each process computed during the step",
-      "properties": {
-        "fluid": {"type": "number"},
-        "solid": {"type": "number"},
-        "coupler": {"type": "number"}
-      }
-    }
-  }
-}"#;
+/// JSON schema (draft 2020-12) of the diagnostics messages, derived from [`Diagnostics`] (so it
+/// names every field the coupler writes), with the nested types inlined: Foxglove resolves no
+/// `$ref`.
+pub fn diagnostics_schema() -> String {
+    let generator = schemars::generate::SchemaSettings::draft2020_12()
+        .with(|s| s.inline_subschemas = true)
+        .into_generator();
+    let schema = generator.into_root_schema_for::<Diagnostics>();
+    serde_json::to_string_pretty(&schema).expect("a JSON schema serializes")
+}
 
-/// The diagnostics object of one step, as documented in the module docs (the coupler may use
-/// its own type as long as it serializes to the same JSON).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// The diagnostics object of one step, as the coupler writes it on `/diagnostics`. A step that
+/// failed to converge has `converged: false`, its residual history, and no `ledger`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(default)]
+#[schemars(
+    title = "cosim.Diagnostics",
+    description = "Per-step diagnostics of the fluid-structure coupler"
+)]
 pub struct Diagnostics {
-    /// Coupling step.
+    /// Coupling step n, from 0 (the frames' stamp and `ledger.step` count the same way).
     pub step: u64,
     /// Time at the end of the step \[s\].
     pub t: f64,
     /// Step size \[s\].
     pub dt: f64,
-    /// Fixed-point iterations.
+    /// What limited the step (`fluid:...`, `solid:...`, `scene`, `output`).
+    pub limiter: String,
+    /// Fixed-point iterations (solid trials).
     pub iterations: u32,
     /// Residual of each iteration.
     pub residuals: Vec<f64>,
+    /// Relaxation factor of each iteration.
+    pub relaxation: Vec<f64>,
+    /// IQN-ILS columns in use at each iteration.
+    pub columns: Vec<u32>,
+    /// IQN-ILS columns dropped during the step.
+    pub columns_dropped: u32,
+    /// Whether the first trial was extrapolated from earlier steps.
+    pub predicted: bool,
     /// Whether the fixed point converged.
     pub converged: bool,
-    /// Conservation ledger: totals and relative errors, by name.
-    pub ledger: BTreeMap<String, f64>,
-    /// Busy seconds per process during the step.
+    /// Output index written at the end of the step, if any.
+    pub output: Option<u32>,
+    /// Conservation ledger at the end of the step (missing for a step that failed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ledger: Option<LedgerEntry>,
+    /// Busy seconds per process during the run so far (wall clock: the one part of the
+    /// record that differs between two runs of a scene).
     pub busy_s: BusySeconds,
 }
 
-/// Seconds each process computed during a step.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// Seconds each process computed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct BusySeconds {
     /// Fluid node \[s\].
     pub fluid: f64,
@@ -91,24 +82,15 @@ pub struct BusySeconds {
     /// Coupler \[s\].
     pub coupler: f64,
 }
-/// Topic of a bus channel (`fluid-to-coupler` ...), `None` for a pair that is not a link.
+
+/// Topic of a bus link (`/fluid-to-coupler` ...), `None` for a pair that is not a link.
 pub fn frame_topic(from: NodeKind, to: NodeKind) -> Option<&'static str> {
-    match (from, to) {
-        (NodeKind::Fluid, NodeKind::Coupler) => Some("fluid-to-coupler"),
-        (NodeKind::Coupler, NodeKind::Fluid) => Some("coupler-to-fluid"),
-        (NodeKind::Solid, NodeKind::Coupler) => Some("solid-to-coupler"),
-        (NodeKind::Coupler, NodeKind::Solid) => Some("coupler-to-solid"),
-        _ => None,
-    }
+    topics::frame(from, to)
 }
 
 /// Topic of a node's (or the coupler's own) checkpoints.
 pub fn checkpoint_topic(node: NodeKind) -> Option<&'static str> {
-    match node {
-        NodeKind::Fluid => Some("checkpoint/fluid"),
-        NodeKind::Solid => Some("checkpoint/solid"),
-        NodeKind::Coupler => Some("checkpoint/coupler"),
-    }
+    Some(topics::checkpoint(node))
 }
 
 pub(crate) fn level_name(level: RecordLevel) -> &'static str {

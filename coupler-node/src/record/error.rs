@@ -14,12 +14,15 @@ pub enum RecordError {
     /// The bytes are not a readable record (not MCAP, damaged: chunk and offset named).
     #[error(transparent)]
     Read(#[from] ScanError),
+    /// The record was written with an older layout (record layout and protocol version named).
+    #[error("{0}")]
+    Layout(String),
     /// A recorded frame or diagnostics message does not decode (inspection).
     #[error("{topic} message of step {step} does not decode: {reason}")]
     Decode {
         /// Topic.
         topic: String,
-        /// Its log time (step).
+        /// Its coupling step (its log time when the step itself is unreadable).
         step: u64,
         /// The decoder's message.
         reason: String,

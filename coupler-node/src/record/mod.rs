@@ -6,34 +6,40 @@
 //!
 //! | topic | message encoding | schema (name, encoding) |
 //! |---|---|---|
-//! | `fluid-to-coupler`, `coupler-to-fluid`, `solid-to-coupler`, `coupler-to-solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
-//! | `checkpoint/fluid`, `checkpoint/solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
-//! | `diagnostics` | `json` | `cosim.Diagnostics`, `jsonschema` ([`DIAGNOSTICS_SCHEMA`]) |
-//! | `checkpoint/coupler` | `bincode` | `protocol::wire::Message`, `bincode-serde` (a `Checkpoint` whose bytes are a `CouplerCheckpoint`) |
+//! | `/fluid-to-coupler`, `/coupler-to-fluid`, `/solid-to-coupler`, `/coupler-to-solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
+//! | `/checkpoint/fluid`, `/checkpoint/solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
+//! | `/diagnostics` | `json` | `cosim.Diagnostics`, `jsonschema` ([`diagnostics_schema`], derived from [`Diagnostics`]) |
+//! | `/checkpoint/coupler` | `bincode` | `protocol::wire::Message`, `bincode-serde` (a `Checkpoint` whose bytes are a `CouplerCheckpoint`) |
 //!
 //! Frames are the bytes of `protocol::codec` (24-byte header + bincode payload), so a reader
 //! decodes them with `protocol::codec::decode`. Channel ids are fixed (1 to 8 in the order of the
-//! table; only `diagnostics` at level `Diagnostics`), sequence numbers count per channel from 0,
-//! `log_time` is the coupling step and `publish_time` the wall clock in ns since the UNIX epoch
-//! given by the caller. Everything but `publish_time` is a function of the recorded run.
+//! table; only `/diagnostics` at level `Diagnostics`), sequence numbers count per channel from 0.
+//! Log time is the simulated time in ns ([`protocol::topics::log_time`]): a frame or checkpoint
+//! has the start time of its step, a diagnostics message the end time of its step, so
+//! Foxglove's timeline is the simulation's. Publish time is the wall clock in ns since the UNIX
+//! epoch given by the caller. The coupling step is in every payload (the frame header's step,
+//! the diagnostics' `step`), read back as [`Recorded::step`]. Everything but `publish_time`
+//! (and the wall-clock `busy_s` of the diagnostics) is a function of the recorded run.
 //!
-//! Metadata records: `scene` {`name`, `toml`} and `run` {`protocol_version`, `record_level`,
-//! `recorder`}.
+//! Metadata records: `scene` {`name`, `toml`} and `run` {`protocol_version`, `record_layout`,
+//! `record_level`, `recorder`}. Records of layout 1 (topics without `/`, log time = step,
+//! protocol version 2) are refused with an error naming both versions
+//! ([`RecordError::Layout`]): their frames would not decode with this protocol version anyway.
 //!
 //! # Diagnostics JSON
 //!
-//! One object per completed step, serialized by the coupler (see [`Diagnostics`]):
+//! One object per completed step, a serialized [`Diagnostics`]:
 //!
 //! ```json
-//! {"step": 12, "t": 0.0012, "dt": 1e-4, "iterations": 3, "residuals": [1e-3, 2e-7, 4e-13],
-//!  "converged": true,
-//!  "ledger": {"fluid_mass": 1.2, "fluid_energy": 250.0, "solid_energy": 3.5,
-//!             "mass_rel_err": 1e-15, "energy_rel_err": 2e-12},
+//! {"step": 12, "t": 0.0012, "dt": 1e-4, "limiter": "fluid:cfl at cell 40", "iterations": 3,
+//!  "residuals": [1e-3, 2e-7, 4e-13], "relaxation": [0.5, 0.4, 0.4], "columns": [0, 1, 2],
+//!  "columns_dropped": 0, "predicted": true, "converged": true, "output": null,
+//!  "ledger": {"step": 12, "t": 0.0012, "fluid_mass": 1.2, "fluid_energy": 250.0, ...},
 //!  "busy_s": {"fluid": 0.010, "solid": 0.002, "coupler": 0.0001}}
 //! ```
 //!
-//! `step` is required; every other field may be missing (readers must cope); more ledger keys
-//! may be added.
+//! `step` and `ledger.step` are the same number. A step that failed to converge has
+//! `converged: false` and no `ledger`; readers fill missing fields with defaults.
 //!
 //! # Durability
 //!
@@ -60,8 +66,8 @@ mod recover;
 mod writer;
 
 pub use channels::{
-    BusySeconds, DIAGNOSTICS_SCHEMA, DIAGNOSTICS_TOPIC, Diagnostics, FRAME_MESSAGE_ENCODING,
-    FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, frame_topic,
+    BusySeconds, DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, Diagnostics, FRAME_MESSAGE_ENCODING,
+    FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_topic,
 };
 pub use error::RecordError;
 pub use reader::{Recorded, Recording, read_recording};

@@ -3,15 +3,18 @@
 use std::collections::BTreeMap;
 
 use protocol::mcap_read::{self, Dropped, End, Mode, Scan};
+use protocol::topics;
 
-use crate::record::RecordError;
+use crate::record::{DIAGNOSTICS_TOPIC, RecordError};
 
 /// One recorded message.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Recorded {
     /// Topic of its channel.
     pub topic: String,
-    /// Coupling step.
+    /// Coupling step, from the payload (a frame's header, the `step` of a diagnostics object).
+    pub step: u64,
+    /// Simulated time \[ns\] (frames: the start of their step; diagnostics: its end).
     pub log_time: u64,
     /// Wall clock \[ns since the UNIX epoch\].
     pub publish_time: u64,
@@ -58,27 +61,72 @@ impl Recording {
 
 /// Reads every message in file order. Works on finished files and on the records of killed runs
 /// (up to the last completed step, or to where the file was cut); a damaged file is an error
-/// naming the chunk and byte offset ([`protocol::mcap_read`]), never a panic.
+/// naming the chunk and byte offset ([`protocol::mcap_read`]), never a panic. A record of the
+/// older layout (topics without `/`, written before record layout 2) is refused with
+/// [`RecordError::Layout`], naming both versions.
 pub fn read_recording(bytes: &[u8]) -> Result<Recording, RecordError> {
-    Ok(recording(mcap_read::scan(bytes, Mode::Strict)?))
+    recording(mcap_read::scan(bytes, Mode::Strict)?)
 }
 
-pub(crate) fn recording(scan: Scan) -> Recording {
+pub(crate) fn check_layout(scan: &Scan) -> Result<(), RecordError> {
+    let version = scan
+        .metadata
+        .iter()
+        .find(|(name, _)| name == "run")
+        .and_then(|(_, run)| run.get("protocol_version"))
+        .map(String::as_str);
+    match topics::legacy_layout(scan.channels.values().map(|c| c.topic.as_str()), version) {
+        Some(why) => Err(RecordError::Layout(why)),
+        None => Ok(()),
+    }
+}
+
+/// The coupling step a message's payload holds.
+fn payload_step(topic: &str, data: &[u8], log_time: u64) -> Result<u64, RecordError> {
+    #[derive(serde::Deserialize)]
+    struct Step {
+        step: u64,
+    }
+    let step = if topic == DIAGNOSTICS_TOPIC {
+        serde_json::from_slice::<Step>(data)
+            .map(|s| s.step)
+            .map_err(|e| format!("no integer \"step\" in the diagnostics object: {e}"))
+    } else {
+        topics::frame_step(data).ok_or_else(|| {
+            format!(
+                "{} bytes is too short for a frame (24-byte header)",
+                data.len()
+            )
+        })
+    };
+    step.map_err(|reason| RecordError::Decode {
+        topic: topic.to_string(),
+        step: log_time,
+        reason: format!("{reason} (log time {log_time} ns)"),
+    })
+}
+
+pub(crate) fn recording(scan: Scan) -> Result<Recording, RecordError> {
+    check_layout(&scan)?;
     let messages = scan
         .messages
         .into_iter()
-        .map(|m| Recorded {
-            topic: scan.channels[&m.channel_id].topic.clone(),
-            log_time: m.log_time,
-            publish_time: m.publish_time,
-            sequence: m.sequence,
-            data: m.data,
+        .map(|m| {
+            let topic = scan.channels[&m.channel_id].topic.clone();
+            Ok(Recorded {
+                step: payload_step(&topic, &m.data, m.log_time)?,
+                topic,
+                log_time: m.log_time,
+                publish_time: m.publish_time,
+                sequence: m.sequence,
+                data: m.data,
+            })
         })
-        .collect();
-    Recording {
+        .collect::<Result<_, RecordError>>()?;
+    Ok(Recording {
         messages,
         metadata: scan.metadata.into_iter().collect(),
         end: scan.end,
         dropped: scan.dropped,
-    }
+    })
 }

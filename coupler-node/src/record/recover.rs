@@ -7,7 +7,7 @@ use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions};
 use protocol::mcap_read::{self, Dropped, Mode};
 
-use crate::record::reader::recording;
+use crate::record::reader::{check_layout, recording};
 use crate::record::{RecordError, Recording};
 
 /// What [`recover`] made.
@@ -27,6 +27,7 @@ pub struct Recovered {
 /// verifies. Only bytes that are not MCAP at all are an error.
 pub fn recover(bytes: &[u8]) -> Result<Recovered, RecordError> {
     let scan = mcap_read::scan(bytes, Mode::Salvage)?;
+    check_layout(&scan)?;
     let mut writer = WriteOptions::new()
         .compression(Some(Compression::Lz4))
         .compression_threads(0)
@@ -64,7 +65,7 @@ pub fn recover(bytes: &[u8]) -> Result<Recovered, RecordError> {
     }
     writer.finish()?;
     let dropped = scan.dropped.clone();
-    let mut recording = recording(scan);
+    let mut recording = recording(scan)?;
     recording.end = mcap_read::End::Finished {
         summary_damage: None,
     };

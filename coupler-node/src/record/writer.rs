@@ -12,12 +12,14 @@ use mcap::{Compression, WriteOptions, Writer};
 use protocol::PROTOCOL_VERSION;
 use protocol::mcap_read::PROVISIONAL_END;
 use protocol::scene::RecordLevel;
+use protocol::topics::{self, RECORD_LAYOUT};
 use protocol::wire::NodeKind;
 
 use crate::record::RecordError;
 use crate::record::channels::{
-    DIAGNOSTICS_SCHEMA, DIAGNOSTICS_TOPIC, FRAME_MESSAGE_ENCODING, FRAME_SCHEMA_ENCODING,
-    FRAME_SCHEMA_NAME, checkpoint_topic, frame_schema_text, frame_topic, level_name,
+    DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, FRAME_MESSAGE_ENCODING, FRAME_SCHEMA_ENCODING,
+    FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_schema_text, frame_topic,
+    level_name,
 };
 
 /// Largest uncompressed chunk [`Recorder`] holds in memory before it writes it (4 MiB).
@@ -79,6 +81,7 @@ impl<W: Write + Seek> Recorder<W> {
             name: "run".into(),
             metadata: BTreeMap::from([
                 ("protocol_version".to_string(), PROTOCOL_VERSION.to_string()),
+                ("record_layout".to_string(), RECORD_LAYOUT.to_string()),
                 ("record_level".to_string(), level_name(level).to_string()),
                 (
                     "recorder".to_string(),
@@ -122,9 +125,9 @@ impl<W: Write + Seek> Recorder<W> {
             frame_schema = Some(schema);
         }
         let schema = writer.add_schema(
-            "cosim.Diagnostics",
+            DIAGNOSTICS_SCHEMA_NAME,
             "jsonschema",
-            DIAGNOSTICS_SCHEMA.as_bytes(),
+            diagnostics_schema().as_bytes(),
         )?;
         let id = writer.add_channel(schema, DIAGNOSTICS_TOPIC, "json", &BTreeMap::new())?;
         channels.insert(DIAGNOSTICS_TOPIC, (id, 0));
@@ -155,13 +158,15 @@ impl<W: Write + Seek> Recorder<W> {
         self.level
     }
 
-    /// Records one bus frame exactly as it crossed the bus, on topic `<from>-to-<to>`; log time =
-    /// `step`, publish time = `wall_ns`. A no-op at level `Diagnostics`.
+    /// Records one bus frame exactly as it crossed the bus, on topic `/<from>-to-<to>`; log time
+    /// = simulated time `t` \[s\] in ns ([`topics::log_time`]; the caller passes the start time
+    /// of the frame's step), publish time = `wall_ns`. The step stays in the frame's header. A
+    /// no-op at level `Diagnostics`.
     pub fn record_frame(
         &mut self,
         from: NodeKind,
         to: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), RecordError> {
@@ -169,42 +174,39 @@ impl<W: Write + Seek> Recorder<W> {
             return Ok(());
         }
         let topic = frame_topic(from, to).ok_or_else(|| RecordError::Decode {
-            topic: format!("{from}-to-{to}"),
-            step,
+            topic: format!("/{from}-to-{to}"),
+            step: topics::frame_step(frame).unwrap_or(0),
             reason: "no such bus channel (frames go between the coupler and a node)".into(),
         })?;
-        self.write(topic, step, wall_ns, frame)
+        self.write(topic, t, wall_ns, frame)
     }
 
-    /// Records a checkpoint frame on `checkpoint/fluid`, `checkpoint/solid` or
-    /// `checkpoint/coupler`. A no-op at level
+    /// Records a checkpoint frame on `/checkpoint/fluid`, `/checkpoint/solid` or
+    /// `/checkpoint/coupler`, log time as [`Recorder::record_frame`]. A no-op at level
     /// `Diagnostics`.
     pub fn record_checkpoint(
         &mut self,
         node: NodeKind,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), RecordError> {
         if self.level == RecordLevel::Diagnostics {
             return Ok(());
         }
-        let topic = checkpoint_topic(node).ok_or_else(|| RecordError::Decode {
-            topic: format!("checkpoint/{node}"),
-            step,
-            reason: "only the fluid and solid nodes have checkpoints".into(),
-        })?;
-        self.write(topic, step, wall_ns, frame)
+        let topic = checkpoint_topic(node).expect("every node has a checkpoint topic");
+        self.write(topic, t, wall_ns, frame)
     }
 
-    /// Records the diagnostics object of a step (`json` is the serialized object).
+    /// Records the diagnostics object of a step (`json` is the serialized object, whose `step`
+    /// key holds the step); log time = `t` (the step's end time) in ns.
     pub fn record_diagnostics(
         &mut self,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         json: &[u8],
     ) -> Result<(), RecordError> {
-        self.write(DIAGNOSTICS_TOPIC, step, wall_ns, json)
+        self.write(DIAGNOSTICS_TOPIC, t, wall_ns, json)
     }
 
     /// Called after each completed step: closes the open chunk, writes it and the provisional
@@ -242,7 +244,7 @@ impl<W: Write + Seek> Recorder<W> {
     fn write(
         &mut self,
         topic: &'static str,
-        step: u64,
+        t: f64,
         wall_ns: u64,
         data: &[u8],
     ) -> Result<(), RecordError> {
@@ -253,7 +255,7 @@ impl<W: Write + Seek> Recorder<W> {
         let header = MessageHeader {
             channel_id: *channel_id,
             sequence: *sequence,
-            log_time: step,
+            log_time: topics::log_time(t),
             publish_time: wall_ns,
         };
         *sequence = sequence.wrapping_add(1);
