@@ -6,6 +6,7 @@
 //! - [`scene`]: the scene file schema and its validation.
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
+//! - [`vtk`]: VTK XML files for ParaView (`.vti`, `.vtp`, `.pvd`) built in memory, and read back.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
 //! - `mcap_read` (feature `replay`): bounded, CRC-checked reading of MCAP bytes.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
@@ -20,6 +21,7 @@ pub mod codec;
 pub mod scene;
 pub mod session;
 pub mod transport;
+pub mod vtk;
 pub mod wire;
 
 #[cfg(feature = "bus")]
