@@ -227,7 +227,10 @@ fn decompress(data: &[u8], offset: usize) -> Result<Vec<u8>, String> {
     let block_size = word(offset + 8)? as usize;
     let last = word(offset + 16)? as usize;
     if n_blocks > data.len() / 8 {
-        return Err(format!("{n_blocks} blocks cannot fit in {} bytes", data.len()));
+        return Err(format!(
+            "{n_blocks} blocks cannot fit in {} bytes",
+            data.len()
+        ));
     }
     let mut at = offset + 24 + 8 * n_blocks;
     let mut out = Vec::new();

@@ -26,7 +26,10 @@ fn image(cells: [usize; 3]) -> ImageData {
         cell_data: vec![
             DataArray::scalar("rho", Values::Float64(values(n))),
             DataArray::vector("velocity", values(3 * n)),
-            DataArray::scalar("flag", Values::UInt8((0..n).map(|i| (i % 3) as u8).collect())),
+            DataArray::scalar(
+                "flag",
+                Values::UInt8((0..n).map(|i| (i % 3) as u8).collect()),
+            ),
         ],
     }
 }
@@ -133,14 +136,19 @@ fn poly_data_round_trips_with_point_and_cell_arrays() {
         assert_eq!(file.piece[&format!("NumberOf{tag}")], "3");
         assert_eq!(file.piece["NumberOfVerts"], "0");
         assert!(same_bits(
-            file.array("Points", "Points").and_then(|a| a.as_f64()).expect("points"),
+            file.array("Points", "Points")
+                .and_then(|a| a.as_f64())
+                .expect("points"),
             &points
         ));
         assert_eq!(
             file.array(tag, "connectivity").and_then(|a| a.as_i64()),
             Some(&connectivity[..])
         );
-        assert_eq!(file.array(tag, "offsets").and_then(|a| a.as_i64()), Some(&offsets[..]));
+        assert_eq!(
+            file.array(tag, "offsets").and_then(|a| a.as_i64()),
+            Some(&offsets[..])
+        );
         assert_eq!(
             file.array("PointData", "id").map(|a| &a.values),
             Some(&Values::Int64((0..7).collect()))
@@ -150,7 +158,9 @@ fn poly_data_round_trips_with_point_and_cell_arrays() {
             Some(&Values::Int32(vec![4, -1, 9]))
         );
         assert!(same_bits(
-            file.array("CellData", "normal").and_then(|a| a.as_f64()).expect("normal"),
+            file.array("CellData", "normal")
+                .and_then(|a| a.as_f64())
+                .expect("normal"),
             &values(9)
         ));
     }
@@ -160,7 +170,10 @@ fn poly_data_round_trips_with_point_and_cell_arrays() {
 fn empty_poly_data_round_trips() {
     let file = read::parse(&poly_data(&PolyData::vertices(Vec::new()), "none")).expect("parses");
     assert_eq!(file.piece["NumberOfPoints"], "0");
-    assert_eq!(file.array("Verts", "offsets").map(|a| a.values.len()), Some(0));
+    assert_eq!(
+        file.array("Verts", "offsets").map(|a| a.values.len()),
+        Some(0)
+    );
 }
 
 #[test]
@@ -172,7 +185,11 @@ fn series_lists_each_output_once_in_order() {
     // A rewritten output (the same k after a restore) replaces its entry.
     let text = series.record(1, 0.125, "fluid_1.vti");
     let entries = read::pvd(&text).expect("pvd");
-    let expected = [(0.0_f64, "fluid_0.vti"), (0.125, "fluid_1.vti"), (0.2, "fluid_2.vti")];
+    let expected = [
+        (0.0_f64, "fluid_0.vti"),
+        (0.125, "fluid_1.vti"),
+        (0.2, "fluid_2.vti"),
+    ];
     assert_eq!(entries.len(), expected.len());
     for ((t, file), (t0, file0)) in entries.iter().zip(expected) {
         assert_eq!((t.to_bits(), file.as_str()), (t0.to_bits(), file0));
@@ -180,7 +197,10 @@ fn series_lists_each_output_once_in_order() {
     // Times round-trip exactly through their text.
     let t = 0.1 + 0.2;
     let entries = read::pvd(&Series::default().record(0, t, "a&b.vti")).expect("pvd");
-    assert_eq!((entries[0].0.to_bits(), entries[0].1.as_str()), (t.to_bits(), "a&b.vti"));
+    assert_eq!(
+        (entries[0].0.to_bits(), entries[0].1.as_str()),
+        (t.to_bits(), "a&b.vti")
+    );
 }
 
 #[test]
@@ -199,7 +219,8 @@ fn damaged_files_are_refused_with_the_reason() {
         .into_bytes();
     let err = read::parse(&other).expect_err("header type");
     assert!(
-        err.to_string().contains("header_type is UInt32, expected UInt64"),
+        err.to_string()
+            .contains("header_type is UInt32, expected UInt64"),
         "{err}"
     );
 }

@@ -178,7 +178,8 @@ pub fn image_data(image: &ImageData, comment: &str) -> Vec<u8> {
         check_tuples(array, n_cells, "cell");
         file.array(array, 8);
     }
-    file.xml.push_str("      </CellData>\n    </Piece>\n  </ImageData>\n");
+    file.xml
+        .push_str("      </CellData>\n    </Piece>\n  </ImageData>\n");
     file.finish()
 }
 
@@ -322,8 +323,7 @@ impl XmlFile {
     }
 
     fn finish(mut self) -> Vec<u8> {
-        self.xml
-            .push_str("  <AppendedData encoding=\"raw\">\n   _");
+        self.xml.push_str("  <AppendedData encoding=\"raw\">\n   _");
         let mut bytes = self.xml.into_bytes();
         bytes.append(&mut self.appended);
         bytes.extend_from_slice(b"\n  </AppendedData>\n</VTKFile>\n");
@@ -368,4 +368,3 @@ fn escape(text: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
 }
-
