@@ -10,7 +10,7 @@ use crate::dem::{ParticleId, Solid, WetSurfaceData};
 
 /// The particles as VTK XML polydata (`.vtp` bytes): one vertex per particle centre \[m\] with
 /// point data `id`, `velocity` [m/s], `angular_velocity` [rad/s] (space frame; 2-D about z),
-/// the orientation relative to t = 0 (`theta` [rad] in 2-D, `orientation` the quaternion
+/// the orientation relative to t = 0 (`theta` \[rad\] in 2-D, `orientation` the quaternion
 /// `(w, x, y, z)` in 3-D) and `sigma_n` \[Pa\] as [`Solid::normal_stress`].
 pub fn particles_vtp(solid: &Solid, title: &str) -> Vec<u8> {
     let dim = solid.dim();

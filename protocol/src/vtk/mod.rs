@@ -6,7 +6,7 @@
 //! compression header (`header_type="UInt64"`: the number of blocks, the block size, the size of
 //! the last partial block or 0 when the last block is full, then each block's compressed size),
 //! as `vtkXMLWriter` writes with `vtkZLibDataCompressor`. [`read`] decodes such files back (for
-//! tests and tools); it reads what [`write`] writes, not every VTK file.
+//! tests and tools); it reads what [`image_data`] and [`poly_data`] write, not every VTK file.
 //!
 //! ```
 //! use protocol::vtk::{DataArray, ImageData, Values, image_data, read};

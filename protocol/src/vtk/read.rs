@@ -1,5 +1,6 @@
-//! Decoding what [`super::write`] writes: the XML head, each array's compression header and
-//! zlib blocks, and `.pvd` series. Every size is checked against the bytes there are.
+//! Decoding what [`super::image_data`] and [`super::poly_data`] write: the XML head, each
+//! array's compression header and zlib blocks, and `.pvd` series. Every size is checked against
+//! the bytes there are.
 
 use std::collections::BTreeMap;
 use std::io::Read as _;
