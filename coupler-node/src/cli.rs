@@ -29,6 +29,10 @@ pub enum Command {
         /// Output directory (default `out/<scene name>`).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Replace the files of an earlier run in the output directory (without it, a
+        /// non-empty output directory is refused; entries no run writes are never removed).
+        #[arg(long)]
+        overwrite: bool,
         /// Fluid implementation: `real`, `pressure` or `replay:FILE.mcap` (default: the scene's).
         #[arg(long)]
         fluid: Option<String>,
@@ -171,6 +175,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
         Command::Run {
             scene,
             out,
+            overwrite,
             fluid,
             solid,
             timeout_s,
@@ -191,6 +196,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             let summary = launch::run(&RunOptions {
                 scene,
                 out: out.clone(),
+                overwrite,
                 fluid,
                 solid,
                 timeout: timeout_s,

@@ -9,6 +9,9 @@
 //! with [`EXIT_INTERRUPTED`]. The nodes run in a process group of their own, so a signal to the
 //! coupler's group (Ctrl-C or a hangup of its terminal) reaches the coupler only, which ends them.
 //!
+//! The output folder must be missing or empty; `--overwrite` clears the files of an earlier run
+//! there first ([`crate::out_folder`]), so no stale output is left beside the new ones.
+//!
 //! A scene whose estimated memory ([`Scene::memory_estimate`]) exceeds what the machine has
 //! available is refused before any process starts.
 
@@ -35,6 +38,8 @@ pub struct RunOptions {
     pub scene: PathBuf,
     /// Output directory.
     pub out: PathBuf,
+    /// Replace the files of an earlier run in `out` (otherwise a non-empty `out` is refused).
+    pub overwrite: bool,
     /// Fluid implementation override (`real`, `pressure`, `replay:FILE`).
     pub fluid: Option<String>,
     /// Solid implementation override (`real`, `prescribed`, `replay:FILE`).
@@ -196,8 +201,11 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             node_binary(*node, explicit)
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("creating output directory {}", opts.out.display()))?;
+    crate::out_folder::prepare(
+        &opts.out,
+        opts.overwrite,
+        opts.restart.as_ref().map(|(file, _)| file.as_path()),
+    )?;
     let resolved = opts.out.join("scene.toml");
     std::fs::write(&resolved, scene.to_toml())
         .with_context(|| format!("writing {}", resolved.display()))?;

@@ -5,7 +5,8 @@
 //!   [`ledger`]: the conservation balance; [`iqn`]: the IQN-ILS acceleration of the fixed point.
 //! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
 //! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs);
-//!   [`restart`]: a run resumed from a record's checkpoints.
+//!   [`restart`]: a run resumed from a record's checkpoints; [`out_folder`]: the output folder
+//!   (refused when not empty unless `--overwrite`, which clears an earlier run's files).
 //! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`], [`coupler_replay`]: reading
 //!   it back.
 //! - [`report`]: the papers' figures from a run's outputs.
@@ -21,6 +22,7 @@ pub mod inspect;
 pub mod iqn;
 pub mod launch;
 pub mod ledger;
+pub mod out_folder;
 pub mod record;
 pub mod replay;
 pub mod report;

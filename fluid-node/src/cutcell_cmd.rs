@@ -1,5 +1,6 @@
 //! `fluid-node cut-cells`: computes the cut-cell geometry of a surface file on the grid of a
-//! scene, writes Λ, λ and the sub-faces (VTK legacy ASCII and CSV) and prints one JSON line.
+//! scene, writes Λ, λ and the sub-faces (VTK XML and legacy ASCII, and CSV) and prints one JSON
+//! line.
 //!
 //! ```text
 //! fluid-node cut-cells --scene SCENE.toml --surface BODY.stl [--to MOVED.stl] --out DIR
@@ -11,13 +12,15 @@
 //!
 //! Files written in DIR: `solid_fraction.vtk` (cell data), `face_fraction.vtk` (face centres with
 //! λ > 0), `subfaces.vtk` (clipped polygons or segments), `cells.csv`, `faces.csv`,
-//! `subfaces.csv`, and with `--to` `swept.csv`.
+//! `subfaces.csv`, and with `--to` `swept.csv`; `solid_fraction.vti` and `subfaces.vtp` hold the
+//! arrays of the first and the third as VTK XML (compressed binary).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use protocol::vtk::{DataArray, ImageData, PolyCells, PolyData, Values, image_data, poly_data};
 
 use crate::cutcell::stl::{SurfaceMesh, parse_loops_csv, parse_stl};
 use crate::cutcell::{CutGeometry, SweptVolumes, compute, face_index, n_faces, swept_volumes};
@@ -396,6 +399,65 @@ fn write_outputs(
         writeln!(w, "{} {} {}", s.normal[0], s.normal[1], s.normal[2]).map_err(io)?;
     }
     w.flush().map_err(io)?;
+
+    // The same cell data and sub-faces as VTK XML (compressed binary) for ParaView.
+    let image = ImageData {
+        cells: grid.cells,
+        origin: grid.lower,
+        spacing: grid.dx,
+        cell_data: scalars
+            .iter()
+            .map(|(name, values)| DataArray::scalar(name, Values::Float64(values.to_vec())))
+            .collect(),
+    };
+    std::fs::write(
+        dir.join("solid_fraction.vti"),
+        image_data(&image, "cut-cell solid fraction"),
+    )
+    .map_err(io)?;
+    let subfaces = &geometry.subfaces;
+    let mut connectivity = Vec::new();
+    let mut offsets = Vec::with_capacity(subfaces.len());
+    for s in subfaces {
+        connectivity.extend((s.first_vertex..s.first_vertex + s.n_vertices).map(i64::from));
+        offsets.push(connectivity.len() as i64);
+    }
+    let poly = PolyData {
+        points: geometry
+            .subface_vertices
+            .iter()
+            .flatten()
+            .copied()
+            .collect(),
+        kind: if grid.dim == 3 {
+            PolyCells::Polys
+        } else {
+            PolyCells::Lines
+        },
+        connectivity,
+        offsets,
+        point_data: Vec::new(),
+        cell_data: vec![
+            DataArray::scalar(
+                "area",
+                Values::Float64(subfaces.iter().map(|s| s.area).collect()),
+            ),
+            DataArray::scalar(
+                "cell",
+                Values::Int64(subfaces.iter().map(|s| i64::from(s.cell)).collect()),
+            ),
+            DataArray::scalar(
+                "particle",
+                Values::Int64(subfaces.iter().map(|s| i64::from(s.particle)).collect()),
+            ),
+            DataArray::vector("normal", subfaces.iter().flat_map(|s| s.normal).collect()),
+        ],
+    };
+    std::fs::write(
+        dir.join("subfaces.vtp"),
+        poly_data(&poly, "cut-cell sub-faces"),
+    )
+    .map_err(io)?;
 
     if let Some((_, swept)) = moved {
         let mut w = create(dir, "swept.csv")?;

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
 use protocol::session::NodeModel;
+use protocol::vtk::Series;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::embedded::{Embedded, InterfaceBudget, SolidFrame};
@@ -29,6 +30,8 @@ pub struct RealFluid {
     embedded: Option<Embedded>,
     /// Budget restored from a checkpoint before the surface arrived.
     pending_budget: Option<InterfaceBudget>,
+    /// The `.vti` files written so far (`fluid.pvd`).
+    vtk_series: Series,
 }
 
 struct Probe {
@@ -76,6 +79,7 @@ impl RealFluid {
             coupled: scene.solid.is_some(),
             embedded: None,
             pending_budget: None,
+            vtk_series: Series::default(),
         })
     }
 
@@ -202,10 +206,17 @@ impl NodeModel for RealFluid {
                 w.flush()?;
             }
         }
+        let title = format!("{} fluid output {k} t = {t:e}", self.name);
         if self.formats.contains(&OutputFormat::Vtk) {
+            let file = format!("fluid_{k}.vti");
+            let bytes = crate::output::fluid_vti(grid, state, self.gamma, alpha.as_deref(), &title);
+            std::fs::write(out.join(&file), bytes)?;
+            let pvd = self.vtk_series.record(k, t, &file);
+            crate::output::replace_file(&out.join("fluid.pvd"), pvd.as_bytes())?;
+        }
+        if self.formats.contains(&OutputFormat::VtkLegacy) {
             let mut w =
                 std::io::BufWriter::new(std::fs::File::create(out.join(format!("fluid_{k}.vtk")))?);
-            let title = format!("{} fluid output {k} t = {t:e}", self.name);
             crate::output::write_fluid_vtk(
                 &mut w,
                 grid,

@@ -1,7 +1,10 @@
-//! Fluid output files: CSV of cell-centre primitive variables and legacy VTK image data for
-//! ParaView. Writers take any `Write`; only binaries open files.
+//! Fluid output files: CSV of cell-centre primitive variables, and VTK image data for ParaView
+//! (XML `.vti`, or legacy ASCII). Writers take any `Write` or return bytes; only binaries open
+//! files.
 
 use std::io::Write;
+
+use protocol::vtk::{DataArray, ImageData, Values, image_data};
 
 use crate::embedded::{Loads, SolidFrame};
 use crate::fv::FluidState;
@@ -46,6 +49,45 @@ pub fn write_fluid_csv(
         writeln!(w, "{line}")?;
     }
     Ok(())
+}
+
+/// The fluid as VTK XML image data (`.vti` bytes, compressed binary): cell data `rho`
+/// [kg/m³], `p` \[Pa\], `alpha` (fluid fraction [-], 1 when `alpha` is `None`) and the vector
+/// `velocity` [m/s] (3 components, inactive axes 0); inactive axes are one cell thick. The same
+/// arrays as [`write_fluid_vtk`].
+pub fn fluid_vti(
+    grid: &Grid,
+    state: &FluidState,
+    gamma: f64,
+    alpha: Option<&[f64]>,
+    title: &str,
+) -> Vec<u8> {
+    let n = grid.n_cells();
+    let mut rho = Vec::with_capacity(n);
+    let mut p = Vec::with_capacity(n);
+    let mut velocity = Vec::with_capacity(3 * n);
+    for idx in 0..n {
+        let (r, v, pressure) = state.primitive(idx, gamma);
+        rho.push(r);
+        p.push(pressure);
+        velocity.extend_from_slice(&v);
+    }
+    let alpha = match alpha {
+        Some(a) => a.to_vec(),
+        None => vec![1.0; n],
+    };
+    let image = ImageData {
+        cells: grid.cells,
+        origin: grid.lower,
+        spacing: grid.dx,
+        cell_data: vec![
+            DataArray::scalar("rho", Values::Float64(rho)),
+            DataArray::scalar("p", Values::Float64(p)),
+            DataArray::scalar("alpha", Values::Float64(alpha)),
+            DataArray::vector("velocity", velocity),
+        ],
+    };
+    image_data(&image, title)
 }
 
 /// Writes a legacy VTK `STRUCTURED_POINTS` file (ASCII) with cell data `rho`, `p`, `alpha`
@@ -148,4 +190,13 @@ pub fn write_loads_csv(w: &mut impl Write, dim: usize, loads: &Loads) -> std::io
         writeln!(w, "{line}")?;
     }
     Ok(())
+}
+
+/// Replaces `path` with `bytes` through a temporary file beside it and a rename, so that a
+/// reader (or a run killed while writing) sees the old file or the new one, never a part.
+pub fn replace_file(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path)
 }

@@ -1,5 +1,6 @@
 //! End-to-end test of `fluid-node cut-cells` through the library `run` function: a 3-D STL box
-//! moved by a rigid motion and a 2-D CSV of two loops, checking the JSON line and the files.
+//! moved by a rigid motion and a 2-D CSV of two loops, checking the JSON line and the files (the
+//! VTK XML ones decoded and compared with the CSV ones).
 
 #![cfg(feature = "node")]
 
@@ -77,6 +78,70 @@ fn box_stl(lo: [f64; 3], hi: [f64; 3], angle: f64, shift: [f64; 3]) -> String {
     text
 }
 
+/// Columns `cols` of a CSV file's rows, as numbers.
+fn csv_rows(path: &std::path::Path, cols: &[usize]) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let words: Vec<&str> = l.split(',').collect();
+            cols.iter().map(|&c| words[c].parse().unwrap()).collect()
+        })
+        .collect()
+}
+
+/// `solid_fraction.vti` and `subfaces.vtp` hold what `cells.csv` and `subfaces.csv` hold (both
+/// written as the shortest text that reads back to the same double, so equal bits).
+fn check_xml_against_csv(out: &std::path::Path, dim: usize) {
+    use protocol::vtk::read;
+    let image = read::parse(&std::fs::read(out.join("solid_fraction.vti")).unwrap()).unwrap();
+    let fraction = image.array("CellData", "solid_fraction").unwrap();
+    let fraction = fraction.as_f64().unwrap();
+    let cells = csv_rows(&out.join("cells.csv"), &[0, 4]);
+    assert!(!cells.is_empty());
+    for row in &cells {
+        assert_eq!(
+            fraction[row[0] as usize].to_bits(),
+            row[1].to_bits(),
+            "cell {}",
+            row[0]
+        );
+    }
+    let listed = cells.iter().filter(|r| r[1] != 0.0).count();
+    assert_eq!(fraction.iter().filter(|f| **f != 0.0).count(), listed);
+
+    let poly = read::parse(&std::fs::read(out.join("subfaces.vtp")).unwrap()).unwrap();
+    let tag = if dim == 3 { "Polys" } else { "Lines" };
+    let rows = csv_rows(&out.join("subfaces.csv"), &[0, 6, 7, 8, 9]);
+    assert_eq!(
+        poly.piece[&format!("NumberOf{tag}")],
+        rows.len().to_string()
+    );
+    let area = poly.array("CellData", "area").unwrap().as_f64().unwrap();
+    let cell = poly.array("CellData", "cell").unwrap().as_i64().unwrap();
+    let normal = poly.array("CellData", "normal").unwrap().as_f64().unwrap();
+    for (s, row) in rows.iter().enumerate() {
+        assert_eq!(cell[s], row[0] as i64, "sub-face {s}");
+        assert_eq!(area[s].to_bits(), row[1].to_bits(), "sub-face {s}");
+        for d in 0..3 {
+            assert_eq!(
+                normal[3 * s + d].to_bits(),
+                row[2 + d].to_bits(),
+                "sub-face {s}"
+            );
+        }
+    }
+    let offsets = poly.array(tag, "offsets").unwrap().as_i64().unwrap();
+    let points = poly.array("Points", "Points").unwrap().as_f64().unwrap();
+    assert_eq!(offsets.len(), rows.len());
+    assert_eq!(
+        poly.array(tag, "connectivity").unwrap().values.len() as i64,
+        *offsets.last().unwrap()
+    );
+    assert!(points.len() >= 3 * dim);
+}
+
 #[test]
 fn three_dimensional_box_with_motion() {
     let dir = temp_dir("3d");
@@ -121,6 +186,7 @@ fn three_dimensional_box_with_motion() {
     }
     let vtk = std::fs::read_to_string(dir.join("out/solid_fraction.vtk")).unwrap();
     assert!(vtk.contains("DIMENSIONS 11 13 10") && vtk.contains("CELL_DATA 1080"));
+    check_xml_against_csv(&dir.join("out"), 3);
     // Printing variant.
     run(&args).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
@@ -158,6 +224,7 @@ p = 1.0
     assert!((field(&json, "solid_volume") - area).abs() <= 1e-12 * area);
     assert!((field(&json, "wet_area") - (2.0 + 1.8)).abs() <= 1e-12);
     assert!(field(&json, "max_cell_residual") <= 1e-12);
+    check_xml_against_csv(&dir.join("out"), 2);
     // Errors are reported, not panics.
     args.surface = dir.join("missing.csv");
     let err = run_to_json(&args).unwrap_err();

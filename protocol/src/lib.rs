@@ -7,6 +7,7 @@
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - [`topics`]: topic names and log-time convention of the MCAP record.
+//! - [`vtk`]: VTK XML files for ParaView (`.vti`, `.vtp`, `.pvd`) built in memory, and read back.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
 //! - `mcap_read` (feature `replay`): bounded, CRC-checked reading of MCAP bytes.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
@@ -22,6 +23,7 @@ pub mod scene;
 pub mod session;
 pub mod topics;
 pub mod transport;
+pub mod vtk;
 pub mod wire;
 
 #[cfg(feature = "bus")]

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
 use protocol::session::NodeModel;
+use protocol::vtk::Series;
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
 };
@@ -24,6 +25,8 @@ pub struct RealSolid {
     links_broken: u64,
     zero_force: Vec<f64>,
     zero_torque: Vec<f64>,
+    /// The `.vtp` files written so far: `particles.pvd`, `solid.pvd`, `wet.pvd`.
+    vtk_series: [Series; 3],
 }
 
 struct Probe {
@@ -84,6 +87,7 @@ impl RealSolid {
             links_broken: 0,
             zero_force: vec![0.0; n * dim],
             zero_torque: vec![0.0; n * n_rot],
+            vtk_series: Default::default(),
         })
     }
 
@@ -176,8 +180,27 @@ impl NodeModel for RealSolid {
             crate::output::write_particles_csv(&mut w, &self.solid)?;
             w.flush()?;
         }
+        let title = format!("{} solid output {k} t = {t:e}", self.name);
         if self.formats.contains(&OutputFormat::Vtk) {
-            let title = format!("{} solid output {k} t = {t:e}", self.name);
+            let files = [
+                (
+                    "particles",
+                    crate::output::particles_vtp(&self.solid, &title),
+                ),
+                ("solid", crate::output::solid_faces_vtp(&self.solid, &title)),
+                (
+                    "wet",
+                    crate::output::wet_surface_vtp(self.solid.wet_surface(), &title),
+                ),
+            ];
+            for ((kind, bytes), series) in files.into_iter().zip(&mut self.vtk_series) {
+                let file = format!("{kind}_{k}.vtp");
+                std::fs::write(out.join(&file), bytes)?;
+                let pvd = series.record(k, t, &file);
+                crate::output::replace_file(&out.join(format!("{kind}.pvd")), pvd.as_bytes())?;
+            }
+        }
+        if self.formats.contains(&OutputFormat::VtkLegacy) {
             let mut w =
                 std::io::BufWriter::new(std::fs::File::create(out.join(format!("solid_{k}.vtk")))?);
             crate::output::write_particles_vtk(&mut w, &self.solid, &title)?;

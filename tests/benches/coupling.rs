@@ -160,7 +160,7 @@ fn main() {
         let mut wall = 0.0;
         for _ in 0..reps {
             let status = std::process::Command::new(&coupler)
-                .args(["run", "--quiet", "--out"])
+                .args(["run", "--quiet", "--overwrite", "--out"])
                 .arg(out.join(record))
                 .arg(&path)
                 .status()

@@ -5,4 +5,5 @@ mod doubles;
 mod e2e;
 mod issue_11;
 mod issue_11_records;
+mod issue_15;
 mod tidy;

@@ -14,7 +14,8 @@ pub struct OutputConfig {
     /// Output period \[s\] (instead of or with `times`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub every: Option<f64>,
-    /// File formats: `"csv"`, `"vtk"` (default csv).
+    /// File formats: `"csv"`, `"vtk"` (VTK XML: `.vti`, `.vtp` and a `.pvd` series per kind),
+    /// `"vtk-legacy"` (legacy ASCII `.vtk`) (default csv).
     #[serde(default = "default_formats")]
     pub formats: Vec<OutputFormat>,
     /// Probes.
@@ -43,8 +44,11 @@ impl Default for OutputConfig {
 pub enum OutputFormat {
     /// Comma-separated values.
     Csv,
-    /// Legacy VTK for ParaView.
+    /// VTK XML for ParaView: compressed binary `.vti` (fluid) and `.vtp` (particles, wet
+    /// surface), and one `.pvd` time series per kind.
     Vtk,
+    /// Legacy ASCII VTK (`.vtk`), as written before the XML files.
+    VtkLegacy,
 }
 
 /// One `[[output.probes]]` entry.
