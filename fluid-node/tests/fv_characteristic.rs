@@ -251,3 +251,66 @@ fn cylinder_explosion_scene_starts_coarse_fluid_only() {
         s.time()
     );
 }
+
+#[test]
+fn the_scene_sets_sigma_and_the_far_field_pressure() {
+    // `fluid.characteristic`: absent, each side gets σ = 0.25 and its mean initial pressure;
+    // given, its σ and p_far on every characteristic side, and the other sides are left alone.
+    let scene = |table: &str| {
+        let text = format!(
+            r#"
+            name = "far"
+            [fluid]
+            lower = [0.0, 0.0]
+            upper = [1.0, 1.0]
+            cells = [8, 8]
+            boundary = {{ x = ["characteristic", "characteristic"], y = ["wall", "wall"] }}
+            {table}
+            [[fluid.init]]
+            region = "all"
+            rho = 1.0
+            p = 1.0
+            [[fluid.init]]
+            region = {{ box = {{ lower = [0.5, 0.0], upper = [1.0, 1.0] }} }}
+            rho = 1.0
+            p = 3.0
+        "#
+        );
+        let scene = protocol::scene::Scene::from_toml_str(&text, "far").expect("valid");
+        FluidSolver::from_scene(scene.fluid.as_ref().expect("fluid"), 1)
+            .expect("solver")
+            .params()
+            .boundary
+    };
+    let default = scene("");
+    assert_eq!(
+        default[0],
+        [
+            BoundaryKind::Characteristic {
+                p_far: 1.0,
+                sigma: 0.25
+            },
+            BoundaryKind::Characteristic {
+                p_far: 3.0,
+                sigma: 0.25
+            }
+        ]
+    );
+    let given = scene("characteristic = { sigma = 0.1, p_far = 2.0 }");
+    assert_eq!(
+        given[0],
+        [BoundaryKind::Characteristic {
+            p_far: 2.0,
+            sigma: 0.1
+        }; 2]
+    );
+    assert_eq!(given[1], [BoundaryKind::Wall; 2]);
+    let sigma_only = scene("characteristic = { sigma = 0.0 }");
+    assert_eq!(
+        sigma_only[0][1],
+        BoundaryKind::Characteristic {
+            p_far: 3.0,
+            sigma: 0.0
+        }
+    );
+}

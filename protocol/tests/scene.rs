@@ -179,3 +179,48 @@ fn two_probes_of_one_name_are_refused() {
     assert_eq!(invalid_path(Err(err)), "output.probes[1].name");
     assert!(text.contains("output.probes[0] has it"), "{text}");
 }
+
+#[test]
+fn the_characteristic_table_is_checked() {
+    let scene = |boundary: &str, table: &str| {
+        format!(
+            r#"
+            name = "far"
+            [fluid]
+            lower = [0.0, 0.0]
+            upper = [1.0, 1.0]
+            cells = [8, 8]
+            boundary = {{ x = [{boundary}], y = ["wall", "wall"] }}
+            characteristic = {table}
+            [[fluid.init]]
+            region = "all"
+            rho = 1.0
+            p = 1.0
+        "#
+        )
+    };
+    let err = |text: String| {
+        protocol::scene::Scene::from_toml_str(&text, "far")
+            .expect_err("refused")
+            .to_string()
+    };
+    let ch = r#""characteristic", "outflow""#;
+    assert!(protocol::scene::Scene::from_toml_str(&scene(ch, "{}"), "far").is_ok());
+    let e = err(scene(r#""outflow", "outflow""#, "{ sigma = 0.1 }"));
+    assert!(
+        e.contains("fluid.characteristic") && e.contains("characteristic"),
+        "{e}"
+    );
+    let e = err(scene(ch, "{ sigma = -0.1 }"));
+    assert!(
+        e.contains("fluid.characteristic.sigma") && e.contains("[0, 10]"),
+        "{e}"
+    );
+    let e = err(scene(ch, "{ p_far = 0.0 }"));
+    assert!(
+        e.contains("fluid.characteristic.p_far") && e.contains("> 0"),
+        "{e}"
+    );
+    let e = err(scene(ch, "{ p = 1.0 }"));
+    assert!(e.contains("p"), "{e}");
+}

@@ -44,14 +44,15 @@ pub enum BoundaryKind {
     Characteristic {
         /// Far-field pressure \[Pa\] the incoming characteristic relaxes toward.
         p_far: f64,
-        /// Poinsot–Lele relaxation coefficient σ [-] (scenes: `sweep::CHARACTERISTIC_SIGMA`;
+        /// Poinsot–Lele relaxation coefficient σ [-] (default `sweep::CHARACTERISTIC_SIGMA`, or `fluid.characteristic.sigma`;
         /// 0 gives the zero-gradient outflow).
         sigma: f64,
     },
 }
 
 impl From<Boundary> for BoundaryKind {
-    /// The scene's kind; a characteristic side gets σ = `CHARACTERISTIC_SIGMA` and
+    /// The scene's kind; a characteristic side gets σ = `CHARACTERISTIC_SIGMA` (the scene's
+    /// `fluid.characteristic.sigma` replaces it in [`from_scene`]) and
     /// `p_far = 0` here, set from the initial state by [`from_scene`].
     fn from(b: Boundary) -> Self {
         match b {
@@ -66,12 +67,23 @@ impl From<Boundary> for BoundaryKind {
     }
 }
 
-/// Sets the far-field pressure of every characteristic side to the mean initial pressure of
-/// the cells along that side (the layer of cells touching it), summed in index order.
-pub fn set_far_pressures(grid: &Grid, params: &mut FluidParams, state: &FluidState) {
+/// Sets the far-field pressure of every characteristic side: `fluid.characteristic.p_far`
+/// when the scene gives it, else the mean initial pressure of the cells along that side (the
+/// layer of cells touching it), summed in index order.
+pub fn set_far_pressures(
+    grid: &Grid,
+    params: &mut FluidParams,
+    state: &FluidState,
+    cfg: &FluidConfig,
+) {
+    let given = cfg.characteristic.as_ref().and_then(|c| c.p_far);
     for axis in 0..grid.dim {
         for side in 0..2 {
             if let BoundaryKind::Characteristic { p_far, .. } = &mut params.boundary[axis][side] {
+                if let Some(p) = given {
+                    *p_far = p;
+                    continue;
+                }
                 let layer = if side == 0 { 0 } else { grid.cells[axis] - 1 };
                 let (mut sum, mut count) = (0.0, 0usize);
                 for idx in 0..grid.n_cells() {
@@ -183,6 +195,13 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
             ));
         }
         *b = [lo.into(), hi.into()];
+        if let Some(ch) = &cfg.characteristic {
+            for side in b.iter_mut() {
+                if let BoundaryKind::Characteristic { sigma, .. } = side {
+                    *sigma = ch.sigma;
+                }
+            }
+        }
     }
     let params = FluidParams {
         gamma: cfg.gamma,
@@ -247,7 +266,7 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
             }
         }
         let mut params = params;
-        set_far_pressures(&grid, &mut params, &state);
+        set_far_pressures(&grid, &mut params, &state, cfg);
         return Ok((grid, params, state));
     }
     for idx in 0..grid.n_cells() {
@@ -265,6 +284,6 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
         state.set_primitive(idx, entry.rho, vel, entry.p, params.gamma);
     }
     let mut params = params;
-    set_far_pressures(&grid, &mut params, &state);
+    set_far_pressures(&grid, &mut params, &state, cfg);
     Ok((grid, params, state))
 }

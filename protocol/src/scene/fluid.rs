@@ -35,6 +35,10 @@ pub struct FluidConfig {
     /// Vacuum thresholds (default ρ = p = 1e-10).
     #[serde(default)]
     pub vacuum: VacuumConfig,
+    /// Settings of the `"characteristic"` sides (defaults: σ = 0.25, far-field pressure = the
+    /// mean initial pressure along each side); only with such a side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub characteristic: Option<CharacteristicConfig>,
     /// Initial state, applied in order (a later entry overrides an earlier one).
     #[serde(default)]
     pub init: Vec<InitEntry>,
@@ -185,6 +189,28 @@ pub enum Boundary {
     Characteristic,
 }
 
+/// Poinsot–Lele relaxation coefficient σ of a characteristic side unless the scene sets one
+/// (Poinsot & Lele 1992 use σ ≈ 0.25; Rudy & Strikwerda 1980 found 0.27 best).
+pub const DEFAULT_CHARACTERISTIC_SIGMA: f64 = 0.25;
+
+/// `fluid.characteristic`: how the non-reflecting sides hold the far field.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CharacteristicConfig {
+    /// Relaxation coefficient σ \[-\] (default 0.25; 0 is the zero-gradient outflow, larger holds
+    /// the far-field pressure more firmly and reflects more).
+    #[serde(default = "default_characteristic_sigma")]
+    pub sigma: f64,
+    /// Far-field pressure \[Pa\] of every characteristic side (default: each side's mean
+    /// initial pressure).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub p_far: Option<f64>,
+}
+
+fn default_characteristic_sigma() -> f64 {
+    DEFAULT_CHARACTERISTIC_SIGMA
+}
+
 /// `fluid.vacuum`: below either threshold a cell is a vacuum cell.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -303,6 +329,33 @@ impl FluidConfig {
         }
         c.positive("fluid.vacuum.rho", fluid.vacuum.rho)?;
         c.positive("fluid.vacuum.p", fluid.vacuum.p)?;
+        if let Some(ch) = &fluid.characteristic {
+            let dim = fluid.lower.len().min(3);
+            let any = (0..dim).any(|a| fluid.boundary.axis(a).contains(&Boundary::Characteristic));
+            if !any {
+                return Err(c.invalid(
+                    "fluid.characteristic",
+                    "a side of kind \"characteristic\" in fluid.boundary",
+                    "none: remove the table or make a side characteristic".to_string(),
+                ));
+            }
+            if !(ch.sigma.is_finite() && (0.0..=10.0).contains(&ch.sigma)) {
+                return Err(c.invalid(
+                    "fluid.characteristic.sigma",
+                    "a number in [0, 10]",
+                    ch.sigma.to_string(),
+                ));
+            }
+            if let Some(p) = ch.p_far {
+                if !(p.is_finite() && p > 0.0) {
+                    return Err(c.invalid(
+                        "fluid.characteristic.p_far",
+                        "a finite pressure > 0",
+                        p.to_string(),
+                    ));
+                }
+            }
+        }
         match &fluid.profile {
             Some(Profile::DensityWave {
                 amplitude,

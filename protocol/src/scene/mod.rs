@@ -21,8 +21,8 @@ use serde::{Deserialize, Serialize};
 
 pub use error::SceneError;
 pub use fluid::{
-    Boundary, BoundaryConfig, FluidConfig, FluxConfig, FluxScheme, InitEntry, PressureField,
-    Profile, VacuumConfig,
+    Boundary, BoundaryConfig, CharacteristicConfig, DEFAULT_CHARACTERISTIC_SIGMA, FluidConfig,
+    FluxConfig, FluxScheme, InitEntry, PressureField, Profile, VacuumConfig,
 };
 pub use memory::{MemoryError, MemoryEstimate};
 pub use output::{OutputConfig, OutputFormat, ProbeConfig};
