@@ -346,14 +346,14 @@ impl FluidConfig {
                     ch.sigma.to_string(),
                 ));
             }
-            if let Some(p) = ch.p_far {
-                if !(p.is_finite() && p > 0.0) {
-                    return Err(c.invalid(
-                        "fluid.characteristic.p_far",
-                        "a finite pressure > 0",
-                        p.to_string(),
-                    ));
-                }
+            if let Some(p) = ch.p_far
+                && !(p.is_finite() && p > 0.0)
+            {
+                return Err(c.invalid(
+                    "fluid.characteristic.p_far",
+                    "a finite pressure > 0",
+                    p.to_string(),
+                ));
             }
         }
         match &fluid.profile {
