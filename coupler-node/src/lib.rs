@@ -3,7 +3,8 @@
 //!
 //! - [`scheme`]: the handshake as a sans-IO state machine; [`dt`]: time-step agreement;
 //!   [`ledger`]: the conservation balance; [`iqn`]: the IQN-ILS acceleration of the fixed point.
-//! - [`driver`]: the loop that feeds the state machine from a transport and records every frame.
+//! - [`driver`]: the loop that feeds the state machine from a transport and records every frame;
+//!   [`progress`]: its progress line.
 //! - [`launch`]: `coupler-node run` (scene validation, child processes, supervision, outputs);
 //!   [`restart`]: a run resumed from a record's checkpoints; [`out_folder`]: the output folder
 //!   (refused when not empty unless `--overwrite`, which clears an earlier run's files).
@@ -23,6 +24,7 @@ pub mod iqn;
 pub mod launch;
 pub mod ledger;
 pub mod out_folder;
+pub mod progress;
 pub mod record;
 pub mod replay;
 pub mod report;
