@@ -11,10 +11,12 @@
 //! - [`record`], [`sink`]: the MCAP record; [`inspect`], [`replay`], [`coupler_replay`]: reading
 //!   it back.
 //! - [`report`]: the papers' figures from a run's outputs.
+//! - [`check`]: `coupler-node check` (a scene validated without running it).
 //! - [`cli`]: the command line.
 
 #![warn(missing_docs)]
 
+pub mod check;
 pub mod cli;
 pub mod coupler_replay;
 pub mod driver;
