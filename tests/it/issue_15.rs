@@ -213,6 +213,7 @@ fn issue_15_a_run_into_a_used_out_is_refused_unless_overwrite_and_leaves_no_stal
             "fluid_0.vti",
             "fluid_1.csv",
             "fluid_1.vti",
+            "ledger.csv",
             "outputs.csv",
             "scene.toml",
             "summary.json"
