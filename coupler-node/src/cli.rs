@@ -1,22 +1,77 @@
-//! Command line of the `coupler-node` binary: `run`, `replay`, `inspect`, `report`.
+//! Command line of the `coupler-node` binary: `run`, `check`, `replay`, `inspect`, `report`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use protocol::wire::NodeKind;
 
 use crate::launch::{self, RunOptions};
 
 /// Couples a fluid node and a solid node over shared memory, records the exchange, replays it.
 #[derive(Debug, Parser)]
-#[command(name = "coupler-node", version)]
+#[command(name = "coupler-node", version, after_long_help = AFTER_LONG_HELP)]
 pub struct Args {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// Examples and exit codes, at the end of `coupler-node --help`.
+const AFTER_LONG_HELP: &str = "\
+Examples:
+  coupler-node check scenes/sod.toml
+  coupler-node run scenes/sod.toml --out out/sod
+  coupler-node run scenes/clamped-beam-2d.toml --solid prescribed --quiet
+  coupler-node inspect out/sod/exchange.mcap --step 10 --export json
+  coupler-node replay out/sod/exchange.mcap --node fluid --step 10
+  coupler-node report figures out/sod
+
+Exit codes:
+  0    success (a replay: identical)
+  1    a replay differs from the record
+  2    an error: bad arguments, a bad scene or record, a failed run
+  130  a run interrupted by SIGINT, SIGTERM or SIGHUP (its summary is written)";
+
+/// `replay --node`: which process is re-run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum NodeArg {
+    /// The fluid node.
+    Fluid,
+    /// The solid node.
+    Solid,
+    /// The coupler's state machine on the recorded node messages, from its checkpoint.
+    Coupler,
+}
+
+impl From<NodeArg> for NodeKind {
+    fn from(node: NodeArg) -> NodeKind {
+        match node {
+            NodeArg::Fluid => NodeKind::Fluid,
+            NodeArg::Solid => NodeKind::Solid,
+            NodeArg::Coupler => NodeKind::Coupler,
+        }
+    }
+}
+
+/// `inspect --export`: the export format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExportArg {
+    /// One step's messages as one JSON document.
+    Json,
+    /// One tidy table, `step,iteration,channel,field,index,value`, one row per number.
+    Csv,
+}
+
+impl From<ExportArg> for crate::inspect::ExportFormat {
+    fn from(format: ExportArg) -> crate::inspect::ExportFormat {
+        match format {
+            ExportArg::Json => crate::inspect::ExportFormat::Json,
+            ExportArg::Csv => crate::inspect::ExportFormat::Csv,
+        }
+    }
 }
 
 /// Subcommands.
@@ -53,6 +108,19 @@ pub enum Command {
         #[arg(long, requires = "restart")]
         step: Option<u64>,
     },
+    /// Check a scene without running it: parse and validate it (the errors `run` gives), compare
+    /// its memory estimate with the machine, open each `replay:FILE` record it names; print a
+    /// one-line summary. Exit 0 when `run` would start, 2 otherwise.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Check with this fluid implementation (as `run --fluid`).
+        #[arg(long)]
+        fluid: Option<String>,
+        /// Check with this solid implementation (as `run --solid`).
+        #[arg(long)]
+        solid: Option<String>,
+    },
     /// Re-run one node (or the coupler) on the recorded inputs up to step N and compare its
     /// outputs.
     Replay {
@@ -61,10 +129,9 @@ pub enum Command {
         /// Last step to replay.
         #[arg(long)]
         step: u64,
-        /// Which node: `fluid`, `solid`, or `coupler` (its state machine on the recorded node
-        /// messages, from its checkpoint).
-        #[arg(long)]
-        node: String,
+        /// Which node.
+        #[arg(long, value_enum)]
+        node: NodeArg,
         /// Implementation to run (default: the one recorded in its hello).
         #[arg(long)]
         double: Option<String>,
@@ -81,11 +148,9 @@ pub enum Command {
         /// step).
         #[arg(long)]
         step: Option<u64>,
-        /// Export format: `json` (one step's messages) or `csv` (one tidy table,
-        /// `step,iteration,channel,field,index,value`, one row per number). Default with
-        /// `--step`: json.
-        #[arg(long)]
-        export: Option<String>,
+        /// Export format (default with `--step`: json).
+        #[arg(long, value_enum)]
+        export: Option<ExportArg>,
         /// Rewrite a killed or damaged record into FILE.recovered.mcap: keeps every chunk that
         /// verifies, says what it dropped, and lists the recovered record.
         #[arg(long)]
@@ -220,6 +285,15 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             );
             Ok(ExitCode::SUCCESS)
         }
+        Command::Check {
+            scene,
+            fluid,
+            solid,
+        } => {
+            let summary = crate::check::check(&scene, fluid.as_deref(), solid.as_deref())?;
+            println!("{summary}");
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Replay {
             file,
             step,
@@ -227,12 +301,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             double,
             timeout_s,
         } => {
-            let node = match node.as_str() {
-                "fluid" => NodeKind::Fluid,
-                "solid" => NodeKind::Solid,
-                "coupler" => NodeKind::Coupler,
-                other => anyhow::bail!("--node {other:?}: expected fluid, solid or coupler"),
-            };
+            let node = NodeKind::from(node);
             let outcome = crate::replay::replay(&crate::replay::ReplayOptions {
                 file,
                 step,
@@ -327,12 +396,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     )
                 })?
             };
-            let format = match export.as_deref() {
-                None => None,
-                Some("json") => Some(crate::inspect::ExportFormat::Json),
-                Some("csv") => Some(crate::inspect::ExportFormat::Csv),
-                Some(other) => anyhow::bail!("--export {other:?}: expected json or csv"),
-            };
+            let format = export.map(crate::inspect::ExportFormat::from);
             match (step, format) {
                 (Some(step), format) => {
                     let format = format.unwrap_or(crate::inspect::ExportFormat::Json);

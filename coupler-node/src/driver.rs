@@ -15,6 +15,7 @@ use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, S
 use serde::Serialize;
 
 use crate::ledger::LedgerEntry;
+use crate::progress::Progress;
 use crate::record::Diagnostics;
 use crate::scheme::{Action, Coupler, Finish, StepReport};
 
@@ -214,7 +215,7 @@ pub fn drive(
 ) -> (Summary, Option<DriverError>) {
     let started = Instant::now();
     let mut busy = Busy::default();
-    let mut progress = Progress::new(cfg);
+    let mut progress = Progress::new(cfg.progress, &cfg.name, cfg.t_end);
     let mut outputs = Vec::new();
     let result = drive_inner(
         transport,
@@ -491,74 +492,4 @@ fn check_dt_min(
         dt_min: floor,
         default_floor: dt_min.is_none(),
     })
-}
-
-/// The progress line: simulated time, step, dt, iterations, ETA.
-struct Progress {
-    enabled: bool,
-    tty: bool,
-    started: Instant,
-    last: Option<Instant>,
-    t_end: f64,
-    name: String,
-    printed: bool,
-}
-
-impl Progress {
-    fn new(cfg: &DriverConfig) -> Progress {
-        use std::io::IsTerminal;
-        Progress {
-            enabled: cfg.progress,
-            tty: std::io::stderr().is_terminal(),
-            started: Instant::now(),
-            last: None,
-            t_end: cfg.t_end,
-            name: cfg.name.clone(),
-            printed: false,
-        }
-    }
-
-    fn update(&mut self, r: &StepReport) {
-        if !self.enabled {
-            return;
-        }
-        let every = if self.tty { 0.2 } else { 5.0 };
-        if self.last.is_some_and(|l| l.elapsed().as_secs_f64() < every) {
-            return;
-        }
-        self.last = Some(Instant::now());
-        let frac = (r.t / self.t_end).clamp(0.0, 1.0);
-        let elapsed = self.started.elapsed().as_secs_f64();
-        let eta = if frac > 0.0 {
-            elapsed * (1.0 - frac) / frac
-        } else {
-            0.0
-        };
-        let width = 24;
-        let filled = (frac * width as f64).round() as usize;
-        let bar: String = "#".repeat(filled) + &"-".repeat(width - filled);
-        let line = format!(
-            "{} [{bar}] t = {:.4e}/{:.4e} s ({:5.1}%) step {} dt {:.3e} it {} ETA {:.0} s",
-            self.name,
-            r.t,
-            self.t_end,
-            100.0 * frac,
-            r.step + 1,
-            r.dt,
-            r.iterations,
-            eta
-        );
-        if self.tty {
-            eprint!("\r{line}\x1b[K");
-        } else {
-            eprintln!("{line}");
-        }
-        self.printed = true;
-    }
-
-    fn finish(&mut self) {
-        if self.enabled && self.tty && self.printed {
-            eprintln!();
-        }
-    }
 }

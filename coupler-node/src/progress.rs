@@ -1,0 +1,245 @@
+//! The progress line of `coupler-node run`: bar, simulated time, step, dt, iterations and ETA.
+//!
+//! The ETA is the simulated time left over the recent rate of simulated time per wall second,
+//! measured between completed steps only: node start-up, the handshake and the first step (which
+//! builds the solvers' scratch buffers) are not counted. On a terminal the line is redrawn in
+//! place every 0.2 s; piped, it is a plain line (no `\r`) every 5 s. Either way the last line is
+//! drawn when the run ends, so a run that reaches `t_end` ends on 100 %.
+
+use std::collections::VecDeque;
+use std::io::IsTerminal;
+use std::time::Instant;
+
+use crate::scheme::StepReport;
+
+/// Width of the bar, in characters.
+const BAR_WIDTH: usize = 24;
+
+/// Wall time the rate is measured over \[s\]: long enough to smooth step-to-step noise, short
+/// enough to follow a run that slows down.
+const RATE_WINDOW_S: f64 = 30.0;
+
+/// At most this many samples are kept (a run of tiny steps does not grow the window).
+const MAX_SAMPLES: usize = 256;
+
+/// What one progress line shows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProgressLine<'a> {
+    /// Scene name.
+    pub name: &'a str,
+    /// Simulated time reached \[s\].
+    pub t: f64,
+    /// End time \[s\].
+    pub t_end: f64,
+    /// Steps completed.
+    pub steps: u64,
+    /// Last step's size \[s\].
+    pub dt: f64,
+    /// Last step's coupling iterations.
+    pub iterations: u32,
+    /// Wall time left \[s\]; `None` until two steps have completed.
+    pub eta_s: Option<f64>,
+}
+
+/// Formats one progress line (pure): `NAME [####----] t = T/T_END s ( PCT%) step N dt DT it K
+/// ETA E s`. The bar and the percentage are `t / t_end`, clamped to `[0, 1]`.
+pub fn format_line(p: &ProgressLine<'_>) -> String {
+    let frac = if p.t_end > 0.0 {
+        (p.t / p.t_end).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let filled = ((frac * BAR_WIDTH as f64).round() as usize).min(BAR_WIDTH);
+    let bar = "#".repeat(filled) + &"-".repeat(BAR_WIDTH - filled);
+    let eta = match p.eta_s {
+        Some(eta) => format!("{eta:.0} s"),
+        None => "--".to_string(),
+    };
+    format!(
+        "{} [{bar}] t = {:.4e}/{:.4e} s ({:5.1}%) step {} dt {:.3e} it {} ETA {eta}",
+        p.name,
+        p.t,
+        p.t_end,
+        100.0 * frac,
+        p.steps,
+        p.dt,
+        p.iterations,
+    )
+}
+
+/// The wall time left (pure): `samples` are `(wall_s, t)` pairs of completed steps, oldest first;
+/// the rate is simulated time per wall second between the first and the last. `None` with fewer
+/// than two samples or no simulated time between them; `Some(0.0)` once `t_end` is reached.
+pub fn eta_s(samples: &[(f64, f64)], t_end: f64) -> Option<f64> {
+    let (&(wall_0, t_0), &(wall_1, t_1)) = (samples.first()?, samples.last()?);
+    if t_1 >= t_end {
+        return Some(0.0);
+    }
+    let (d_wall, d_t) = (wall_1 - wall_0, t_1 - t_0);
+    if samples.len() < 2 || d_t <= 0.0 || d_wall <= 0.0 {
+        return None;
+    }
+    Some((t_end - t_1) * d_wall / d_t)
+}
+
+/// The progress line's state: when it last printed and the recent steps' `(wall, t)`.
+pub(crate) struct Progress {
+    enabled: bool,
+    tty: bool,
+    origin: Instant,
+    last_print: Option<Instant>,
+    samples: VecDeque<(f64, f64)>,
+    t_end: f64,
+    name: String,
+    last: Option<(u64, f64, f64, u32)>,
+    /// Whether the last report was printed (so `finish` does not print it twice).
+    current: bool,
+}
+
+impl Progress {
+    /// A progress line for a run of `name` to `t_end`, printing only when `enabled`.
+    pub(crate) fn new(enabled: bool, name: &str, t_end: f64) -> Progress {
+        Progress {
+            enabled,
+            tty: std::io::stderr().is_terminal(),
+            origin: Instant::now(),
+            last_print: None,
+            samples: VecDeque::new(),
+            t_end,
+            name: name.to_string(),
+            last: None,
+            current: false,
+        }
+    }
+
+    /// A step completed: remember it; print if the last line is old enough.
+    pub(crate) fn update(&mut self, r: &StepReport) {
+        if !self.enabled {
+            return;
+        }
+        let wall = self.origin.elapsed().as_secs_f64();
+        self.samples.push_back((wall, r.t));
+        while self.samples.len() > MAX_SAMPLES
+            || (self.samples.len() > 2
+                && self
+                    .samples
+                    .front()
+                    .is_some_and(|s| wall - s.0 > RATE_WINDOW_S))
+        {
+            self.samples.pop_front();
+        }
+        self.last = Some((r.step + 1, r.t, r.dt, r.iterations));
+        self.current = false;
+        let every = if self.tty { 0.2 } else { 5.0 };
+        if self
+            .last_print
+            .is_some_and(|l| l.elapsed().as_secs_f64() < every)
+        {
+            return;
+        }
+        self.print();
+    }
+
+    /// The run ended: draw its last step (100 % when it reached `t_end`) and end the line.
+    pub(crate) fn finish(&mut self) {
+        if !self.enabled || self.last.is_none() {
+            return;
+        }
+        if !self.current {
+            self.print();
+        }
+        if self.tty {
+            eprintln!();
+        }
+    }
+
+    fn print(&mut self) {
+        let Some((steps, t, dt, iterations)) = self.last else {
+            return;
+        };
+        let eta = eta_s(self.samples.make_contiguous(), self.t_end);
+        let line = format_line(&ProgressLine {
+            name: &self.name,
+            t,
+            t_end: self.t_end,
+            steps,
+            dt,
+            iterations,
+            eta_s: eta,
+        });
+        if self.tty {
+            eprint!("\r{line}\x1b[K");
+        } else {
+            eprintln!("{line}");
+        }
+        self.last_print = Some(Instant::now());
+        self.current = true;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(t: f64, eta_s: Option<f64>) -> String {
+        format_line(&ProgressLine {
+            name: "sod",
+            t,
+            t_end: 0.2,
+            steps: 7,
+            dt: 1.5e-3,
+            iterations: 2,
+            eta_s,
+        })
+    }
+
+    #[test]
+    fn the_line_shows_the_fraction_of_t_end_and_the_eta() {
+        assert_eq!(
+            line(0.05, Some(12.4)),
+            "sod [######------------------] t = 5.0000e-2/2.0000e-1 s ( 25.0%) step 7 dt 1.500e-3 it 2 ETA 12 s"
+        );
+    }
+
+    #[test]
+    fn the_bar_is_full_at_t_end_and_before_the_rate_is_known_the_eta_is_dashes() {
+        assert_eq!(
+            line(0.2, Some(0.0)),
+            "sod [########################] t = 2.0000e-1/2.0000e-1 s (100.0%) step 7 dt 1.500e-3 it 2 ETA 0 s"
+        );
+        assert_eq!(
+            line(0.0, None),
+            "sod [------------------------] t = 0.0000e0/2.0000e-1 s (  0.0%) step 7 dt 1.500e-3 it 2 ETA --"
+        );
+        // A last step that overshoots `t_end` by rounding still draws a full bar, no more.
+        assert!(line(0.2 + 1e-12, None).contains("[########################] "));
+        assert!(line(0.2 + 1e-12, None).contains("(100.0%)"));
+    }
+
+    #[test]
+    fn the_eta_is_the_time_left_over_the_recent_rate() {
+        // 0.5 s of simulated time in 2 wall seconds; 1 s left: 4 s.
+        assert_eq!(
+            eta_s(&[(3.0, 0.5), (4.0, 0.625), (5.0, 1.0)], 2.0),
+            Some(4.0)
+        );
+        // 0.25 s in 2 wall seconds; 1 s left: 8 s.
+        assert_eq!(eta_s(&[(10.0, 0.75), (12.0, 1.0)], 2.0), Some(8.0));
+    }
+
+    #[test]
+    fn start_up_is_not_counted_because_the_rate_starts_at_the_first_completed_step() {
+        // The first step completes 60 s after launch (start-up); the next two take 1 s each.
+        // The rate is 0.25 s per wall second, not 0.75 s over 62 s; 1 s left: 4 s, not 83 s.
+        let samples = [(60.0, 0.25), (61.0, 0.5), (62.0, 0.75)];
+        assert_eq!(eta_s(&samples, 1.75), Some(4.0));
+    }
+
+    #[test]
+    fn no_eta_from_one_step_or_a_step_of_no_time_and_zero_at_the_end() {
+        assert_eq!(eta_s(&[], 1.0), None);
+        assert_eq!(eta_s(&[(1.0, 0.5)], 1.0), None);
+        assert_eq!(eta_s(&[(1.0, 0.5), (2.0, 0.5)], 1.0), None);
+        assert_eq!(eta_s(&[(1.0, 0.5), (2.0, 1.0)], 1.0), Some(0.0));
+    }
+}
