@@ -155,9 +155,9 @@ pub enum RecordLevel {
 /// `run.record_compression`: how the chunks of `exchange.mcap` are compressed. Any value gives
 /// the same messages back; it only trades file size against the coupler's time.
 ///
-/// NOTE: frames are f64 arrays, which compress little (a few %); `"none"` writes fastest,
-/// `"lz4"` (the default, as before the key existed) saves a little space at small cost, and
-/// `"zstd"` saves the most and costs the most (README, "Outputs of a run").
+/// NOTE: `"none"` writes fastest; `"lz4"` (the default, as before the key existed) made the
+/// record of `clamped-beam-2d` 2.7 times smaller for about 3 % more of the run's time; `"zstd"`
+/// is smaller still and slower (README, "Outputs of a run").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RecordCompression {
