@@ -1,5 +1,6 @@
 //! Recording throughput: 64 KiB and 1 MiB frames through [`Recorder`] into a `Vec` and into a
-//! file in `/tmp`, with `end_step` after every 4 frames (a step's worth).
+//! file in `/tmp`, with `end_step` after every 4 frames (a step's worth), for each
+//! `run.record_compression` (ids `none/file/65536` and so on).
 //!
 //! `CARGO_TARGET_DIR=... cargo bench -p coupler-node --bench record`
 
@@ -9,7 +10,7 @@ use std::time::Duration;
 
 use coupler_node::record::Recorder;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use protocol::scene::RecordLevel;
+use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::wire::NodeKind;
 
 const FRAMES_PER_ITER: usize = 16;
@@ -27,8 +28,13 @@ fn frame(len: usize) -> Vec<u8> {
         .collect()
 }
 
-fn record<W: std::io::Write + std::io::Seek>(writer: W, frame: &[u8]) -> W {
-    let mut rec = Recorder::new(writer, RecordLevel::Exchange, "bench", "").expect("recorder");
+fn record<W: std::io::Write + std::io::Seek>(
+    writer: W,
+    compression: RecordCompression,
+    frame: &[u8],
+) -> W {
+    let mut rec =
+        Recorder::new(writer, RecordLevel::Exchange, compression, "bench", "").expect("recorder");
     for i in 0..FRAMES_PER_ITER {
         // Steps of 1 µs of simulated time.
         let t = (i / 4) as f64 * 1e-6;
@@ -46,23 +52,39 @@ fn bench_record(c: &mut Criterion) {
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(4));
     let path = std::env::temp_dir().join(format!("cosim-record-bench-{}.mcap", std::process::id()));
-    for len in [64usize << 10, 1 << 20] {
-        let data = frame(len);
-        group.throughput(Throughput::Bytes((FRAMES_PER_ITER * len) as u64));
-        group.bench_with_input(BenchmarkId::new("vec", len), &data, |b, data| {
-            b.iter(|| {
-                record(
-                    Cursor::new(Vec::with_capacity(FRAMES_PER_ITER * len * 2)),
-                    data,
-                )
-            })
-        });
-        group.bench_with_input(BenchmarkId::new("file", len), &data, |b, data| {
-            b.iter(|| {
-                let file = File::create(&path).expect("create bench file");
-                record(BufWriter::new(file), data)
-            })
-        });
+    for compression in [
+        RecordCompression::None,
+        RecordCompression::Lz4,
+        RecordCompression::Zstd,
+    ] {
+        let name = compression.name();
+        for len in [64usize << 10, 1 << 20] {
+            let data = frame(len);
+            group.throughput(Throughput::Bytes((FRAMES_PER_ITER * len) as u64));
+            group.bench_with_input(
+                BenchmarkId::new(format!("{name}/vec"), len),
+                &data,
+                |b, data| {
+                    b.iter(|| {
+                        record(
+                            Cursor::new(Vec::with_capacity(FRAMES_PER_ITER * len * 2)),
+                            compression,
+                            data,
+                        )
+                    })
+                },
+            );
+            group.bench_with_input(
+                BenchmarkId::new(format!("{name}/file"), len),
+                &data,
+                |b, data| {
+                    b.iter(|| {
+                        let file = File::create(&path).expect("create bench file");
+                        record(BufWriter::new(file), compression, data)
+                    })
+                },
+            );
+        }
     }
     group.finish();
     let _ = std::fs::remove_file(&path);

@@ -23,8 +23,14 @@ impl FileSink {
     /// Creates `path` and writes the scene as metadata.
     pub fn create(path: &Path, level: RecordLevel, scene: &Scene) -> anyhow::Result<FileSink> {
         let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let recorder = Recorder::new(BufWriter::new(file), level, &scene.name, &scene.to_toml())
-            .with_context(|| format!("starting the record {}", path.display()))?;
+        let recorder = Recorder::new(
+            BufWriter::new(file),
+            level,
+            scene.run.record_compression,
+            &scene.name,
+            &scene.to_toml(),
+        )
+        .with_context(|| format!("starting the record {}", path.display()))?;
         Ok(FileSink {
             recorder: Some(recorder),
             frames: matches!(level, RecordLevel::All | RecordLevel::Exchange),

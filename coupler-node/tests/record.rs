@@ -16,7 +16,7 @@ use coupler_node::record::{
 use proptest::prelude::*;
 use protocol::codec;
 use protocol::mcap_read::{End, PROVISIONAL_END, ScanError};
-use protocol::scene::RecordLevel;
+use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::wire::*;
 
 const SCENE: &str = "[run]\nt_end = 0.01\n";
@@ -184,8 +184,17 @@ fn record_run(n_steps: u64, level: RecordLevel) -> (Vec<u8>, Frames, Vec<usize>)
 /// [`record_run`], with the file as it is on disk after every `end_step` (what a kill right
 /// then, or at any moment during the next step, leaves).
 fn record_run_with_snapshots(n_steps: u64, level: RecordLevel) -> (Vec<u8>, Frames, Vec<Vec<u8>>) {
+    record_run_compressed(n_steps, level, RecordCompression::Lz4)
+}
+
+/// [`record_run_with_snapshots`] with chunks compressed by `compression`.
+fn record_run_compressed(
+    n_steps: u64,
+    level: RecordLevel,
+    compression: RecordCompression,
+) -> (Vec<u8>, Frames, Vec<Vec<u8>>) {
     let shared = Shared::default();
-    let mut rec = Recorder::new(shared.clone(), level, "unit-scene", SCENE).unwrap();
+    let mut rec = Recorder::new(shared.clone(), level, compression, "unit-scene", SCENE).unwrap();
     let mut per_step = Vec::new();
     let mut snapshots = Vec::new();
     for step in 0..n_steps {
@@ -307,6 +316,22 @@ fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
             recover(&bytes[..cut_at]).unwrap().bytes,
             vec![],
         ),
+        // Issue 15, item 8: the other values of `run.record_compression`, finished and killed.
+        (
+            "sample-none.mcap",
+            record_run_compressed(5, RecordLevel::Exchange, RecordCompression::None).0,
+            vec![],
+        ),
+        (
+            "sample-none-killed.mcap",
+            record_run_compressed(5, RecordLevel::Exchange, RecordCompression::None).2[2].clone(),
+            vec!["--unfinished"],
+        ),
+        (
+            "sample-zstd.mcap",
+            record_run_compressed(5, RecordLevel::Exchange, RecordCompression::Zstd).0,
+            vec![],
+        ),
     ];
     let py = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/py");
     // `$COSIM_PYTHON`, or a venv with the package made on first use under the target folder.
@@ -346,6 +371,96 @@ fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// Issue 15, item 8: `run.record_compression` = none, lz4 and zstd give the same messages
+/// (topics, times, sequence numbers, payloads) through [`read_recording`], each chunk says the
+/// compression it was written with, and a killed run's file reads up to its last step for each.
+#[test]
+fn issue_15_each_record_compression_reads_back_the_same_messages() {
+    let reference = read_recording(&record_run(3, RecordLevel::Exchange).0).unwrap();
+    // The default scene value and the recorder's default agree.
+    assert_eq!(RecordCompression::default(), RecordCompression::Lz4);
+    for (compression, name) in [
+        (RecordCompression::None, ""),
+        (RecordCompression::Lz4, "lz4"),
+        (RecordCompression::Zstd, "zstd"),
+    ] {
+        let (bytes, per_step, snapshots) =
+            record_run_compressed(3, RecordLevel::Exchange, compression);
+        let rec = read_recording(&bytes).unwrap();
+        assert_eq!(
+            rec.end,
+            End::Finished {
+                summary_damage: None
+            },
+            "{compression:?}"
+        );
+        assert_eq!(
+            rec.messages.len(),
+            reference.messages.len(),
+            "{compression:?}"
+        );
+        for (got, want) in rec.messages.iter().zip(&reference.messages) {
+            assert_eq!(
+                (
+                    &got.topic,
+                    got.sequence,
+                    got.log_time,
+                    got.publish_time,
+                    &got.data
+                ),
+                (
+                    &want.topic,
+                    want.sequence,
+                    want.log_time,
+                    want.publish_time,
+                    &want.data
+                ),
+                "{compression:?}"
+            );
+        }
+        let frames: Vec<&Vec<u8>> = rec
+            .messages
+            .iter()
+            .filter(|m| m.topic.contains("-to-"))
+            .map(|m| &m.data)
+            .collect();
+        let expected: Vec<&Vec<u8>> = per_step.iter().flatten().map(|(_, _, f)| f).collect();
+        assert_eq!(frames, expected, "{compression:?}");
+        // Every chunk, read by the mcap crate itself, names the compression.
+        let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
+        assert!(!summary.chunk_indexes.is_empty());
+        assert!(
+            summary.chunk_indexes.iter().all(|c| c.compression == name),
+            "{compression:?}: {:?}",
+            summary
+                .chunk_indexes
+                .iter()
+                .map(|c| &c.compression)
+                .collect::<Vec<_>>()
+        );
+        // A run killed after step 1 reads up to there.
+        let killed = read_recording(&snapshots[1]).unwrap();
+        assert_eq!(killed.end, End::Unfinished, "{compression:?}");
+        assert_eq!(
+            killed.topic(DIAGNOSTICS_TOPIC).count(),
+            2,
+            "{compression:?}"
+        );
+    }
+    // Uncompressed frames of f64 values are the largest file, but not by much: they hardly
+    // compress.
+    let size = |c| record_run_compressed(3, RecordLevel::Exchange, c).0.len();
+    let (none, lz4, zstd) = (
+        size(RecordCompression::None),
+        size(RecordCompression::Lz4),
+        size(RecordCompression::Zstd),
+    );
+    assert!(
+        none > lz4 && lz4 > zstd,
+        "none {none}, lz4 {lz4}, zstd {zstd}"
+    );
+}
+
 #[test]
 fn same_run_records_the_same_message_bytes() {
     let (a, _, _) = record_run(4, RecordLevel::Exchange);
@@ -360,9 +475,15 @@ fn diagnostics_level_writes_no_frames_and_none_is_refused() {
     let rec = read_recording(&bytes).unwrap();
     assert_eq!(rec.messages.len(), 3);
     assert!(rec.messages.iter().all(|m| m.topic == DIAGNOSTICS_TOPIC));
-    let err = Recorder::new(Cursor::new(Vec::new()), RecordLevel::None, "s", SCENE)
-        .err()
-        .expect("refused");
+    let err = Recorder::new(
+        Cursor::new(Vec::new()),
+        RecordLevel::None,
+        RecordCompression::Lz4,
+        "s",
+        SCENE,
+    )
+    .err()
+    .expect("refused");
     assert!(matches!(err, RecordError::Disabled));
     // The recorder writes the same for All and Exchange (All differs in the coupler, which
     // then asks every node for a checkpoint at every step: tests/it/doubles.rs).
@@ -573,8 +694,14 @@ fn export_step_dumps_the_exchanged_arrays() {
 #[test]
 fn issue_11_a_killed_run_reads_with_standard_readers_up_to_its_last_completed_step() {
     let shared = Shared::default();
-    let mut rec =
-        Recorder::new(shared.clone(), RecordLevel::Exchange, "unit-scene", SCENE).unwrap();
+    let mut rec = Recorder::new(
+        shared.clone(),
+        RecordLevel::Exchange,
+        RecordCompression::Lz4,
+        "unit-scene",
+        SCENE,
+    )
+    .unwrap();
     // Killed before the first step ends: an empty but readable record.
     let empty = shared.0.borrow().get_ref().clone();
     assert_eq!(mcap::MessageStream::new(&empty).unwrap().count(), 0);

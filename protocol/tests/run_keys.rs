@@ -1,7 +1,8 @@
 //! The fixed-point keys of `[run]`: IQN-ILS, its reuse and filter, the first relaxation factor
-//! and the predictor are read with their defaults, and out-of-range values are refused by key.
+//! and the predictor are read with their defaults, and out-of-range values are refused by key;
+//! `record_compression` is read and a bad value refused naming the key and the choices.
 
-use protocol::scene::{Predictor, Relaxation, Scene, SceneError};
+use protocol::scene::{Predictor, RecordCompression, Relaxation, Scene, SceneError};
 
 fn scene(run: &str) -> Result<Scene, SceneError> {
     let text = format!(
@@ -50,6 +51,50 @@ fn out_of_range_fixed_point_keys_are_refused_by_key() {
         match scene(run) {
             Err(SceneError::Invalid { path, .. }) => assert_eq!(path, key, "{run}"),
             other => panic!("{run}: expected an Invalid error, got {other:?}"),
+        }
+    }
+}
+
+/// Issue 15, item 8: `run.record_compression` is lz4 unless the scene says `"none"` or
+/// `"zstd"`; it survives the scene's round trip through TOML (the record's metadata); any other
+/// value is refused naming the key and the three allowed values.
+#[test]
+fn record_compression_is_read_and_a_bad_value_names_the_key_and_the_choices() {
+    assert_eq!(
+        scene("").expect("defaults").run.record_compression,
+        RecordCompression::Lz4
+    );
+    for (value, want) in [
+        ("none", RecordCompression::None),
+        ("lz4", RecordCompression::Lz4),
+        ("zstd", RecordCompression::Zstd),
+    ] {
+        let s = scene(&format!("record_compression = \"{value}\"")).expect(value);
+        assert_eq!(s.run.record_compression, want);
+        assert_eq!(want.name(), value);
+        let again = Scene::from_toml_str(&s.to_toml(), "again.toml").expect("round trip");
+        assert_eq!(again.run.record_compression, want);
+    }
+    for bad in [
+        "record_compression = \"gzip\"",
+        "record_compression = \"LZ4\"",
+        "record_compression = 1",
+    ] {
+        match scene(bad) {
+            Err(e @ SceneError::Parse { .. }) => {
+                let SceneError::Parse { path, message, .. } = &e else {
+                    unreachable!()
+                };
+                assert_eq!(path, "run.record_compression", "{bad}: {e}");
+                let text = e.to_string();
+                assert!(text.contains("run.record_compression"), "{bad}: {text}");
+                if bad.contains('"') {
+                    for allowed in ["`none`", "`lz4`", "`zstd`"] {
+                        assert!(message.contains(allowed), "{bad}: {message}");
+                    }
+                }
+            }
+            other => panic!("{bad}: expected a Parse error, got {other:?}"),
         }
     }
 }

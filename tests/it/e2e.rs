@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use coupler_node::record::{self, Recorder};
 use protocol::codec;
-use protocol::scene::RecordLevel;
+use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::wire::{Message, NodeKind};
 
 pub(crate) fn workspace() -> PathBuf {
@@ -331,6 +331,7 @@ fn replay_is_identical_and_names_an_altered_value() {
     let mut recorder = Recorder::new(
         std::io::BufWriter::new(std::fs::File::create(&altered_path).expect("create")),
         RecordLevel::Exchange,
+        RecordCompression::Lz4,
         "backbone-doubles",
         &rec.metadata["scene"]["toml"],
     )

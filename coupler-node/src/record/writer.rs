@@ -11,7 +11,7 @@ use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions, Writer};
 use protocol::PROTOCOL_VERSION;
 use protocol::mcap_read::PROVISIONAL_END;
-use protocol::scene::RecordLevel;
+use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::topics::{self, RECORD_LAYOUT};
 use protocol::wire::NodeKind;
 
@@ -41,25 +41,32 @@ pub struct Recorder<W: Write + Seek> {
 impl<W: Write + Seek> Recorder<W> {
     /// `level`: `All` | `Exchange`: all bus frames, checkpoints and diagnostics; `Diagnostics`:
     /// only the diagnostics JSON channel; `None` is refused ([`RecordError::Disabled`]).
-    /// `scene_toml` is stored as metadata `scene` (key `toml`) with the scene name; metadata
-    /// `run` holds the protocol version.
+    /// `compression`: of every chunk (`run.record_compression`). `scene_toml` is stored as
+    /// metadata `scene` (key `toml`) with the scene name; metadata `run` holds the protocol
+    /// version.
     pub fn new(
         writer: W,
         level: RecordLevel,
+        compression: RecordCompression,
         scene_name: &str,
         scene_toml: &str,
     ) -> Result<Self, RecordError> {
         if level == RecordLevel::None {
             return Err(RecordError::Disabled);
         }
-        // NOTE: lz4 is fast enough not to slow the coupler, and `compression_threads(0)` keeps
-        // the writer on the caller's thread (pitfall 13; it only matters for zstd).
+        // NOTE: `compression_threads(0)` keeps zstd on the caller's thread (pitfall 13), so
+        // compression never takes a core from the solvers.
+        let compression = match compression {
+            RecordCompression::None => None,
+            RecordCompression::Lz4 => Some(Compression::Lz4),
+            RecordCompression::Zstd => Some(Compression::Zstd),
+        };
         let end_due = Arc::new(AtomicBool::new(false));
         // NOTE: `disable_seeking` makes the writer build each chunk in memory and write it
         // whole, so nothing reaches the file mid-step and the provisional end stays the last
         // thing in it; `chunk_size(None)` leaves closing chunks to `close_chunk`.
         let mut writer = WriteOptions::new()
-            .compression(Some(Compression::Lz4))
+            .compression(compression)
             .compression_threads(0)
             .chunk_size(None)
             .disable_seeking(true)

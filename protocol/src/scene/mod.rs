@@ -28,7 +28,8 @@ pub use memory::{MemoryError, MemoryEstimate};
 pub use output::{OutputConfig, OutputFormat, ProbeConfig};
 pub use region::Region;
 pub use run::{
-    DT_MIN_OF_T_END, DT_MIN_RELATIVE, Predictor, RecordLevel, Relaxation, RunConfig, SchemeName,
+    DT_MIN_OF_T_END, DT_MIN_RELATIVE, Predictor, RecordCompression, RecordLevel, Relaxation,
+    RunConfig, SchemeName,
 };
 pub use solid::{
     BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FractureConfig, LinksConfig, Motion,
