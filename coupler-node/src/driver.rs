@@ -114,6 +114,9 @@ pub struct Summary {
     pub wall_s: f64,
     /// Busy seconds per node.
     pub busy_s: Busy,
+    /// Seconds of the coupler's time spent in its sink: the MCAP record and `ledger.csv`
+    /// (part of `busy_s.coupler`).
+    pub record_s: f64,
     /// Fixed-point iterations.
     pub coupling_iterations: Iterations,
     /// Largest relative mass error of the ledger.
@@ -217,6 +220,10 @@ pub fn drive(
     let mut busy = Busy::default();
     let mut progress = Progress::new(cfg.progress, &cfg.name, cfg.t_end);
     let mut outputs = Vec::new();
+    let sink = &mut TimedSink {
+        inner: sink,
+        seconds: 0.0,
+    };
     let result = drive_inner(
         transport,
         coupler,
@@ -291,6 +298,7 @@ pub fn drive(
         t_end: coupler.time(),
         wall_s: wall,
         busy_s: busy,
+        record_s: sink.seconds,
         coupling_iterations: Iterations { mean, max },
         mass_rel_err: ledger.max_mass_rel_err,
         energy_rel_err: ledger.max_energy_rel_err,
@@ -303,6 +311,56 @@ pub fn drive(
         outputs,
     };
     (summary, error)
+}
+
+/// A sink that counts the seconds spent in it (`Summary::record_s`).
+struct TimedSink<'a> {
+    inner: &'a mut dyn RecordSink,
+    seconds: f64,
+}
+
+impl TimedSink<'_> {
+    fn timed<T>(&mut self, call: impl FnOnce(&mut dyn RecordSink) -> T) -> T {
+        let start = Instant::now();
+        let out = call(&mut *self.inner);
+        self.seconds += start.elapsed().as_secs_f64();
+        out
+    }
+}
+
+impl RecordSink for TimedSink<'_> {
+    fn frame(
+        &mut self,
+        from: NodeKind,
+        to: NodeKind,
+        t: f64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String> {
+        self.timed(|s| s.frame(from, to, t, wall_ns, frame))
+    }
+
+    fn checkpoint(
+        &mut self,
+        node: NodeKind,
+        t: f64,
+        wall_ns: u64,
+        frame: &[u8],
+    ) -> Result<(), String> {
+        self.timed(|s| s.checkpoint(node, t, wall_ns, frame))
+    }
+
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
+        self.timed(|s| s.diagnostics(t, wall_ns, json))
+    }
+
+    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+        self.timed(|s| s.ledger(entry))
+    }
+
+    fn end_step(&mut self) -> Result<(), String> {
+        self.timed(|s| s.end_step())
+    }
 }
 
 /// The start time of each step the loop has seen \[s\], so that a frame's log time is the

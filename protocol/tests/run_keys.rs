@@ -62,7 +62,7 @@ fn out_of_range_fixed_point_keys_are_refused_by_key() {
 fn record_compression_is_read_and_a_bad_value_names_the_key_and_the_choices() {
     assert_eq!(
         scene("").expect("defaults").run.record_compression,
-        RecordCompression::Lz4
+        RecordCompression::None
     );
     for (value, want) in [
         ("none", RecordCompression::None),
