@@ -315,6 +315,21 @@ struct NearWall {
     /// along `a` sees: sub-faces parallel to the axis do not count, so a box's corner cell
     /// shows each sweep the face across it.
     normal: [[f64; 3]; 3],
+    /// Area of its wet sub-faces.
+    wet_area: f64,
+    /// `Σ A ν` over its wet sub-faces.
+    wet_normal: [f64; 3],
+}
+
+impl NearWall {
+    /// Whether a covered cell with this wall is a crack (or two bodies touching): wet faces of
+    /// opposite normals, so no fluid between them yet. A single wet face on a grid plane, which
+    /// the tie rule gives to the covered cell behind it, is not one: its `Σ A ν` is its area.
+    fn is_crack(&self) -> bool {
+        let n = self.wet_normal;
+        self.wet_area > 0.0
+            && (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() <= 0.5 * self.wet_area
+    }
 }
 
 impl NearWall {
@@ -488,6 +503,22 @@ impl Embedded {
                 }
             }
             nw.area += s.area;
+            if self.current.wet[s.element as usize] && domain_face(grid, s).is_none() {
+                nw.wet_area += s.area;
+                for a in 0..3 {
+                    nw.wet_normal[a] += s.area * s.normal[a];
+                }
+            }
+        }
+        // Covered cells between the two faces of a crack that has just opened hold no fluid
+        // yet: vacuum (paper 000 §3.2), not ghost states.
+        self.hooks.vacuum.clear();
+        for (k, &c) in self.near.iter().enumerate() {
+            if self.geom.solid_fraction[c as usize] >= 1.0 - COVERED_TOLERANCE
+                && self.near_walls[k].is_crack()
+            {
+                self.hooks.vacuum.push(c);
+            }
         }
         for nw in &mut self.near_walls {
             if nw.area > 0.0 {
@@ -543,6 +574,7 @@ impl Embedded {
         // U^n of the near cells, with the ghosts of the first sweep in the covered ones.
         let first = crate::fv::sweep_order(dim, solver.steps())[0];
         solver.apply_ghosts(first, &self.hooks.ghosts[first]);
+        solver.apply_vacuum(&self.hooks.vacuum);
         let nvar = dim + 2;
         let u = &solver.state().u;
         self.saved.clear();
@@ -561,6 +593,11 @@ impl Embedded {
         let ng = self.ng as isize;
         let fills = &mut self.hooks.ghosts[axis];
         let walls = &mut self.hooks.walls[axis];
+        // A crack cell is vacuum fluid to the sweeps, not a covered cell.
+        let vacuum = &self.hooks.vacuum;
+        let covered = |q: usize| {
+            lambda[q] >= 1.0 - COVERED_TOLERANCE && vacuum.binary_search(&(q as u32)).is_err()
+        };
         let stride: usize = grid.cells[..axis].iter().product();
         // The wall seen along the axis from `fluid` beside the covered cell `covered`: the fluid
         // cell's sub-faces, else the covered cell's, else a wall at rest normal to the axis.
@@ -575,7 +612,7 @@ impl Embedded {
         };
         for &c in &self.near {
             let c = c as usize;
-            if lambda[c] < 1.0 - COVERED_TOLERANCE {
+            if !covered(c) {
                 continue;
             }
             let ijk = grid.ijk(c);
@@ -586,7 +623,7 @@ impl Embedded {
                     grid.index(q[0], q[1], q[2])
                 })
             };
-            let is_covered = |m: isize| at(m).is_some_and(|q| lambda[q] >= 1.0 - COVERED_TOLERANCE);
+            let is_covered = |m: isize| at(m).is_some_and(covered);
             let m0 = ijk[axis] as isize;
             for dir in [1isize, -1] {
                 // `c` starts a covered run seen from the fluid cell at `m0 − dir`.

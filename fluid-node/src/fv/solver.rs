@@ -139,6 +139,10 @@ pub struct SplitHooks {
     /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
     /// by pencil and position.
     pub walls: [Vec<WallRun>; 3],
+    /// Covered cells that hold no fluid yet beside a wet face (a crack that has just opened,
+    /// paper 000 §3.2): set to vacuum (all zero) before each sweep, after the ghosts, so the
+    /// faces beside them take the Lax–Friedrichs flux.
+    pub vacuum: Vec<u32>,
 }
 
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
@@ -460,6 +464,7 @@ impl FluidSolver {
             self.record_pressures(axis);
             if let Some((h, _)) = hooks.as_mut() {
                 self.apply_ghosts(axis, &h.ghosts[axis]);
+                self.apply_vacuum(&h.vacuum);
                 self.record_pressures_at(&h.pressure_cells, &mut h.pressures[axis]);
             }
             let grid = &self.grid;
@@ -533,6 +538,15 @@ impl FluidSolver {
                 let full = to_full(self.state.cell(c), self.grid.dim);
                 !state_ok(&full, gamma, self.params.vacuum_rho, self.params.vacuum_p)
             })
+    }
+
+    /// Sets `cells` to vacuum (every conserved quantity zero).
+    pub fn apply_vacuum(&mut self, cells: &[u32]) {
+        let nvar = self.state.nvar;
+        for &c in cells {
+            let c = c as usize * nvar;
+            self.state.u[c..c + nvar].fill(0.0);
+        }
     }
 
     /// Writes the ghost states of `fills` (see [`GhostFill`]) for a sweep along `axis`.
