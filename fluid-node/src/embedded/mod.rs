@@ -315,10 +315,23 @@ struct NearWall {
     /// along `a` sees: sub-faces parallel to the axis do not count, so a box's corner cell
     /// shows each sweep the face across it.
     normal: [[f64; 3]; 3],
+    /// Per sweep axis `a` and side (0: `ν_a > 0`, the solid below along `a`; 1: `ν_a < 0`):
+    /// `Σ A`, `Σ A w` and `Σ A |ν_a| ν` of the sub-faces facing that way. A run of covered cells
+    /// seen across the axis sees only the faces turned towards the fluid: a gap between two
+    /// walls (a crack) has a different wall on each side.
+    facing: [[Facing; 2]; 3],
     /// Area of its wet sub-faces.
     wet_area: f64,
     /// `Σ A ν` over its wet sub-faces.
     wet_normal: [f64; 3],
+}
+
+/// The sub-faces of a near cell turned one way along one axis (see [`NearWall::facing`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Facing {
+    area: f64,
+    velocity: [f64; 3],
+    normal: [f64; 3],
 }
 
 impl NearWall {
@@ -333,6 +346,23 @@ impl NearWall {
 }
 
 impl NearWall {
+    /// The wall a sweep along `axis` sees across a covered run on side `dir` (±1) of the fluid:
+    /// the sub-faces turned towards the fluid, if any.
+    fn facing(&self, axis: usize, dir: isize) -> Option<Wall> {
+        let f = &self.facing[axis][usize::from(dir > 0)];
+        if f.area <= 0.0 {
+            return None;
+        }
+        let n = f.normal;
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let mut wall = Wall::at_rest(axis);
+        wall.velocity = f.velocity.map(|v| v / f.area);
+        if len > 0.0 {
+            wall.normal = n.map(|x| x / len);
+        }
+        Some(wall)
+    }
+
     /// The wall a sweep along `axis` sees; normal to the axis if no sub-face faces it.
     fn along(&self, axis: usize) -> Wall {
         let n = self.normal[axis];
@@ -503,6 +533,16 @@ impl Embedded {
                 }
             }
             nw.area += s.area;
+            for a in 0..dim {
+                if s.normal[a] != 0.0 {
+                    let f = &mut nw.facing[a][usize::from(s.normal[a] < 0.0)];
+                    f.area += s.area;
+                    for b in 0..3 {
+                        f.velocity[b] += s.area * w[b];
+                        f.normal[b] += s.area * s.normal[a].abs() * s.normal[b];
+                    }
+                }
+            }
             if self.current.wet[s.element as usize] && domain_face(grid, s).is_none() {
                 nw.wet_area += s.area;
                 for a in 0..3 {
@@ -577,10 +617,23 @@ impl Embedded {
         solver.apply_vacuum(&self.hooks.vacuum);
         let nvar = dim + 2;
         let u = &solver.state().u;
+        // NOTE: a covered cell the first sweep gives no ghost keeps a stale state (the interior
+        // of a solid, farther than the stencil from any fluid along that axis); its `U^n` is
+        // vacuum, so that a crack opening there in this step (its faces are wet only at
+        // `t^{n+1}`) starts empty rather than with that state.
+        let mut ghosted: Vec<u32> = self.hooks.ghosts[first].iter().map(|g| g.cell).collect();
+        ghosted.sort_unstable();
+        let lambda = &self.geom.solid_fraction;
         self.saved.clear();
         for &c in &self.near {
+            let stale =
+                lambda[c as usize] >= 1.0 - COVERED_TOLERANCE && ghosted.binary_search(&c).is_err();
             let c = c as usize * nvar;
-            self.saved.extend_from_slice(&u[c..c + nvar]);
+            if stale {
+                self.saved.extend(std::iter::repeat_n(0.0, nvar));
+            } else {
+                self.saved.extend_from_slice(&u[c..c + nvar]);
+            }
         }
     }
 
@@ -601,14 +654,24 @@ impl Embedded {
         let stride: usize = grid.cells[..axis].iter().product();
         // The wall seen along the axis from `fluid` beside the covered cell `covered`: the fluid
         // cell's sub-faces, else the covered cell's, else a wall at rest normal to the axis.
-        let wall_seen = |fluid: usize, covered: usize| -> Wall {
-            [fluid, covered]
-                .into_iter()
+        // The sub-faces turned towards the fluid first: a thin gap between a wall at rest and a
+        // moving one must mirror each side about its own wall.
+        let wall_seen = |fluid: usize, covered: usize, dir: isize| -> Wall {
+            let walls = [fluid, covered]
                 .map(|c| self.slot_of[c] as usize)
-                .filter(|&k| k > 0)
-                .map(|k| &self.near_walls[k - 1])
-                .find(|w| w.area > 0.0)
-                .map_or(Wall::at_rest(axis), |w| w.along(axis))
+                .map(|k| (k > 0).then(|| &self.near_walls[k - 1]));
+            walls
+                .iter()
+                .flatten()
+                .find_map(|w| w.facing(axis, dir))
+                .or_else(|| {
+                    walls
+                        .iter()
+                        .flatten()
+                        .find(|w| w.area > 0.0)
+                        .map(|w| w.along(axis))
+                })
+                .unwrap_or(Wall::at_rest(axis))
         };
         for &c in &self.near {
             let c = c as usize;
@@ -636,7 +699,7 @@ impl Embedded {
                     len += 1;
                 }
                 let closed = len < 2 * ng && at(m0 + dir * len).is_some();
-                let wall = wall_seen(fluid, c);
+                let wall = wall_seen(fluid, c, dir);
                 if closed && dir == 1 {
                     let far = at(m0 + len).expect("closed");
                     let last = at(m0 + len - 1).expect("in the run");
@@ -644,7 +707,7 @@ impl Embedded {
                         pencil: (c % stride + (c / (stride * n as usize)) * stride) as u32,
                         lo: m0 as u32,
                         hi: (m0 + len) as u32,
-                        walls: [wall, wall_seen(far, last)],
+                        walls: [wall, wall_seen(far, last, -1)],
                     });
                 }
                 let count = if closed {
@@ -672,6 +735,51 @@ impl Embedded {
         walls.sort_unstable_by_key(|w| (w.pencil, w.lo));
     }
 
+    /// Whether a sub-face of `frame` belongs to a face that becomes wet in this step (a link
+    /// broke) and lies in a cell covered at `t^n`: the crack behind it is vacuum, and the state
+    /// the sweeps left in that cell is not the fluid's, so it carries no pressure.
+    fn opening(&self, s: &crate::cutcell::SubFace, frame: &SolidFrame) -> bool {
+        let e = s.element as usize;
+        frame.wet[e]
+            && !self.current.wet.get(e).copied().unwrap_or(true)
+            && self.geom.solid_fraction[s.cell as usize] >= 1.0 - COVERED_TOLERANCE
+    }
+
+    /// The Lax–Friedrichs flux along `axis` through the face between cells `left` and `right`
+    /// when a crack opens on exactly one side of it (`opening`, by near slot) and the other side
+    /// held fluid at `t^n`: that fluid against vacuum, with the sweeps' `sigma = Δt/Δx`.
+    fn crack_flux(
+        &self,
+        axis: usize,
+        left: usize,
+        right: usize,
+        opening: &[bool],
+        sigma: f64,
+    ) -> Option<[f64; NQ]> {
+        let dim = self.grid.dim;
+        let nvar = dim + 2;
+        let (kl, kr) = (self.slot_of[left] as usize, self.slot_of[right] as usize);
+        if kl == 0 || kr == 0 || opening[kl - 1] == opening[kr - 1] {
+            return None;
+        }
+        let fluid = if opening[kl - 1] { right } else { left };
+        if self.geom.solid_fraction[fluid] >= 1.0 - COVERED_TOLERANCE {
+            return None;
+        }
+        let state = |k: usize| -> [f64; NQ] {
+            if opening[k - 1] {
+                return [0.0; NQ];
+            }
+            let mut u = full_state(&self.saved[(k - 1) * nvar..k * nvar], dim, 1.0);
+            u.swap(1, 1 + axis);
+            u
+        };
+        let mut f =
+            crate::fv::euler::flux_lax_friedrichs(&state(kl), &state(kr), sigma, self.gamma);
+        f.swap(1, 1 + axis);
+        Some(f)
+    }
+
     fn pressure_of(&self, cell: u32, axis: usize) -> Option<f64> {
         let k = self.slot_of[cell as usize];
         (k > 0).then(|| self.hooks.pressures[axis][k as usize - 1])
@@ -697,7 +805,10 @@ impl Embedded {
             torque: vec![0.0; np * nr],
         };
         for s in &self.trial.subfaces {
-            if !trial.wet[s.element as usize] || domain_face(&self.grid, s).is_some() {
+            if !trial.wet[s.element as usize]
+                || domain_face(&self.grid, s).is_some()
+                || self.opening(s, trial)
+            {
                 continue;
             }
             let mut f = [0.0; 3];
@@ -780,6 +891,22 @@ impl Embedded {
             ));
         }
         self.check_swept(step)?;
+        // Cells covered at t^n in which a crack opens in this step (a link broke): no fluid was
+        // there, so their `U^n` is vacuum, and the faces between them and the fluid take the
+        // Lax–Friedrichs flux of that fluid against vacuum (paper 000 §3.2), not the sweeps'
+        // flux against a ghost state.
+        let mut opening = vec![false; self.near.len()];
+        for s in &self.trial.subfaces {
+            if self.opening(s, &accepted) {
+                let k = self.slot_of[s.cell as usize] as usize;
+                if k > 0 {
+                    opening[k - 1] = true;
+                }
+            }
+        }
+        for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {
+            self.saved[k * nvar..(k + 1) * nvar].fill(0.0);
+        }
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
         // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
@@ -847,6 +974,7 @@ impl Embedded {
             self.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
             let alpha = 1.0 - new_lambda[c];
+            let covered_before = old_lambda[c] >= 1.0 - COVERED_TOLERANCE;
             let u0 = &self.saved[k * nvar..(k + 1) * nvar];
             let acc = &mut self.content[k];
             for q in 0..nvar {
@@ -863,7 +991,39 @@ impl Embedded {
                         "step {step}: face fluxes of near cell {ijk:?} were not kept (a bug)"
                     ));
                 };
-                let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
+                let below = (ijk[a] > 0).then(|| c - grid.cells[..a].iter().product::<usize>());
+                let above = (ijk[a] + 1 < grid.cells[a])
+                    .then(|| c + grid.cells[..a].iter().product::<usize>());
+                let fl = below
+                    .and_then(|q| self.crack_flux(a, q, c, &opening, sigma))
+                    .unwrap_or(fl);
+                let fr = above
+                    .and_then(|q| self.crack_flux(a, c, q, &opening, sigma))
+                    .unwrap_or(fr);
+                let (mut wl, mut wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
+                // NOTE: a face between two cells covered at t^n that opens in this step (a
+                // crack opening between them) had no fluid on either side: the flux the sweeps
+                // computed there, from ghost or stale states, is not the fluid's; it is zero.
+                if covered_before {
+                    let shut = |face: usize, other: Option<[usize; 3]>| {
+                        self.geom.face_fraction[a][face] >= 1.0 - COVERED_TOLERANCE
+                            && other.is_some_and(|q| {
+                                old_lambda[grid.index(q[0], q[1], q[2])] >= 1.0 - COVERED_TOLERANCE
+                            })
+                    };
+                    let below = (ijk[a] > 0).then(|| {
+                        let mut q = ijk;
+                        q[a] -= 1;
+                        q
+                    });
+                    let above = (ijk[a] + 1 < grid.cells[a]).then_some(up);
+                    if shut(lo, below) {
+                        wl = 0.0;
+                    }
+                    if shut(hi, above) {
+                        wr = 0.0;
+                    }
+                }
                 let acc = &mut self.content[k];
                 acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
                 for b in 0..dim {
@@ -889,7 +1049,10 @@ impl Embedded {
             (&self.trial, &accepted)
         };
         for s in &flux_geom.subfaces {
-            if !flux_frame.wet[s.element as usize] || domain_face(&grid, s).is_some() {
+            if !flux_frame.wet[s.element as usize]
+                || domain_face(&grid, s).is_some()
+                || self.opening(s, flux_frame)
+            {
                 continue;
             }
             let k = self.slot_of[s.cell as usize] as usize - 1;
@@ -1040,6 +1203,7 @@ impl Embedded {
         let old_lambda = &self.geom.solid_fraction;
         let alpha = |c: usize| 1.0 - new_lambda[c];
         let big = |c: usize| alpha(c) >= MIX_BELOW && old_lambda[c] < 1.0 - COVERED_TOLERANCE;
+        let near_scale = self.saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         // Sources.
         let mut sources: Vec<usize> = Vec::new();
         for (k, &c) in self.near.iter().enumerate() {
@@ -1055,11 +1219,13 @@ impl Embedded {
             let covered = a <= COVERED_TOLERANCE;
             if covered {
                 // NOTE: a covered cell keeps only round-off from fluxes of (nearly) covered faces;
-                // below 1e-13 of its state's scale it is dropped (a covered cell beside a wall may
-                // have no fluid to mix into). What is dropped is reported.
+                // below 1e-13 of its state's scale (or of the near cells', for a cell whose
+                // `U^n` is vacuum) it is dropped (a covered cell beside a wall may have no fluid
+                // to mix into). What is dropped is reported.
                 let scale = self.saved[k * nvar..(k + 1) * nvar]
                     .iter()
                     .fold(0.0f64, |m, x| m.max(x.abs()));
+                let scale = if scale > 0.0 { scale } else { near_scale };
                 let residue = self.content[k][..nvar]
                     .iter()
                     .fold(0.0f64, |m, x| m.max(x.abs()));
@@ -1158,7 +1324,50 @@ impl Embedded {
             }
             g
         };
-        // Root of each source: follow hops to a large cell, or to a cycle (its smallest cell).
+        // The nearest target through open faces (breadth first, faces in axis order), for a walk
+        // that cycles between small cells: a thin crack, a cell cut on two sides (paper 000
+        // §3.3, recursive mixing). `None` for a pocket with no target within `MAX_SEARCH` cells.
+        const MAX_SEARCH: usize = 4096;
+        let nearest_target = |from: usize| -> Option<usize> {
+            let mut seen = vec![from];
+            let mut next = 0;
+            while next < seen.len() && seen.len() < MAX_SEARCH {
+                let c = seen[next];
+                next += 1;
+                let ijk = grid.ijk(c);
+                for a in 0..dim {
+                    for side in [0usize, 1] {
+                        let (mut q, mut f) = (ijk, ijk);
+                        if side == 0 {
+                            if q[a] == 0 {
+                                continue;
+                            }
+                            q[a] -= 1;
+                        } else {
+                            if q[a] + 1 >= grid.cells[a] {
+                                continue;
+                            }
+                            q[a] += 1;
+                            f[a] += 1;
+                        }
+                        if self.trial.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
+                            continue;
+                        }
+                        let qi = grid.index(q[0], q[1], q[2]);
+                        if alpha(qi) <= COVERED_TOLERANCE || seen.contains(&qi) {
+                            continue;
+                        }
+                        if target(qi) {
+                            return Some(qi);
+                        }
+                        seen.push(qi);
+                    }
+                }
+            }
+            None
+        };
+        // Root of each source: follow hops to a large cell; a walk that cycles goes to the
+        // nearest target through open faces, or, in a closed pocket, to the cycle's smallest cell.
         let mut groups: Vec<(usize, usize)> = Vec::with_capacity(sources.len());
         for &k in &sources {
             let mut path = vec![self.near[k] as usize];
@@ -1170,7 +1379,8 @@ impl Embedded {
                     break next;
                 }
                 if let Some(pos) = path.iter().position(|&p| p == next) {
-                    break *path[pos..].iter().min().expect("non-empty cycle");
+                    break nearest_target(path[0])
+                        .unwrap_or_else(|| *path[pos..].iter().min().expect("non-empty cycle"));
                 }
                 if is_source(next).is_none() || path.len() > 64 {
                     break next;
