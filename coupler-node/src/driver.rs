@@ -47,6 +47,12 @@ pub trait RecordSink {
     fn ledger(&mut self, _entry: &LedgerEntry) -> Result<(), String> {
         Ok(())
     }
+    /// The links broken in accepted step `step`, which ends at `t` \[s\], as particle-id
+    /// pairs in break order, before its `end_step` (`links_broken.csv`; called for every step,
+    /// with an empty list when none broke); the default keeps nothing.
+    fn links_broken(&mut self, _t: f64, _step: u64, _pairs: &[[u32; 2]]) -> Result<(), String> {
+        Ok(())
+    }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), String>;
 }
@@ -121,6 +127,15 @@ pub struct Summary {
     pub coupling_iterations: Iterations,
     /// Largest relative mass error of the ledger.
     pub mass_rel_err: f64,
+    /// Fluid mass the solid's motion displaced over the run \[kg\] (2-D: per unit depth):
+    /// `Σ_n Σ_cells ρⁿ max(0, Λ^{n+1} − Λⁿ) V`, the fluid that was, at the start of each
+    /// step, in the volume the solid newly covers during it. 0 without a real fluid and a
+    /// solid.
+    pub swept_mass: f64,
+    /// |M(t_end) − M(0)| \[kg\] of the fluid, counting the mass that left through open
+    /// boundaries (the largest over the run is `mass_rel_err` × M(0));
+    /// `mass_abs_err / swept_mass` is the mass error of paper 000 (Fig. 11a, 21a, 28a).
+    pub mass_abs_err: f64,
     /// Largest relative energy error of the ledger.
     pub energy_rel_err: f64,
     /// Energy error relative to the largest interface exchange, at the end.
@@ -301,6 +316,8 @@ pub fn drive(
         record_s: sink.seconds,
         coupling_iterations: Iterations { mean, max },
         mass_rel_err: ledger.max_mass_rel_err,
+        swept_mass: ledger.last.as_ref().map_or(0.0, |l| l.swept_mass),
+        mass_abs_err: ledger.last.as_ref().map_or(0.0, |l| l.mass_abs_err),
         energy_rel_err: ledger.max_energy_rel_err,
         energy_err_vs_exchange: ledger
             .last
@@ -497,12 +514,15 @@ fn drive_inner(
                         converged: true,
                         output: report.output,
                         ledger: Some(report.ledger.clone()),
+                        vacuum_cells: report.vacuum_cells,
                         busy_s: busy.clone(),
                     })
                     .expect("diagnostics serialize");
                     sink.diagnostics(report.t, wall_ns(), &json)
                         .map_err(DriverError::Record)?;
                     sink.ledger(&report.ledger).map_err(DriverError::Record)?;
+                    sink.links_broken(report.t, report.step, &report.broken_links)
+                        .map_err(DriverError::Record)?;
                     sink.end_step().map_err(DriverError::Record)?;
                     progress.update(&report);
                     if let Some(k) = report.output {

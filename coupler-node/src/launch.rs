@@ -29,7 +29,7 @@ use protocol::wire::NodeKind;
 
 use crate::driver::{self, Abort, DriverConfig, RecordSink, Summary};
 use crate::scheme::{Coupler, CouplerConfig};
-use crate::sink::{FileSink, LedgerCsv, RunSink};
+use crate::sink::{FileSink, LedgerCsv, LinksBrokenCsv, RunSink};
 
 /// Options of `coupler-node run`.
 #[derive(Clone, Debug)]
@@ -252,6 +252,12 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let mut run_sink = RunSink {
         record: file_sink,
         ledger: LedgerCsv::create(&opts.out.join("ledger.csv"))?,
+        links_broken: scene
+            .solid
+            .as_ref()
+            .is_some_and(|s| s.fracture.is_some())
+            .then(|| LinksBrokenCsv::create(&opts.out.join("links_broken.csv")))
+            .transpose()?,
     };
     let sink: &mut dyn RecordSink = &mut run_sink;
     let cfg = CouplerConfig::from_scene(&scene);

@@ -1,10 +1,14 @@
 //! The conservation ledger (DESIGN §3 step 6): the nodes' totals each step, the balance checked.
 //!
 //! Balances, with `0` the first report:
-//! - mass: fluid mass plus the mass that left through open boundaries stays at its initial value;
-//! - energy: Σ node energy + energy dissipated by broken links + energy that left through open
-//!   boundaries stays at its initial value (relative error, and error relative to the largest
-//!   energy exchanged through the interface, the measure of paper 003 Fig. 7);
+//! - mass: fluid mass plus the mass that left through open boundaries stays at its initial value
+//!   (relative error, and absolute error to set against the mass the solid swept, the measure
+//!   of paper 000 Fig. 11a, 21a and 28a);
+//! - energy: Σ node energy (fluid total energy; solid kinetic + elastic + contact + gravity
+//!   potential) + energy dissipated (links broken, contact dashpots and friction) + energy that
+//!   left through open boundaries stays at its initial value (relative error, and error
+//!   relative to the largest energy exchanged through the interface, the measure of paper 003
+//!   Fig. 7); the interface work moves energy between the nodes and cancels in the sum;
 //! - interface: the work the fluid gives equals the work the solid receives.
 
 use protocol::wire::ConservedTotals;
@@ -27,12 +31,19 @@ pub struct LedgerEntry {
     pub solid_energy: f64,
     /// Kinetic part of `solid_energy` (translation + rotation) \[J\].
     pub solid_kinetic: f64,
-    /// Energy dissipated by the solid's broken links \[J\].
+    /// Energy the solid dissipated \[J\]: elastic energy of its broken links, work of the
+    /// contact dashpots and friction.
     pub solid_dissipated: f64,
-    /// Energy dissipated by broken links \[J\].
+    /// Energy dissipated, both nodes \[J\] (the fluid dissipates none it reports).
     pub dissipated: f64,
     /// |mass now − mass at start| / mass at start (0 when there is no mass).
     pub mass_rel_err: f64,
+    /// |mass now − mass at start| \[kg\], the fluid mass counting what left through open
+    /// boundaries (2-D: per unit depth).
+    pub mass_abs_err: f64,
+    /// Fluid mass the solid's motion displaced since the start \[kg\] (see
+    /// [`ConservedTotals::swept_mass`]); `mass_abs_err / swept_mass` is paper 000's mass error.
+    pub swept_mass: f64,
     /// |energy now − energy at start| / max(|energy at start|, largest |interface work|, largest
     /// magnitude of the energies' parts).
     pub energy_rel_err: f64,
@@ -112,8 +123,9 @@ impl Ledger {
             .max_exchange
             .max(work_fluid.abs())
             .max(work_solid.abs());
+        let mass_abs_err = (mass - initial_mass).abs();
         let mass_rel_err = if initial_mass != 0.0 {
-            (mass - initial_mass).abs() / initial_mass.abs()
+            mass_abs_err / initial_mass.abs()
         } else {
             0.0
         };
@@ -151,6 +163,8 @@ impl Ledger {
             solid_dissipated: solid.map_or(0.0, |s| s.dissipated),
             dissipated: fluid.map_or(0.0, |f| f.dissipated) + solid.map_or(0.0, |s| s.dissipated),
             mass_rel_err,
+            mass_abs_err,
+            swept_mass: fluid.map_or(0.0, |f| f.swept_mass),
             energy_rel_err,
             energy_err_vs_exchange,
             work_fluid,
@@ -181,6 +195,9 @@ mod tests {
             boundary_mass_out: out_m,
             boundary_energy_out: out_e,
             links_broken: 0,
+            broken_pairs: Vec::new(),
+            swept_mass: 0.0,
+            vacuum_cells: 0,
             kinetic: 0.0,
             energy_scale: energy.abs(),
         }
@@ -241,6 +258,55 @@ mod tests {
         let e = ledger.update(2, Some(&totals(NodeKind::Fluid, 1.5, 7.0, 0.25, 3.0)), None);
         assert!((e.mass_rel_err - 0.125).abs() < 1e-15, "{}", e.mass_rel_err);
         assert!((ledger.max_mass_rel_err - 0.125).abs() < 1e-15);
+    }
+
+    #[test]
+    fn broken_links_and_contact_dissipation_close_the_energy_balance() {
+        // Issue 14 item 4: fluid + solid (kinetic + elastic + contact) + dissipated is what
+        // stays, and the interface work only moves energy between the nodes.
+        let mut ledger = Ledger::default();
+        let mut s = totals(NodeKind::Solid, 50.0, 5.0, 0.0, 0.0);
+        s.kinetic = 2.0;
+        let f = totals(NodeKind::Fluid, 1.0, 10.0, 0.0, 0.0);
+        ledger.update(0, Some(&f), Some(&s));
+        // A link breaks and releases its 2 J of elastic energy (3 → 1 J); then two fragments
+        // touch: 0.5 J of kinetic energy goes to 0.3 J of contact potential and 0.2 J into the
+        // dashpot. Meanwhile the fluid gives the solid 1 J through the interface.
+        let mut f1 = f.clone();
+        f1.energy = 9.0;
+        f1.interface_work = 1.0;
+        s.kinetic = 2.0 - 0.5 + 1.0;
+        s.energy = s.kinetic + 1.0 + 0.3;
+        s.dissipated = 2.0 + 0.2;
+        s.interface_work = 1.0;
+        s.energy_scale = s.energy;
+        f1.energy_scale = f1.energy;
+        s.links_broken = 1;
+        let e = ledger.update(1, Some(&f1), Some(&s));
+        assert!(e.energy_rel_err < 1e-15, "{}", e.energy_rel_err);
+        assert_eq!(e.solid_dissipated, 2.2);
+        assert_eq!(e.dissipated, 2.2);
+        assert_eq!(e.links_broken, 1);
+        // Without the dissipated energy the balance would miss 2.2 J of 15.
+        s.dissipated = 0.0;
+        let e = ledger.update(2, Some(&f1), Some(&s));
+        assert!(
+            (e.energy_rel_err - 2.2 / 15.0).abs() < 1e-15,
+            "{}",
+            e.energy_rel_err
+        );
+    }
+
+    #[test]
+    fn the_absolute_mass_error_and_the_swept_mass_are_reported() {
+        let mut ledger = Ledger::default();
+        ledger.update(0, Some(&totals(NodeKind::Fluid, 2.0, 10.0, 0.0, 0.0)), None);
+        let mut f = totals(NodeKind::Fluid, 1.5 + 3e-13, 7.0, 0.5, 3.0);
+        f.swept_mass = 0.25;
+        let e = ledger.update(1, Some(&f), None);
+        assert!((e.mass_abs_err - 3e-13).abs() < 1e-15, "{}", e.mass_abs_err);
+        assert_eq!(e.swept_mass, 0.25);
+        assert!((e.mass_rel_err - e.mass_abs_err / 2.0).abs() < 1e-30);
     }
 
     #[test]

@@ -175,6 +175,10 @@ pub struct StepReport {
     pub output: Option<u32>,
     /// The balance.
     pub ledger: LedgerEntry,
+    /// Fluid cells below the vacuum thresholds at the end of the step (0 without a fluid).
+    pub vacuum_cells: u64,
+    /// Particle ids `[a, b]` of the links broken in this step, in the order they broke.
+    pub broken_links: Vec<[u32; 2]>,
 }
 
 /// Why the coupler stops a run.
@@ -960,6 +964,13 @@ impl Coupler {
             predicted: account.predicted,
             output,
             ledger: entry.clone(),
+            vacuum_cells: fluid.map_or(0, |f| f.vacuum_cells),
+            broken_links: solid.map_or_else(Vec::new, |s| {
+                s.broken_pairs
+                    .chunks_exact(2)
+                    .map(|p| [p[0], p[1]])
+                    .collect()
+            }),
         }));
         if entry.mass_rel_err > self.cfg.mass_tolerance {
             return Err(CouplerError::Ledger {

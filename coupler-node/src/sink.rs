@@ -1,5 +1,6 @@
-//! The run's files the loop writes as it goes: the MCAP record `exchange.mcap` and the
-//! conservation history `ledger.csv`, both durable at the end of every step.
+//! The run's files the loop writes as it goes: the MCAP record `exchange.mcap`, the
+//! conservation history `ledger.csv` and, with fracture, `links_broken.csv`, all durable at the
+//! end of every step.
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -127,13 +128,62 @@ impl LedgerCsv {
     }
 }
 
-/// What `coupler-node run` writes as it goes: the record (none at level `none`) and
-/// `ledger.csv` (always).
+/// Header line of `links_broken.csv` (DESIGN §7), without the newline.
+pub const LINKS_BROKEN_HEADER: &str = "t,step,a,b";
+
+/// The `links_broken.csv` rows of one accepted step (each with its newline): `t` the step's end
+/// in shortest round-trip form, `step` from 0, `a, b` the particle ids of each link broken in
+/// it, in the order they broke. Empty when none broke.
+pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
+    pairs
+        .iter()
+        .map(|[a, b]| format!("{t:e},{step},{a},{b}\n"))
+        .collect()
+}
+
+/// `links_broken.csv` (scenes with `solid.fracture`): one row per link broken on an accepted
+/// step, in break order; each step's rows go out with one `write` on the unbuffered file, so a
+/// killed run keeps every row up to its last step.
+pub struct LinksBrokenCsv {
+    file: File,
+    path: std::path::PathBuf,
+}
+
+impl LinksBrokenCsv {
+    /// Creates `path` and writes the header line.
+    pub fn create(path: &Path) -> anyhow::Result<LinksBrokenCsv> {
+        use std::io::Write;
+        let mut file =
+            File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        file.write_all(format!("{LINKS_BROKEN_HEADER}\n").as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        Ok(LinksBrokenCsv {
+            file,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Appends the rows of one step (nothing when no link broke).
+    pub fn rows(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+        use std::io::Write;
+        if pairs.is_empty() {
+            return Ok(());
+        }
+        self.file
+            .write_all(links_broken_rows(t, step, pairs).as_bytes())
+            .map_err(|e| format!("writing {}: {e}", self.path.display()))
+    }
+}
+
+/// What `coupler-node run` writes as it goes: the record (none at level `none`),
+/// `ledger.csv` (always) and `links_broken.csv` (scenes with `solid.fracture`).
 pub struct RunSink {
     /// The MCAP record.
     pub record: Option<FileSink>,
     /// The conservation history.
     pub ledger: LedgerCsv,
+    /// The broken links, when the scene can break any.
+    pub links_broken: Option<LinksBrokenCsv>,
 }
 
 impl RunSink {
@@ -173,6 +223,12 @@ impl RecordSink for RunSink {
 
     fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
         self.ledger.row(entry)
+    }
+
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+        self.links_broken
+            .as_mut()
+            .map_or(Ok(()), |csv| csv.rows(t, step, pairs))
     }
 
     fn end_step(&mut self) -> Result<(), String> {

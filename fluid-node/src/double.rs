@@ -155,6 +155,9 @@ impl NodeModel for PressureDouble {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: 0,
+            broken_pairs: Vec::new(),
+            swept_mass: 0.0,
+            vacuum_cells: 0,
             kinetic: 0.0,
             energy_scale: self.work.abs(),
         }

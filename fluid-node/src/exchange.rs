@@ -14,7 +14,7 @@ use protocol::session::NodeModel;
 use protocol::vtk::Series;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
-use crate::embedded::{Embedded, InterfaceBudget, SolidFrame};
+use crate::embedded::{COVERED_TOLERANCE, Embedded, InterfaceBudget, SolidFrame};
 use crate::fv::{FluidSolver, Trouble};
 use crate::node::FluidModel;
 
@@ -87,6 +87,24 @@ impl RealFluid {
         self.embedded
             .as_mut()
             .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))
+    }
+
+    /// Cells holding fluid whose density or pressure is below the `fluid.vacuum` thresholds
+    /// (the test that picks the Lax–Friedrichs flux); a cell the solid covers holds a ghost
+    /// state and is left out.
+    fn vacuum_cells(&self) -> u64 {
+        let params = self.solver.params();
+        let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
+        let n_cells = self.solver.grid().n_cells();
+        (0..n_cells)
+            .filter(|&c| {
+                if lambda.is_some_and(|l| l[c] >= 1.0 - COVERED_TOLERANCE) {
+                    return false;
+                }
+                let (rho, _, p) = self.solver.primitive(c);
+                !(rho >= params.vacuum_rho && p >= params.vacuum_p)
+            })
+            .count() as u64
     }
 
     fn check_dt(&self, plan: &StepPlan) -> Result<(), String> {
@@ -162,6 +180,9 @@ impl NodeModel for RealFluid {
             boundary_mass_out: totals.outflow_mass,
             boundary_energy_out: totals.outflow_energy,
             links_broken: 0,
+            broken_pairs: Vec::new(),
+            swept_mass: budget.swept_mass,
+            vacuum_cells: self.vacuum_cells(),
             kinetic: 0.0,
             energy_scale: totals.energy.abs(),
         }

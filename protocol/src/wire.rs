@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 3;
+pub const PROTOCOL_VERSION: u32 = 4;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -292,6 +292,17 @@ pub struct ConservedTotals {
     pub boundary_energy_out: f64,
     /// Links broken since the start (solid only).
     pub links_broken: u64,
+    /// Particle ids `a, b` of each link broken in this step, two per link, in the order they
+    /// broke (solid only; empty in the initial totals and from the doubles). Breaking is decided
+    /// when a step is accepted, never on a rejected fixed-point trial.
+    pub broken_pairs: Vec<u32>,
+    /// Fluid mass the solid's motion displaced since the start \[kg\] (2-D: per unit depth):
+    /// `Σ_n Σ_cells ρⁿ max(0, Λ^{n+1} − Λⁿ) V`, the fluid that was, at the start of each step,
+    /// in the volume the solid newly covers during it (fluid only; 0 from the doubles).
+    pub swept_mass: f64,
+    /// Cells holding fluid (not covered by the solid) whose density or pressure is below the
+    /// `fluid.vacuum` thresholds at the end of the step (fluid only).
+    pub vacuum_cells: u64,
     /// Kinetic part of `energy` \[J\] (solid: translation + rotation; the fluid reports 0, its
     /// energy is not split). The rest of a solid's `energy` is potential (elastic links,
     /// contacts, gravity).

@@ -23,6 +23,9 @@ pub struct RealSolid {
     name: String,
     probes: Vec<Probe>,
     links_broken: u64,
+    /// Particle ids of the links broken in the last committed step, two per link, in break
+    /// order (the totals of that step carry them to the coupler's `links_broken.csv`).
+    last_broken: Vec<u32>,
     zero_force: Vec<f64>,
     zero_torque: Vec<f64>,
     /// The `.vtp` files written so far: `particles.pvd`, `solid.pvd`, `wet.pvd`.
@@ -85,6 +88,7 @@ impl RealSolid {
             name: scene.name.clone(),
             probes,
             links_broken: 0,
+            last_broken: Vec::new(),
             zero_force: vec![0.0; n * dim],
             zero_torque: vec![0.0; n * n_rot],
             vtk_series: Default::default(),
@@ -152,6 +156,9 @@ impl NodeModel for RealSolid {
             boundary_mass_out: 0.0,
             boundary_energy_out: 0.0,
             links_broken: self.links_broken,
+            broken_pairs: self.last_broken.clone(),
+            swept_mass: 0.0,
+            vacuum_cells: 0,
             kinetic: e.kinetic_translation + e.kinetic_rotation,
             energy_scale: e.kinetic_translation
                 + e.kinetic_rotation
@@ -170,6 +177,8 @@ impl NodeModel for RealSolid {
         let (links_broken, inner): (u64, Vec<u8>) = protocol::codec::decode_blob(bytes)?;
         self.solid.restore_checkpoint(&inner)?;
         self.links_broken = links_broken;
+        // A checkpoint is the state at the start of a step: nothing has broken in it yet.
+        self.last_broken.clear();
         Ok(())
     }
 
@@ -298,6 +307,11 @@ impl SolidModel for RealSolid {
     fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
         let report = self.solid.commit();
         self.links_broken += report.broken_links.len() as u64;
+        self.last_broken.clear();
+        for b in &report.broken_links {
+            self.last_broken
+                .extend([b.particles[0].0, b.particles[1].0]);
+        }
         if report.diagnostics.is_empty() {
             Ok(())
         } else {

@@ -5,6 +5,7 @@ mod doubles;
 mod e2e;
 mod issue_11;
 mod issue_11_records;
+mod issue_14;
 mod issue_15;
 mod issue_15_cli;
 mod tidy;

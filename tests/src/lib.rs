@@ -16,6 +16,8 @@ pub struct MemorySink {
     pub frames: Vec<(NodeKind, NodeKind, Vec<u8>)>,
     /// Diagnostics JSON, one per step.
     pub diagnostics: Vec<Vec<u8>>,
+    /// The rows `links_broken.csv` would hold, without its header.
+    pub links_broken: String,
 }
 
 impl RecordSink for MemorySink {
@@ -36,6 +38,11 @@ impl RecordSink for MemorySink {
     }
     fn diagnostics(&mut self, _: f64, _: u64, json: &[u8]) -> Result<(), String> {
         self.diagnostics.push(json.to_vec());
+        Ok(())
+    }
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+        self.links_broken
+            .push_str(&coupler_node::sink::links_broken_rows(t, step, pairs));
         Ok(())
     }
     fn end_step(&mut self) -> Result<(), String> {

@@ -67,6 +67,9 @@ pub struct Diagnostics {
     /// Conservation ledger at the end of the step (missing for a step that failed).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ledger: Option<LedgerEntry>,
+    /// Fluid cells whose density or pressure is below the `fluid.vacuum` thresholds at the end
+    /// of the step, cells the solid covers left out (0 without a real fluid).
+    pub vacuum_cells: u64,
     /// Busy seconds per process during the run so far (wall clock: the one part of the
     /// record that differs between two runs of a scene).
     pub busy_s: BusySeconds,

@@ -64,6 +64,9 @@ fn totals(node: NodeKind, step: u64, mass: f64) -> Message {
         boundary_mass_out: 0.0,
         boundary_energy_out: 0.0,
         links_broken: 0,
+        broken_pairs: Vec::new(),
+        swept_mass: 0.0,
+        vacuum_cells: 0,
         kinetic: 0.0,
         energy_scale: 1.0,
     })

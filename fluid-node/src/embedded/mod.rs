@@ -263,6 +263,9 @@ pub struct InterfaceBudget {
     pub work_given: f64,
     /// Momentum the fluid gave the solid [kg m/s].
     pub impulse_given: [f64; 3],
+    /// Fluid mass the solid displaced \[kg\]: `Σ_n Σ_cells ρⁿ max(0, Λ^{n+1} − Λⁿ) V`
+    /// (`summary.json`'s `swept_mass`, the measure of paper 000's mass errors).
+    pub swept_mass: f64,
 }
 
 /// The fluid's side of the coupling, beside a [`FluidSolver`] on the same grid.
@@ -909,6 +912,15 @@ impl Embedded {
         }
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
+        // The fluid at t^n in the volume the solid newly covers (every change of Λ is in a near
+        // cell: the prisms were checked to stay there).
+        let mut swept_mass = 0.0;
+        for (k, &c) in self.near.iter().enumerate() {
+            let gained = new_lambda[c as usize] - old_lambda[c as usize];
+            if gained > 0.0 {
+                swept_mass += gained * volume * self.saved[k * nvar];
+            }
+        }
         // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
         self.content.clear();
         self.content.resize(self.near.len(), [0.0; NQ]);
@@ -1112,6 +1124,7 @@ impl Embedded {
         report.mixed_cells = n_mixed;
         report.work_received = work_received;
         self.budget.work_given -= work_received;
+        self.budget.swept_mass += swept_mass;
         for a in 0..3 {
             self.budget.impulse_given[a] -= impulse_received[a];
         }
