@@ -375,6 +375,10 @@ impl RecordSink for TimedSink<'_> {
         self.timed(|s| s.ledger(entry))
     }
 
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+        self.timed(|s| s.links_broken(t, step, pairs))
+    }
+
     fn end_step(&mut self) -> Result<(), String> {
         self.timed(|s| s.end_step())
     }

@@ -748,9 +748,11 @@ impl Embedded {
             && self.geom.solid_fraction[s.cell as usize] >= 1.0 - COVERED_TOLERANCE
     }
 
-    /// The Lax–Friedrichs flux along `axis` through the face between cells `left` and `right`
-    /// when a crack opens on exactly one side of it (`opening`, by near slot) and the other side
-    /// held fluid at `t^n`: that fluid against vacuum, with the sweeps' `sigma = Δt/Δx`.
+    /// The flux along `axis` through the face between cells `left` and `right` when a crack
+    /// opens on either side of it (`opening`, by near slot): the Lax–Friedrichs flux of the
+    /// fluid on the other side against vacuum, with the sweeps' `sigma = Δt/Δx`, or zero if
+    /// the other side held no fluid at `t^n` either (the sweeps' flux there came from ghost or
+    /// stale states, not from the fluid).
     fn crack_flux(
         &self,
         axis: usize,
@@ -762,12 +764,14 @@ impl Embedded {
         let dim = self.grid.dim;
         let nvar = dim + 2;
         let (kl, kr) = (self.slot_of[left] as usize, self.slot_of[right] as usize);
-        if kl == 0 || kr == 0 || opening[kl - 1] == opening[kr - 1] {
+        if kl == 0 || kr == 0 || !(opening[kl - 1] || opening[kr - 1]) {
             return None;
         }
-        let fluid = if opening[kl - 1] { right } else { left };
-        if self.geom.solid_fraction[fluid] >= 1.0 - COVERED_TOLERANCE {
-            return None;
+        let empty = |c: usize, k: usize| {
+            opening[k - 1] || self.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+        };
+        if empty(left, kl) && empty(right, kr) {
+            return Some([0.0; NQ]);
         }
         let state = |k: usize| -> [f64; NQ] {
             if opening[k - 1] {
@@ -986,7 +990,6 @@ impl Embedded {
             self.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
             let alpha = 1.0 - new_lambda[c];
-            let covered_before = old_lambda[c] >= 1.0 - COVERED_TOLERANCE;
             let u0 = &self.saved[k * nvar..(k + 1) * nvar];
             let acc = &mut self.content[k];
             for q in 0..nvar {
@@ -1012,30 +1015,7 @@ impl Embedded {
                 let fr = above
                     .and_then(|q| self.crack_flux(a, c, q, &opening, sigma))
                     .unwrap_or(fr);
-                let (mut wl, mut wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
-                // NOTE: a face between two cells covered at t^n that opens in this step (a
-                // crack opening between them) had no fluid on either side: the flux the sweeps
-                // computed there, from ghost or stale states, is not the fluid's; it is zero.
-                if covered_before {
-                    let shut = |face: usize, other: Option<[usize; 3]>| {
-                        self.geom.face_fraction[a][face] >= 1.0 - COVERED_TOLERANCE
-                            && other.is_some_and(|q| {
-                                old_lambda[grid.index(q[0], q[1], q[2])] >= 1.0 - COVERED_TOLERANCE
-                            })
-                    };
-                    let below = (ijk[a] > 0).then(|| {
-                        let mut q = ijk;
-                        q[a] -= 1;
-                        q
-                    });
-                    let above = (ijk[a] + 1 < grid.cells[a]).then_some(up);
-                    if shut(lo, below) {
-                        wl = 0.0;
-                    }
-                    if shut(hi, above) {
-                        wr = 0.0;
-                    }
-                }
+                let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
                 let acc = &mut self.content[k];
                 acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
                 for b in 0..dim {
