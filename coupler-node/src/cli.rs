@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
+use protocol::logs::Verbosity;
 use protocol::wire::NodeKind;
 
 use crate::launch::{self, RunOptions};
@@ -14,9 +15,34 @@ use crate::launch::{self, RunOptions};
 #[derive(Debug, Parser)]
 #[command(name = "coupler-node", version, after_long_help = AFTER_LONG_HELP)]
 pub struct Args {
+    /// More log lines on stderr: -v debug, -vv trace; `run` passes it on to the nodes
+    /// (`RUST_LOG`, when set, decides instead, in every process).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
+    pub verbose: u8,
+    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only; `run -q` also
+    /// drops the progress line. Errors are printed at any level.
+    #[arg(
+        short,
+        long,
+        action = clap::ArgAction::Count,
+        global = true,
+        conflicts_with = "verbose",
+        help_heading = "Logs"
+    )]
+    pub quiet: u8,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+}
+
+impl Args {
+    /// The `-v`/`-q` counts.
+    pub fn verbosity(&self) -> Verbosity {
+        Verbosity {
+            verbose: self.verbose,
+            quiet: self.quiet,
+        }
+    }
 }
 
 /// Examples and exit codes, at the end of `coupler-node --help`.
@@ -25,9 +51,15 @@ Examples:
   coupler-node check scenes/sod.toml
   coupler-node run scenes/sod.toml --out out/sod
   coupler-node run scenes/clamped-beam-2d.toml --solid prescribed --quiet
+  coupler-node run scenes/backbone-doubles.toml -v       (debug lines of all three processes)
+  RUST_LOG=coupler_node=trace coupler-node run scenes/sod.toml
   coupler-node inspect out/sod/exchange.mcap --step 10 --export json
   coupler-node replay out/sod/exchange.mcap --node fluid --step 10
   coupler-node report figures out/sod
+
+Logs:
+  stderr, one line per event, prefixed with the process: `coupler  INFO ...`, `fluid   DEBUG ...`;
+  the level is info, -v debug, -vv trace, -q warn, -qq error, or RUST_LOG's when it is set.
 
 Exit codes:
   0    success (a replay: identical)
@@ -97,9 +129,6 @@ pub enum Command {
         /// Deadline for any one message, in seconds.
         #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
         timeout_s: Duration,
-        /// No progress line.
-        #[arg(long)]
-        quiet: bool,
         /// Resume from the checkpoints this record holds at `--step` (a run of the same scene;
         /// its steps from there are those of the recorded run, bit for bit).
         #[arg(long, requires = "step")]
@@ -222,10 +251,15 @@ pub enum Report {
 /// [`launch::EXIT_INTERRUPTED`] (130) when SIGINT, SIGTERM or SIGHUP interrupted a run.
 pub fn main() -> ExitCode {
     let args = Args::parse();
+    protocol::logs::init_with_writer(
+        "coupler",
+        args.verbosity(),
+        crate::progress::LogLines::new(),
+    );
     match dispatch(args) {
         Ok(code) => code,
         Err(err) => {
-            eprintln!("coupler-node: {err:#}");
+            protocol::logs::print_report(&format!("coupler-node: {err:#}"));
             if err.downcast_ref::<launch::Interrupted>().is_some() {
                 ExitCode::from(launch::EXIT_INTERRUPTED)
             } else {
@@ -236,6 +270,7 @@ pub fn main() -> ExitCode {
 }
 
 fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
+    let verbosity = args.verbosity();
     match args.command {
         Command::Run {
             scene,
@@ -244,7 +279,6 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             fluid,
             solid,
             timeout_s,
-            quiet,
             restart,
             step,
         } => {
@@ -265,12 +299,13 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 fluid,
                 solid,
                 timeout: timeout_s,
-                progress: !quiet,
+                progress: verbosity.quiet == 0,
+                verbosity,
                 fluid_bin: None,
                 solid_bin: None,
                 restart: restart.zip(step),
             })?;
-            eprintln!(
+            tracing::info!(
                 "{}: {} in {} steps, t = {:.6e} s, wall {:.2} s, iterations mean {:.2} max {}, mass err {:.2e}, energy err {:.2e}; outputs in {}",
                 summary.scene,
                 summary.status,
@@ -309,6 +344,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 implementation: double,
                 timeout: timeout_s,
                 bin: None,
+                verbosity,
             })?;
             match outcome {
                 crate::replay::Outcome::Identical {
@@ -316,8 +352,8 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     from_step,
                 } => {
                     println!("identical");
-                    eprintln!(
-                        "coupler-node: {compared} {node} messages compared, steps {from_step} to {step}"
+                    tracing::info!(
+                        "{compared} {node} messages compared, steps {from_step} to {step}"
                     );
                     Ok(ExitCode::SUCCESS)
                 }
@@ -378,10 +414,10 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 std::fs::write(&target, &fixed.bytes)
                     .with_context(|| format!("writing {}", target.display()))?;
                 for dropped in &fixed.dropped {
-                    eprintln!("coupler-node: dropped {dropped}");
+                    tracing::warn!("dropped {dropped}");
                 }
-                eprintln!(
-                    "coupler-node: wrote {}: {} messages kept, {} damaged part{} dropped",
+                tracing::info!(
+                    "wrote {}: {} messages kept, {} damaged part{} dropped",
                     target.display(),
                     fixed.recording.messages.len(),
                     fixed.dropped.len(),
@@ -412,10 +448,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 }
                 (None, None) => {
                     if !recover && let Some(end) = crate::inspect::describe_end(&rec.end) {
-                        eprintln!(
-                            "coupler-node: {}: {end}; --recover rewrites it whole",
-                            file.display()
-                        );
+                        tracing::warn!("{}: {end}; --recover rewrites it whole", file.display());
                     }
                     print!("{}", crate::inspect::list_steps(&rec)?);
                 }

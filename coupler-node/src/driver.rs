@@ -4,6 +4,8 @@
 //! the coupler is handed to the [`RecordSink`] exactly as it crossed, before it is acted on;
 //! diagnostics follow each completed step, and the record is flushed at each step's end so a
 //! killed run leaves a file readable up to its last completed step.
+//!
+//! Logs: each node's greeting and each step at debug, each fixed-point decision at trace.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -296,6 +298,7 @@ pub fn drive(
                             reason: ShutdownReason::Failure(reason.clone()),
                         }),
                     );
+                    tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step);
                     let _ = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame);
                     let _ = transport.send(node, &frame);
                 }
@@ -484,11 +487,21 @@ fn drive_inner(
         {
             first_proposal = first_proposal.min(p.dt_max);
         }
+        if let Message::Hello(hello) = &msg {
+            tracing::debug!(
+                "the {from} node greeted: {}, protocol {}, scene hash {:016x}, capabilities {:?}",
+                hello.implementation,
+                hello.protocol_version,
+                hello.scene_hash,
+                hello.capabilities
+            );
+        }
         let actions = coupler.on_message(from, msg)?;
         starts.observe(coupler);
         for action in actions {
             match action {
                 Action::Send(to, msg) => {
+                    log_sent(to, &msg);
                     codec::encode_into(NodeKind::Coupler, &msg, &mut out);
                     let t = starts.of(msg.stamp().step, coupler);
                     sink.frame(NodeKind::Coupler, to, t, wall_ns(), &out)
@@ -528,6 +541,18 @@ fn drive_inner(
                     sink.links_broken(report.t, report.step, &report.broken_links)
                         .map_err(DriverError::Record)?;
                     sink.end_step().map_err(DriverError::Record)?;
+                    tracing::debug!(
+                        "step {} done: t = {:.6e} s, dt = {:.4e} s ({}), {} iteration{}, residual {:.3e}, mass err {:.2e}, energy err {:.2e}",
+                        report.step,
+                        report.t,
+                        report.dt,
+                        report.limiter,
+                        report.iterations,
+                        if report.iterations == 1 { "" } else { "s" },
+                        report.residuals.last().copied().unwrap_or(0.0),
+                        report.ledger.mass_rel_err,
+                        report.ledger.energy_rel_err
+                    );
                     progress.update(&report);
                     if let Some(k) = report.output {
                         outputs.push((k, report.t));
@@ -535,10 +560,39 @@ fn drive_inner(
                 }
                 Action::Finished(finish) => {
                     sink.end_step().map_err(DriverError::Record)?;
+                    tracing::debug!("finished ({finish:?}) at step {}", coupler.step());
                     return Ok(finish);
                 }
             }
         }
+    }
+}
+
+/// The log of a message the coupler sends: each fixed-point decision at trace (once, though
+/// both nodes get it), checkpoint requests, restores and shutdowns; plans and the rest are in
+/// the step's debug line.
+fn log_sent(to: NodeKind, msg: &Message) {
+    match msg {
+        Message::FixedPointDecision(d) if to == NodeKind::Solid => tracing::trace!(
+            "step {} iteration {}: residual {:.3e}, {:?}",
+            d.stamp.step,
+            d.stamp.iteration,
+            d.residual,
+            d.decision
+        ),
+        Message::CheckpointRequest(r) => {
+            tracing::trace!("checkpoint of step {} asked of the {to} node", r.stamp.step)
+        }
+        Message::Checkpoint(c) => tracing::debug!(
+            "checkpoint of step {} sent back to the {to} node to restore",
+            c.stamp.step
+        ),
+        Message::Shutdown(s) => tracing::debug!(
+            "shutdown sent to the {to} node at step {}: {:?}",
+            s.stamp.step,
+            s.reason
+        ),
+        _ => {}
     }
 }
 

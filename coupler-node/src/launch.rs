@@ -14,6 +14,10 @@
 //!
 //! A scene whose estimated memory ([`Scene::memory_estimate`]) exceeds what the machine has
 //! available is refused before any process starts.
+//!
+//! The nodes inherit the coupler's stderr and environment, so their log lines (prefixed `fluid`
+//! and `solid`) join the coupler's, and a `RUST_LOG` reaches them; the coupler's `-v`/`-q` is
+//! passed on as their own.
 
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
@@ -23,6 +27,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context;
+use protocol::logs::Verbosity;
 use protocol::scene::{RecordLevel, Scene};
 use protocol::transport::{Transport, TransportError};
 use protocol::wire::NodeKind;
@@ -48,6 +53,8 @@ pub struct RunOptions {
     pub timeout: Duration,
     /// Progress line on stderr.
     pub progress: bool,
+    /// `-v`/`-q` of the nodes' logs (the coupler's own).
+    pub verbosity: Verbosity,
     /// Explicit node binaries (default: beside this executable).
     pub fluid_bin: Option<PathBuf>,
     /// Explicit solid binary.
@@ -122,7 +129,7 @@ pub fn sweep_stale_runs() -> Vec<String> {
             Err(err) => {
                 // A run still alive (a parallel run) is left alone; say so for the others.
                 if !err.to_string().contains("is live") {
-                    eprintln!("coupler-node: could not clean the leftovers of run {id}: {err}");
+                    tracing::warn!("could not clean the leftovers of run {id}: {err}");
                 }
                 false
             }
@@ -211,9 +218,19 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
         .with_context(|| format!("writing {}", resolved.display()))?;
     let run_id = run_id(&scene);
     let swept = sweep_stale_runs();
-    if !swept.is_empty() && opts.progress {
-        eprintln!("coupler-node: cleaned the leftovers of crashed runs {swept:?}");
+    if !swept.is_empty() {
+        tracing::info!("cleaned the leftovers of crashed runs {swept:?}");
     }
+    tracing::debug!(
+        "run {run_id}: scene {}, out {}, {}",
+        scene.name,
+        opts.out.display(),
+        nodes
+            .iter()
+            .map(|(node, implementation)| format!("{node} {implementation}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     protocol::bus::cleanup_run(&run_id).context("cleaning leftovers of an earlier run")?;
     let peers: Vec<NodeKind> = nodes.iter().map(|(n, _)| *n).collect();
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
@@ -232,6 +249,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             .arg(implementation)
             .arg("--timeout-s")
             .arg(opts.timeout.as_secs_f64().to_string())
+            .args(opts.verbosity.to_args())
             .stdin(Stdio::null())
             // NOTE: a group of its own, so that Ctrl-C or a terminal hangup reaches the coupler
             // only, which shuts the node down cleanly (a node killed by the signal would read
@@ -276,6 +294,9 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);
     let finished = run_sink.record.as_mut().map_or(Ok(()), FileSink::finish);
     let exits = supervisor.stop(Duration::from_secs(2));
+    for (node, exit) in &exits {
+        tracing::debug!("the {node} node ended: {}", exit.text);
+    }
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);
     let interrupted = hung_up.load(Ordering::SeqCst)
@@ -409,7 +430,14 @@ async fn supervise(
     let mut children = Vec::new();
     for (node, mut cmd) in commands {
         match cmd.spawn() {
-            Ok(child) => children.push((node, child)),
+            Ok(child) => {
+                tracing::debug!(
+                    "started the {node} node: {} (pid {})",
+                    cmd.as_std().get_program().to_string_lossy(),
+                    child.id().unwrap_or(0)
+                );
+                children.push((node, child));
+            }
             Err(err) => {
                 let _ = started.send(Err(format!("starting the {node} node: {err}")));
                 return Vec::new();

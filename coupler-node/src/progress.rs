@@ -5,10 +5,20 @@
 //! builds the solvers' scratch buffers) are not counted. On a terminal the line is redrawn in
 //! place every 0.2 s; piped, it is a plain line (no `\r`) every 5 s. Either way the last line is
 //! drawn when the run ends, so a run that reaches `t_end` ends on 100 %.
+//!
+//! The line is not a log event: `-v`/`-q` and `RUST_LOG` do not change it (`run -q` turns it
+//! off). The coupler's log lines go through [`LogLines`], which knows whether a bar is drawn: it
+//! clears the bar, writes the log line, and draws the bar again below it, so neither is cut into
+//! the other. The nodes' log lines clear the line before they start ([`protocol::logs`]); the bar
+//! comes back with the next step.
 
 use std::collections::VecDeque;
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
+use std::sync::Mutex;
 use std::time::Instant;
+
+use protocol::logs::CLEAR_LINE;
+use tracing_subscriber::fmt::MakeWriter;
 
 use crate::scheme::StepReport;
 
@@ -82,6 +92,94 @@ pub fn eta_s(samples: &[(f64, f64)], t_end: f64) -> Option<f64> {
     Some((t_end - t_1) * d_wall / d_t)
 }
 
+/// The bar drawn on the terminal now, if any (redrawn in place, no newline after it).
+static DRAWN: Mutex<Option<String>> = Mutex::new(None);
+
+fn drawn() -> std::sync::MutexGuard<'static, Option<String>> {
+    // A panic while the lock was held leaves a bar text that is still a bar text.
+    DRAWN
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// The coupler's log writer: stderr, one whole line per event ([`protocol::logs::StderrLines`]),
+/// around the progress bar when one is drawn.
+#[derive(Clone, Copy, Debug)]
+pub struct LogLines {
+    terminal: bool,
+}
+
+impl LogLines {
+    /// Stderr as it is now (a terminal or not).
+    pub fn new() -> LogLines {
+        LogLines {
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+}
+
+impl Default for LogLines {
+    fn default() -> LogLines {
+        LogLines::new()
+    }
+}
+
+impl<'w> MakeWriter<'w> for LogLines {
+    type Writer = LogLine;
+
+    fn make_writer(&'w self) -> LogLine {
+        LogLine {
+            terminal: self.terminal,
+            bytes: Vec::with_capacity(128),
+        }
+    }
+}
+
+/// One log line of the coupler on its way to stderr ([`LogLines`]).
+#[derive(Debug)]
+pub struct LogLine {
+    terminal: bool,
+    bytes: Vec<u8>,
+}
+
+impl Write for LogLine {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.bytes.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for LogLine {
+    fn drop(&mut self) {
+        // NOTE: the bar's lock is taken before stderr's, as `Progress::print` does.
+        let bar = drawn();
+        let bytes = around_bar(self.terminal, bar.as_deref(), &self.bytes);
+        // A closed stderr loses the line; a log line is no reason to fail.
+        let _ = std::io::stderr().lock().write_all(&bytes);
+    }
+}
+
+/// What a log line `line` (ending in a newline) is written as (pure): on a terminal, the line
+/// is cleared first and the bar drawn, if any, is drawn again below the log line; piped, the
+/// line as it is.
+fn around_bar(terminal: bool, bar: Option<&str>, line: &[u8]) -> Vec<u8> {
+    if !terminal {
+        return line.to_vec();
+    }
+    let mut bytes = Vec::with_capacity(line.len() + 160);
+    bytes.extend_from_slice(CLEAR_LINE.as_bytes());
+    bytes.extend_from_slice(line);
+    if let Some(bar) = bar {
+        bytes.extend_from_slice(bar.as_bytes());
+        bytes.extend_from_slice(b"\x1b[K");
+    }
+    bytes
+}
+
 /// The progress line's state: when it last printed and the recent steps' `(wall, t)`.
 pub(crate) struct Progress {
     enabled: bool,
@@ -149,7 +247,9 @@ impl Progress {
             self.print();
         }
         if self.tty {
+            let mut bar = drawn();
             eprintln!();
+            *bar = None;
         }
     }
 
@@ -167,10 +267,16 @@ impl Progress {
             iterations,
             eta_s: eta,
         });
-        if self.tty {
-            eprint!("\r{line}\x1b[K");
+        // NOTE: one `write` a line, so that no node's log line cuts into it.
+        let mut bar = drawn();
+        let bytes = if self.tty {
+            format!("\r{line}\x1b[K")
         } else {
-            eprintln!("{line}");
+            format!("{line}\n")
+        };
+        let _ = std::io::stderr().lock().write_all(bytes.as_bytes());
+        if self.tty {
+            *bar = Some(line);
         }
         self.last_print = Some(Instant::now());
         self.current = true;
@@ -191,6 +297,20 @@ mod tests {
             iterations: 2,
             eta_s,
         })
+    }
+
+    #[test]
+    fn a_log_line_clears_the_bar_and_draws_it_again_below_on_a_terminal_only() {
+        let log = b"coupler  WARN a warning\n";
+        assert_eq!(around_bar(false, Some("sod [##--]"), log), log);
+        assert_eq!(
+            around_bar(true, None, log),
+            b"\r\x1b[Kcoupler  WARN a warning\n"
+        );
+        assert_eq!(
+            around_bar(true, Some("sod [##--]"), log),
+            b"\r\x1b[Kcoupler  WARN a warning\nsod [##--]\x1b[K"
+        );
     }
 
     #[test]

@@ -36,6 +36,8 @@ pub struct ReplayOptions {
     pub timeout: Duration,
     /// Explicit node binary.
     pub bin: Option<PathBuf>,
+    /// `-v`/`-q` of the node's logs (the coupler's own).
+    pub verbosity: protocol::logs::Verbosity,
 }
 
 /// What the replay found.
@@ -175,9 +177,22 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
         .arg(&implementation)
         .arg("--timeout-s")
         .arg(opts.timeout.as_secs_f64().to_string())
+        .args(opts.verbosity.to_args())
         .stdin(std::process::Stdio::null())
         .spawn()
         .with_context(|| format!("starting {}", binary.display()))?;
+    tracing::debug!(
+        "replaying the {} node ({implementation}) to step {}{}: {} (pid {})",
+        opts.node,
+        opts.step,
+        checkpoint
+            .as_ref()
+            .map_or(String::new(), |(step, _)| format!(
+                " from its checkpoint of step {step}"
+            )),
+        binary.display(),
+        child.id()
+    );
     let result = drive(&mut bus, opts, &frames, checkpoint);
     // Tell the node to stop, whatever happened, then reap it.
     let bye = codec::encode(

@@ -31,6 +31,20 @@ pub struct Args {
     /// Deadline for each message from the coupler, in seconds.
     #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
     pub timeout_s: Duration,
+    /// More log lines on stderr: -v debug, -vv trace (`RUST_LOG`, when set, decides instead;
+    /// `coupler-node run` passes its own -v/-q on).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
+    pub verbose: u8,
+    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only.
+    #[arg(
+        short,
+        long,
+        action = clap::ArgAction::Count,
+        global = true,
+        conflicts_with = "verbose",
+        help_heading = "Logs"
+    )]
+    pub quiet: u8,
     /// Tools.
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -67,14 +81,22 @@ pub enum Report {
     },
 }
 
-/// Entry point of the binary: prints `fluid-node: error` and exits 2 on bad input, 3 on
+/// Entry point of the binary: installs the logs ([`protocol::logs`], lines prefixed `fluid`),
+/// runs, prints `fluid-node: error` and exits 2 on bad input, 3 on
 /// numerical failure, 4 when the exchange with the coupler fails.
 pub fn main() -> ExitCode {
     let args = Args::parse();
+    protocol::logs::init(
+        "fluid",
+        protocol::logs::Verbosity {
+            verbose: args.verbose,
+            quiet: args.quiet,
+        },
+    );
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("fluid-node: {err:#}");
+            protocol::logs::print_report(&format!("fluid-node: {err:#}"));
             ExitCode::from(
                 err.downcast_ref::<ServeError>()
                     .map_or(2, ServeError::exit_code),
@@ -99,8 +121,8 @@ fn run(args: Args) -> anyhow::Result<()> {
                 let rows = crate::report::work_precision(&scene, &cells, &orders, &out)
                     .map_err(anyhow::Error::msg)?;
                 print!("{}", crate::report::to_csv(&rows));
-                eprintln!(
-                    "fluid-node: wrote {0}/work_precision_{1}.csv and {0}/work_precision_{1}.svg",
+                tracing::info!(
+                    "wrote {0}/work_precision_{1}.csv and {0}/work_precision_{1}.svg",
                     out.display(),
                     scene.name
                 );

@@ -89,8 +89,8 @@ pub fn run_to_json(args: &CutCellsArgs) -> anyhow::Result<String> {
         None => None,
     };
     if before.enclosed_volume() < 0.0 {
-        eprintln!(
-            "cut-cells: warning: {} encloses a negative volume; its normals may point into the solid",
+        tracing::warn!(
+            "cut-cells: {} encloses a negative volume; its normals may point into the solid",
             args.surface.display()
         );
     }

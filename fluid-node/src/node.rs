@@ -133,6 +133,11 @@ impl FluidSide<'_> {
                 Message::FixedPointDecision(d) => d,
                 other => return Err(unexpected(&other, "a FixedPointDecision")),
             };
+            tracing::trace!(
+                "step {step} iteration {iteration}: loads sent, {:?} at residual {:.3e}",
+                decision.decision,
+                decision.residual
+            );
             if decision.decision == Decision::Accept {
                 break;
             }

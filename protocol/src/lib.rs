@@ -12,9 +12,14 @@
 //! - `mcap_read` (feature `replay`): bounded, CRC-checked reading of MCAP bytes.
 //! - `replay` (feature `replay`): a node's recorded messages read back from MCAP bytes, and the
 //!   replay double that plays them in step with the coupler.
+//! - `serve` (features `bus` and `replay`): what both node binaries run.
+//! - `logs` (feature `logs`): the binaries' stderr subscriber (level from `RUST_LOG` or
+//!   `-v`/`-q`, lines prefixed with the node's name).
 //!
-//! Invariant: apart from `bus`, this crate does no IO: no files, sockets, threads, clocks or
-//! environment variables (the in-memory transport's deadline is its only use of time).
+//! Invariant: apart from `bus`, `serve` and `logs`, this crate does no IO: no files, sockets,
+//! threads, clocks or environment variables (the in-memory transport's deadline is its only use
+//! of time). The node loop emits `tracing` events, which write nothing unless a binary installs
+//! a subscriber.
 
 #![deny(missing_docs)]
 
@@ -28,6 +33,8 @@ pub mod wire;
 
 #[cfg(feature = "bus")]
 pub mod bus;
+#[cfg(feature = "logs")]
+pub mod logs;
 #[cfg(feature = "replay")]
 pub mod mcap_read;
 #[cfg(feature = "replay")]

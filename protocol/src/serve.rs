@@ -85,6 +85,12 @@ pub fn serve<M>(
     };
     let node = node.ok_or_else(|| input(format!("the scene has no [{kind}] section")))?;
     let implementation = opts.double.clone().unwrap_or(node);
+    tracing::debug!(
+        "started: {implementation} {kind}, scene {}, run {}, pid {}",
+        opts.scene.display(),
+        opts.run_id,
+        std::process::id()
+    );
     let mut bus = Bus::open(&opts.run_id, kind, &[NodeKind::Coupler])
         .map_err(|e| input(format!("opening the bus for run {}: {e}", opts.run_id)))?;
     if let Some(file) = implementation.strip_prefix("replay:") {
@@ -92,7 +98,13 @@ pub fn serve<M>(
             std::fs::read(file).map_err(|e| input(format!("reading record {file}: {e}")))?;
         let script = Script::from_mcap(&bytes, kind)
             .map_err(|e| input(format!("reading record {file}: {e}")))?;
+        tracing::debug!(
+            "playing the {kind} node of record {file}: {} frames{}",
+            script.frames.len(),
+            if script.truncated { " (cut short)" } else { "" }
+        );
         play(&mut bus, &script, opts.timeout).map_err(|e| input(e.to_string()))?;
+        tracing::debug!("played record {file} to its end");
         return Ok(());
     }
     let model = build(&scene, &implementation).map_err(input)?;
@@ -109,5 +121,6 @@ pub fn serve<M>(
     let transport: &mut dyn Transport = &mut bus;
     let mut link = Link::new(transport, opts.timeout);
     run(model, &mut link, &cfg)?;
+    tracing::debug!("finished");
     Ok(())
 }

@@ -2,9 +2,12 @@
 //! checkpoints, step plans, outputs, totals, proposals, shutdown), its configuration, its errors,
 //! and the small exchanges every node makes. Each node brings only its side of a step. Pure: the
 //! loops pass a [`Link`] in; nothing here opens files or reads clocks (the models write their
-//! outputs themselves).
+//! outputs themselves). The loop's `tracing` events (greeting, checkpoints, steps at debug,
+//! shutdown) go wherever the binary's subscriber sends them.
 
 use std::path::{Path, PathBuf};
+
+use tracing::debug;
 
 use crate::transport::{Link, LinkError};
 use crate::wire::{
@@ -54,9 +57,18 @@ pub fn run_node<N: NodeModel + ?Sized>(
         implementation: node.implementation().to_string(),
         capabilities: vec!["checkpoint".into()],
     })?;
+    debug!(
+        "greeted the coupler: {} {kind}, protocol {PROTOCOL_VERSION}, scene hash {:016x}, {}",
+        node.implementation(),
+        cfg.scene_hash,
+        if cfg.coupled { "coupled" } else { "alone" }
+    );
     if cfg.coupled {
         match open(node, link) {
-            Err(NodeError::Stopped { .. }) => return finish(node, cfg),
+            Err(NodeError::Stopped { step }) => {
+                debug!("shut down by the coupler before step {step}");
+                return finish(node, cfg);
+            }
             other => other?,
         }
     }
@@ -72,24 +84,39 @@ pub fn run_node<N: NodeModel + ?Sized>(
     propose(link, step, node.dt_max())?;
     loop {
         match link.recv()? {
-            Message::Shutdown(_) => break,
+            Message::Shutdown(shutdown) => {
+                debug!(
+                    "shutdown at step {}: {:?}",
+                    shutdown.stamp.step, shutdown.reason
+                );
+                break;
+            }
             Message::CheckpointRequest(r) => {
+                let bytes = node.checkpoint();
+                debug!("checkpoint of step {}: {} bytes", r.stamp.step, bytes.len());
                 link.send(&Message::Checkpoint(Checkpoint {
                     stamp: r.stamp,
                     node: kind,
-                    bytes: node.checkpoint(),
+                    bytes,
                 }))?;
             }
             Message::Checkpoint(c) => {
                 node.restore(&c.bytes).map_err(|e| fail(link, c.stamp, e))?;
                 step = c.stamp.step;
+                debug!(
+                    "restored the checkpoint of step {step} ({} bytes)",
+                    c.bytes.len()
+                );
                 propose(link, step, node.dt_max())?;
             }
             Message::StepPlan(plan) => {
                 step = plan.stamp.step;
                 match advance(node, link, &plan) {
                     // The coupler ended the run inside the step (Ctrl-C, a failure elsewhere).
-                    Err(NodeError::Stopped { .. }) => break,
+                    Err(NodeError::Stopped { .. }) => {
+                        debug!("shut down by the coupler inside step {step}");
+                        break;
+                    }
                     other => other?,
                 }
                 let t_end = plan.t + plan.dt;
@@ -97,7 +124,12 @@ pub fn run_node<N: NodeModel + ?Sized>(
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
                     node.write_output(k + first_planned, t_end, out)
                         .map_err(|source| NodeError::output(out, source))?;
+                    debug!("output {} at t = {t_end:.6e} s", k + first_planned);
                 }
+                debug!(
+                    "step {step} done: t = {t_end:.6e} s, dt = {:.4e} s",
+                    plan.dt
+                );
                 link.send(&Message::ConservedTotals(
                     node.totals(Stamp::step(step), t_end),
                 ))?;
@@ -120,6 +152,7 @@ fn finish<N: NodeModel + ?Sized>(node: &mut N, cfg: &LoopConfig) -> Result<(), N
     if let Some(out) = &cfg.out {
         node.write_probes(out)
             .map_err(|source| NodeError::output(out, source))?;
+        debug!("probes written into {}", out.display());
     }
     Ok(())
 }

@@ -31,6 +31,20 @@ pub struct Args {
     /// Deadline for each message from the coupler, in seconds.
     #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
     pub timeout_s: Duration,
+    /// More log lines on stderr: -v debug, -vv trace (`RUST_LOG`, when set, decides instead;
+    /// `coupler-node run` passes its own -v/-q on).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
+    pub verbose: u8,
+    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only.
+    #[arg(
+        short,
+        long,
+        action = clap::ArgAction::Count,
+        global = true,
+        conflicts_with = "verbose",
+        help_heading = "Logs"
+    )]
+    pub quiet: u8,
     /// Tools.
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -40,14 +54,22 @@ pub struct Args {
 #[derive(Debug, Subcommand)]
 pub enum Command {}
 
-/// Entry point of the binary: prints `solid-node: error` and exits 2 on bad input, 3 on
+/// Entry point of the binary: installs the logs ([`protocol::logs`], lines prefixed `solid`),
+/// runs, prints `solid-node: error` and exits 2 on bad input, 3 on
 /// numerical failure, 4 when the exchange with the coupler fails.
 pub fn main() -> ExitCode {
     let args = Args::parse();
+    protocol::logs::init(
+        "solid",
+        protocol::logs::Verbosity {
+            verbose: args.verbose,
+            quiet: args.quiet,
+        },
+    );
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("solid-node: {err:#}");
+            protocol::logs::print_report(&format!("solid-node: {err:#}"));
             ExitCode::from(
                 err.downcast_ref::<ServeError>()
                     .map_or(2, ServeError::exit_code),

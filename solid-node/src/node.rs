@@ -33,10 +33,19 @@ fn advance(
                 .map_err(|e| fail(link, loads.stamp, e))?;
             trial.stamp = loads.stamp;
             link.send(&Message::SolidState(trial))?;
-            match link.recv()? {
-                Message::FixedPointDecision(d) if d.decision == Decision::Accept => break,
-                Message::FixedPointDecision(_) => {}
+            let decision = match link.recv()? {
+                Message::FixedPointDecision(d) => d,
                 other => return Err(unexpected(&other, "a FixedPointDecision")),
+            };
+            tracing::trace!(
+                "step {} iteration {}: trial sent, {:?} at residual {:.3e}",
+                loads.stamp.step,
+                loads.stamp.iteration,
+                decision.decision,
+                decision.residual
+            );
+            if decision.decision == Decision::Accept {
+                break;
             }
         }
     } else {

@@ -23,10 +23,13 @@ pub(crate) fn out_dir(test: &str) -> PathBuf {
     dir
 }
 
+/// The coupler binary, with the test shims as its nodes and no `RUST_LOG` (stderr is what the
+/// flags give; a test that wants `RUST_LOG` sets it).
 pub(crate) fn coupler() -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_it-coupler-node"));
     cmd.env("COSIM_FLUID_BIN", env!("CARGO_BIN_EXE_it-fluid-node"))
-        .env("COSIM_SOLID_BIN", env!("CARGO_BIN_EXE_it-solid-node"));
+        .env("COSIM_SOLID_BIN", env!("CARGO_BIN_EXE_it-solid-node"))
+        .env_remove("RUST_LOG");
     cmd
 }
 

@@ -8,4 +8,5 @@ mod issue_11_records;
 mod issue_14;
 mod issue_15;
 mod issue_15_cli;
+mod issue_15_logs;
 mod tidy;
