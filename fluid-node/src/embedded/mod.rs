@@ -1271,30 +1271,14 @@ impl Embedded {
             }
             // No large neighbour: the face neighbour with the largest aperture.
             let mut best: Option<(f64, usize)> = None;
-            for a in 0..dim {
-                for side in [0usize, 1] {
-                    let mut q = ijk;
-                    let mut f = ijk;
-                    if side == 0 {
-                        if q[a] == 0 {
-                            continue;
-                        }
-                        q[a] -= 1;
-                    } else {
-                        if q[a] + 1 >= grid.cells[a] {
-                            continue;
-                        }
-                        q[a] += 1;
-                        f[a] += 1;
-                    }
-                    let qi = grid.index(q[0], q[1], q[2]);
-                    if alpha(qi) <= COVERED_TOLERANCE {
-                        continue;
-                    }
-                    let aperture = 1.0 - self.trial.face_fraction[a][face_index(grid, a, f)];
-                    if best.is_none_or(|(b, _)| aperture > b) {
-                        best = Some((aperture, qi));
-                    }
+            for (a, q, f) in face_neighbours(grid, ijk) {
+                let qi = grid.index(q[0], q[1], q[2]);
+                if alpha(qi) <= COVERED_TOLERANCE {
+                    continue;
+                }
+                let aperture = 1.0 - self.trial.face_fraction[a][face_index(grid, a, f)];
+                if best.is_none_or(|(b, _)| aperture > b) {
+                    best = Some((aperture, qi));
                 }
             }
             best.map_or((c, false), |(_, q)| (q, false))
@@ -1320,41 +1304,26 @@ impl Embedded {
         // The nearest target through open faces (breadth first, faces in axis order), for a walk
         // that cycles between small cells: a thin crack, a cell cut on two sides (paper 000
         // §3.3, recursive mixing). `None` for a pocket with no target within `MAX_SEARCH` cells.
-        const MAX_SEARCH: usize = 4096;
+        const MAX_SEARCH: usize = 1024;
         let nearest_target = |from: usize| -> Option<usize> {
-            let mut seen = vec![from];
+            let mut queue = vec![from];
+            let mut seen = std::collections::BTreeSet::from([from]);
             let mut next = 0;
-            while next < seen.len() && seen.len() < MAX_SEARCH {
-                let c = seen[next];
+            while next < queue.len() && queue.len() < MAX_SEARCH {
+                let ijk = grid.ijk(queue[next]);
                 next += 1;
-                let ijk = grid.ijk(c);
-                for a in 0..dim {
-                    for side in [0usize, 1] {
-                        let (mut q, mut f) = (ijk, ijk);
-                        if side == 0 {
-                            if q[a] == 0 {
-                                continue;
-                            }
-                            q[a] -= 1;
-                        } else {
-                            if q[a] + 1 >= grid.cells[a] {
-                                continue;
-                            }
-                            q[a] += 1;
-                            f[a] += 1;
-                        }
-                        if self.trial.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
-                            continue;
-                        }
-                        let qi = grid.index(q[0], q[1], q[2]);
-                        if alpha(qi) <= COVERED_TOLERANCE || seen.contains(&qi) {
-                            continue;
-                        }
-                        if target(qi) {
-                            return Some(qi);
-                        }
-                        seen.push(qi);
+                for (a, q, f) in face_neighbours(grid, ijk) {
+                    if self.trial.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
+                        continue;
                     }
+                    let qi = grid.index(q[0], q[1], q[2]);
+                    if alpha(qi) <= COVERED_TOLERANCE || !seen.insert(qi) {
+                        continue;
+                    }
+                    if target(qi) {
+                        return Some(qi);
+                    }
+                    queue.push(qi);
                 }
             }
             None
@@ -1574,6 +1543,27 @@ fn full_state(cell: &[f64], dim: usize, scale: f64) -> [f64; NQ] {
     }
     full[4] = cell[dim + 1] / scale;
     full
+}
+
+/// The face neighbours of cell `ijk` inside the grid, axis by axis, lower side first: `(axis,
+/// neighbour, the face's index triple)` (a face is indexed by the cell above it).
+fn face_neighbours(
+    grid: &Grid,
+    ijk: [usize; 3],
+) -> impl Iterator<Item = (usize, [usize; 3], [usize; 3])> + '_ {
+    (0..grid.dim).flat_map(move |a| {
+        let below = (ijk[a] > 0).then(|| {
+            let mut q = ijk;
+            q[a] -= 1;
+            (a, q, ijk)
+        });
+        let above = (ijk[a] + 1 < grid.cells[a]).then(|| {
+            let mut q = ijk;
+            q[a] += 1;
+            (a, q, q)
+        });
+        below.into_iter().chain(above)
+    })
 }
 
 /// All offsets of the `(2r + 1)^dim − 1` neighbours within Chebyshev distance `r`.
