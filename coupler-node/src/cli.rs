@@ -15,21 +15,9 @@ use crate::launch::{self, RunOptions};
 #[derive(Debug, Parser)]
 #[command(name = "coupler-node", version, after_long_help = AFTER_LONG_HELP)]
 pub struct Args {
-    /// More log lines on stderr: -v debug, -vv trace; `run` passes it on to the nodes
-    /// (`RUST_LOG`, when set, decides instead, in every process).
-    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
-    pub verbose: u8,
-    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only; `run -q` also
-    /// drops the progress line. Errors are printed at any level.
-    #[arg(
-        short,
-        long,
-        action = clap::ArgAction::Count,
-        global = true,
-        conflicts_with = "verbose",
-        help_heading = "Logs"
-    )]
-    pub quiet: u8,
+    /// -v/-q.
+    #[command(flatten)]
+    pub log: protocol::logs::Verbosity,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -38,10 +26,7 @@ pub struct Args {
 impl Args {
     /// The `-v`/`-q` counts.
     pub fn verbosity(&self) -> Verbosity {
-        Verbosity {
-            verbose: self.verbose,
-            quiet: self.quiet,
-        }
+        self.log
     }
 }
 

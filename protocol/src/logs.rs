@@ -26,12 +26,24 @@ use tracing_subscriber::registry::LookupSpan;
 /// then erase to the end of the line.
 pub const CLEAR_LINE: &str = "\r\x1b[K";
 
-/// How much a process logs when `RUST_LOG` is not set: the counts of `-v` and `-q`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How much a process logs when `RUST_LOG` is not set: the counts of `-v` and `-q`, the flags
+/// of all three binaries (`#[command(flatten)]`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::Args)]
 pub struct Verbosity {
-    /// `-v` given this many times (default 0).
+    /// More log lines on stderr: -v debug, -vv trace (`RUST_LOG`, when set, decides instead, in
+    /// every process; `coupler-node run` passes -v/-q on to the nodes).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
     pub verbose: u8,
-    /// `-q` given this many times (default 0).
+    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only; errors are
+    /// printed at any level (`coupler-node run -q` also drops the progress line).
+    #[arg(
+        short,
+        long,
+        action = clap::ArgAction::Count,
+        global = true,
+        conflicts_with = "verbose",
+        help_heading = "Logs"
+    )]
     pub quiet: u8,
 }
 

@@ -31,20 +31,9 @@ pub struct Args {
     /// Deadline for each message from the coupler, in seconds.
     #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
     pub timeout_s: Duration,
-    /// More log lines on stderr: -v debug, -vv trace (`RUST_LOG`, when set, decides instead;
-    /// `coupler-node run` passes its own -v/-q on).
-    #[arg(short, long, action = clap::ArgAction::Count, global = true, help_heading = "Logs")]
-    pub verbose: u8,
-    /// Fewer log lines on stderr: -q warnings and errors only, -qq errors only.
-    #[arg(
-        short,
-        long,
-        action = clap::ArgAction::Count,
-        global = true,
-        conflicts_with = "verbose",
-        help_heading = "Logs"
-    )]
-    pub quiet: u8,
+    /// -v/-q.
+    #[command(flatten)]
+    pub log: protocol::logs::Verbosity,
     /// Tools.
     #[command(subcommand)]
     pub command: Option<Command>,
@@ -59,13 +48,7 @@ pub enum Command {}
 /// numerical failure, 4 when the exchange with the coupler fails.
 pub fn main() -> ExitCode {
     let args = Args::parse();
-    protocol::logs::init(
-        "solid",
-        protocol::logs::Verbosity {
-            verbose: args.verbose,
-            quiet: args.quiet,
-        },
-    );
+    protocol::logs::init("solid", args.log);
     match run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
