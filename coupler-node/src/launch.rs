@@ -33,8 +33,9 @@ use protocol::transport::{Transport, TransportError};
 use protocol::wire::NodeKind;
 
 use crate::driver::{self, Abort, DriverConfig, RecordSink, Summary};
+use crate::ledger::CSV_HEADER;
 use crate::scheme::{Coupler, CouplerConfig};
-use crate::sink::{FileSink, LedgerCsv, LinksBrokenCsv, RunSink};
+use crate::sink::{CsvFile, FileSink, LINKS_BROKEN_HEADER, RunSink};
 
 /// Options of `coupler-node run`.
 #[derive(Clone, Debug)]
@@ -269,12 +270,12 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     };
     let mut run_sink = RunSink {
         record: file_sink,
-        ledger: LedgerCsv::create(&opts.out.join("ledger.csv"))?,
+        ledger: CsvFile::create(&opts.out.join("ledger.csv"), CSV_HEADER)?,
         links_broken: scene
             .solid
             .as_ref()
             .is_some_and(|s| s.fracture.is_some())
-            .then(|| LinksBrokenCsv::create(&opts.out.join("links_broken.csv")))
+            .then(|| CsvFile::create(&opts.out.join("links_broken.csv"), LINKS_BROKEN_HEADER))
             .transpose()?,
     };
     let sink: &mut dyn RecordSink = &mut run_sink;

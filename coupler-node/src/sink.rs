@@ -11,7 +11,7 @@ use protocol::scene::{RecordLevel, Scene};
 use protocol::wire::NodeKind;
 
 use crate::driver::RecordSink;
-use crate::ledger::{CSV_HEADER, LedgerEntry};
+use crate::ledger::LedgerEntry;
 use crate::record::Recorder;
 
 /// A recorder writing to a file.
@@ -98,32 +98,37 @@ impl RecordSink for FileSink {
     }
 }
 
-/// `ledger.csv`: one row per accepted step ([`LedgerEntry::csv_row`]), each written whole with
+/// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
-pub struct LedgerCsv {
+/// `ledger.csv` (one row per accepted step, [`LedgerEntry::csv_row`]) and `links_broken.csv`
+/// ([`links_broken_rows`]).
+pub struct CsvFile {
     file: File,
     path: std::path::PathBuf,
 }
 
-impl LedgerCsv {
-    /// Creates `path` and writes the header line.
-    pub fn create(path: &Path) -> anyhow::Result<LedgerCsv> {
+impl CsvFile {
+    /// Creates `path` and writes `header` (without its newline) as the first line.
+    pub fn create(path: &Path, header: &str) -> anyhow::Result<CsvFile> {
         use std::io::Write;
         let mut file =
             File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        file.write_all(format!("{CSV_HEADER}\n").as_bytes())
+        file.write_all(format!("{header}\n").as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
-        Ok(LedgerCsv {
+        Ok(CsvFile {
             file,
             path: path.to_path_buf(),
         })
     }
 
-    /// Appends the row of one step.
-    pub fn row(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+    /// Appends `rows` (each with its newline) in one write; nothing for no rows.
+    pub fn append(&mut self, rows: &str) -> Result<(), String> {
         use std::io::Write;
+        if rows.is_empty() {
+            return Ok(());
+        }
         self.file
-            .write_all(entry.csv_row().as_bytes())
+            .write_all(rows.as_bytes())
             .map_err(|e| format!("writing {}: {e}", self.path.display()))
     }
 }
@@ -141,49 +146,15 @@ pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
         .collect()
 }
 
-/// `links_broken.csv` (scenes with `solid.fracture`): one row per link broken on an accepted
-/// step, in break order; each step's rows go out with one `write` on the unbuffered file, so a
-/// killed run keeps every row up to its last step.
-pub struct LinksBrokenCsv {
-    file: File,
-    path: std::path::PathBuf,
-}
-
-impl LinksBrokenCsv {
-    /// Creates `path` and writes the header line.
-    pub fn create(path: &Path) -> anyhow::Result<LinksBrokenCsv> {
-        use std::io::Write;
-        let mut file =
-            File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        file.write_all(format!("{LINKS_BROKEN_HEADER}\n").as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-        Ok(LinksBrokenCsv {
-            file,
-            path: path.to_path_buf(),
-        })
-    }
-
-    /// Appends the rows of one step (nothing when no link broke).
-    pub fn rows(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
-        use std::io::Write;
-        if pairs.is_empty() {
-            return Ok(());
-        }
-        self.file
-            .write_all(links_broken_rows(t, step, pairs).as_bytes())
-            .map_err(|e| format!("writing {}: {e}", self.path.display()))
-    }
-}
-
 /// What `coupler-node run` writes as it goes: the record (none at level `none`),
 /// `ledger.csv` (always) and `links_broken.csv` (scenes with `solid.fracture`).
 pub struct RunSink {
     /// The MCAP record.
     pub record: Option<FileSink>,
-    /// The conservation history.
-    pub ledger: LedgerCsv,
-    /// The broken links, when the scene can break any.
-    pub links_broken: Option<LinksBrokenCsv>,
+    /// The conservation history, `ledger.csv`.
+    pub ledger: CsvFile,
+    /// The broken links, `links_broken.csv`, when the scene can break any.
+    pub links_broken: Option<CsvFile>,
 }
 
 impl RunSink {
@@ -222,13 +193,13 @@ impl RecordSink for RunSink {
     }
 
     fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
-        self.ledger.row(entry)
+        self.ledger.append(&entry.csv_row())
     }
 
     fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
         self.links_broken
             .as_mut()
-            .map_or(Ok(()), |csv| csv.rows(t, step, pairs))
+            .map_or(Ok(()), |csv| csv.append(&links_broken_rows(t, step, pairs)))
     }
 
     fn end_step(&mut self) -> Result<(), String> {

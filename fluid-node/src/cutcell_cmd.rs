@@ -429,11 +429,7 @@ fn write_outputs(
             .flatten()
             .copied()
             .collect(),
-        kind: if grid.dim == 3 {
-            PolyCells::Polys
-        } else {
-            PolyCells::Lines
-        },
+        kind: PolyCells::surface(grid.dim),
         connectivity,
         offsets,
         point_data: Vec::new(),

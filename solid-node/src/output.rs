@@ -66,11 +66,7 @@ pub fn solid_faces_vtp(solid: &Solid, title: &str) -> Vec<u8> {
     }
     let poly = PolyData {
         points: face_points(solid),
-        kind: if solid.dim() == 3 {
-            PolyCells::Polys
-        } else {
-            PolyCells::Lines
-        },
+        kind: PolyCells::surface(solid.dim()),
         connectivity,
         offsets,
         point_data: Vec::new(),
@@ -102,11 +98,7 @@ pub fn wet_surface_vtp(wet: &WetSurfaceData, title: &str) -> Vec<u8> {
     };
     let poly = PolyData {
         points: pad(&wet.vertices),
-        kind: if wet.dim == 3 {
-            PolyCells::Polys
-        } else {
-            PolyCells::Lines
-        },
+        kind: PolyCells::surface(wet.dim),
         connectivity: wet.elements.iter().map(|&v| i64::from(v)).collect(),
         offsets: (1..=n as i64).map(|e| e * dim as i64).collect(),
         point_data: Vec::new(),

@@ -914,6 +914,8 @@ impl Embedded {
         for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {
             self.saved[k * nvar..(k + 1) * nvar].fill(0.0);
         }
+        let cracking = opening.contains(&true);
+        let stride: Vec<usize> = (0..dim).map(|a| grid.cells[..a].iter().product()).collect();
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
         // The fluid at t^n in the volume the solid newly covers (every change of Λ is in a near
@@ -1006,15 +1008,20 @@ impl Embedded {
                         "step {step}: face fluxes of near cell {ijk:?} were not kept (a bug)"
                     ));
                 };
-                let below = (ijk[a] > 0).then(|| c - grid.cells[..a].iter().product::<usize>());
-                let above = (ijk[a] + 1 < grid.cells[a])
-                    .then(|| c + grid.cells[..a].iter().product::<usize>());
-                let fl = below
-                    .and_then(|q| self.crack_flux(a, q, c, &opening, sigma))
-                    .unwrap_or(fl);
-                let fr = above
-                    .and_then(|q| self.crack_flux(a, c, q, &opening, sigma))
-                    .unwrap_or(fr);
+                let (fl, fr) = if cracking {
+                    let below = (ijk[a] > 0).then(|| c - stride[a]);
+                    let above = (ijk[a] + 1 < grid.cells[a]).then(|| c + stride[a]);
+                    (
+                        below
+                            .and_then(|q| self.crack_flux(a, q, c, &opening, sigma))
+                            .unwrap_or(fl),
+                        above
+                            .and_then(|q| self.crack_flux(a, c, q, &opening, sigma))
+                            .unwrap_or(fr),
+                    )
+                } else {
+                    (fl, fr)
+                };
                 let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
                 let acc = &mut self.content[k];
                 acc[0] += sigma * (wl * fl[0] - wr * fr[0]);

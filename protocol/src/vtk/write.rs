@@ -112,6 +112,15 @@ pub enum PolyCells {
 }
 
 impl PolyCells {
+    /// The cells of a surface in `dim` dimensions: segments in 2-D, polygons in 3-D.
+    pub fn surface(dim: usize) -> PolyCells {
+        if dim == 3 {
+            PolyCells::Polys
+        } else {
+            PolyCells::Lines
+        }
+    }
+
     fn tag(self) -> &'static str {
         match self {
             PolyCells::Verts => "Verts",
