@@ -176,7 +176,9 @@ fn momentum_is_conserved_to_round_off_when_links_break() {
         assert!(n_broken >= 1, "links must break");
         assert!(dp < 1e-13 * scale, "linear momentum drift {dp}");
         assert!(dl < 1e-12 * scale, "angular momentum drift {dl}");
-        assert!(de < 0.02, "energy with dissipation accounted {de}");
+        // Measured 2.6e-5 (2-D), 3.7e-5 (3-D): Verlet's own fluctuation. Counting the broken
+        // links' energy at n+1 instead (the kinetic energy never paid for it) gave 5.0e-3.
+        assert!(de < 2e-4, "energy with dissipation accounted {de}");
         assert_closed(solid.wet_surface());
     }
 }

@@ -141,6 +141,9 @@ pub struct Solid {
     motion: Vec<[[f64; 3]; 2]>,
     /// Output of [`Solid::evaluate_contact`].
     bench_loads: (Vec<[f64; 3]>, Vec<[f64; 3]>),
+    /// Centres and orientations at n of the step being committed (with fracture only: the
+    /// energy a breaking link takes is evaluated there, [`Solid::break_dissipation`]).
+    before_step: (Vec<[f64; 3]>, Vec<[f64; 4]>),
 }
 
 /// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.
@@ -373,6 +376,7 @@ impl Solid {
             contact_limit,
             motion: vec![[[0.0; 3]; 2]; n],
             bench_loads: (Vec::new(), Vec::new()),
+            before_step: (Vec::new(), Vec::new()),
             model,
         };
         solid.rebuild_wet_topology();
