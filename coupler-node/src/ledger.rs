@@ -5,7 +5,8 @@
 //!   (relative error, and absolute error to set against the mass the solid swept, the measure
 //!   of paper 000 Fig. 11a, 21a and 28a);
 //! - energy: Σ node energy (fluid total energy; solid kinetic + elastic + contact + gravity
-//!   potential) + energy dissipated (links broken, contact dashpots and friction) + energy that
+//!   potential) + energy dissipated (links broken, contact dashpots and friction; less the work
+//!   of the solid's prescribed motions, which put energy in) + energy that
 //!   left through open boundaries stays at its initial value (relative error, and error
 //!   relative to the largest energy exchanged through the interface, the measure of paper 003
 //!   Fig. 7); the interface work moves energy between the nodes and cancels in the sum;
@@ -32,7 +33,7 @@ pub struct LedgerEntry {
     /// Kinetic part of `solid_energy` (translation + rotation) \[J\].
     pub solid_kinetic: f64,
     /// Energy the solid dissipated \[J\]: elastic energy of its broken links, work of the
-    /// contact dashpots and friction.
+    /// contact dashpots and friction, less the work of its prescribed motions.
     pub solid_dissipated: f64,
     /// Energy dissipated, both nodes \[J\] (the fluid dissipates none it reports).
     pub dissipated: f64,

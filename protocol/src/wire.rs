@@ -278,7 +278,9 @@ pub struct ConservedTotals {
     pub momentum: Vec<f64>,
     /// Total energy \[J\]: fluid total energy, or solid kinetic + elastic energy.
     pub energy: f64,
-    /// Energy taken out of the node by dissipation (broken links) since the start \[J\].
+    /// Energy taken out of the node since the start \[J\]: dissipated (broken links, contact
+    /// dashpots and friction), less the work its prescribed motions put in (solid: a particle
+    /// driven at a set velocity takes whatever work holds it there).
     pub dissipated: f64,
     /// Work done by the interface loads on this node since the start \[J\] (solid: work received;
     /// fluid: work given, counted positive when the fluid loses energy).

@@ -150,7 +150,8 @@ impl NodeModel for RealSolid {
             mass,
             momentum: m.linear[..dim].to_vec(),
             energy: e.kinetic_translation + e.kinetic_rotation + e.elastic + e.contact + e.gravity,
-            dissipated: e.dissipated,
+            // The prescribed motions' work enters as negative dissipation: energy put in.
+            dissipated: e.dissipated - e.driven_work,
             interface_work: e.external_work,
             interface_impulse: self.solid.external_impulse()[..dim].to_vec(),
             boundary_mass_out: 0.0,
@@ -165,7 +166,8 @@ impl NodeModel for RealSolid {
                 + e.elastic.abs()
                 + e.contact
                 + e.gravity.abs()
-                + e.dissipated.abs(),
+                + e.dissipated.abs()
+                + e.driven_work.abs(),
         }
     }
 

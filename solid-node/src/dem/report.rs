@@ -99,11 +99,15 @@ pub struct Energies {
     pub gravity: f64,
     /// Work of the external loads so far, `Σ F·ΔX + τ·Δθ` with the loads held over each step.
     pub external_work: f64,
+    /// Work the prescribed motions (`motion = { velocity }`) did so far: minus the work of every
+    /// load on the driven particles (external, internal and contact, trapezoidal over each
+    /// step), which their constraint cancels to hold the velocity.
+    pub driven_work: f64,
 }
 
 impl Energies {
-    /// Kinetic + elastic + contact + dissipated + gravity potential (conserved without
-    /// external loads).
+    /// Kinetic + elastic + contact + dissipated + gravity potential, less the work of the
+    /// prescribed motions (conserved without external loads).
     pub fn total(&self) -> f64 {
         self.kinetic_translation
             + self.kinetic_rotation
@@ -111,6 +115,7 @@ impl Energies {
             + self.contact
             + self.dissipated
             + self.gravity
+            - self.driven_work
     }
 }
 

@@ -47,6 +47,9 @@ struct State {
     broken: Vec<bool>,
     dissipated: f64,
     external_work: f64,
+    /// Work the prescribed motions did on the solid so far \[J\]: what their constraints put in
+    /// to hold the motion against the loads, internal and external, on the driven particles.
+    driven_work: f64,
     /// Impulse of the external loads so far, `Σ F Δt` over all particles (fixed ones too).
     external_impulse: [f64; 3],
     wet_revision: u64,
@@ -332,6 +335,7 @@ impl Solid {
             broken: vec![false; n_links],
             dissipated: 0.0,
             external_work: 0.0,
+            driven_work: 0.0,
             external_impulse: [0.0; 3],
             wet_revision: 0,
             contact_damping: if contact.is_some() {
@@ -669,6 +673,7 @@ impl Solid {
             contact: self.contact.as_ref().map_or(0.0, |c| c.energy()),
             dissipated: self.state.dissipated,
             external_work: self.state.external_work,
+            driven_work: self.state.driven_work,
             ..Energies::default()
         };
         for (p, part) in self.model.particles.iter().enumerate() {

@@ -125,6 +125,11 @@ impl Solid {
             self.before_step.0.clone_from(&self.state.x);
             self.before_step.1.clone_from(&self.state.rot);
         }
+        // Internal loads at n on the driven particles (for the work of their constraints).
+        let driven: Vec<(usize, Vector3<f64>)> = (0..self.n_particles())
+            .filter(|&p| matches!(self.model.particles[p].motion, ParticleMotion::Velocity(_)))
+            .map(|p| (p, Vector3::from(self.force_int[p])))
+            .collect();
         for (p, pt) in self.particle_trial.iter().enumerate() {
             let dx = Vector3::from(pt.x) - Vector3::from(self.state.x[p]);
             let size = self.model.particles[p].size;
@@ -182,6 +187,13 @@ impl Solid {
                 self.rebuild_wet_topology();
                 self.limit = self.stability_limit();
             }
+        }
+        // A driven particle keeps its velocity: its constraint does minus the work of the loads
+        // on it (they do not rotate, so only forces).
+        for &(p, f_n) in &driven {
+            let f =
+                Vector3::from(self.ext_force[p]) + 0.5 * (f_n + Vector3::from(self.force_int[p]));
+            self.state.driven_work -= f.dot(&Vector3::from(self.motion[p][0]));
         }
         if self.contact.is_some() {
             self.update_contact_damping();
@@ -295,8 +307,15 @@ impl Solid {
         v.extend(self.particle_trial.iter().map(|pt| pt.v_half));
         omega.extend(self.particle_trial.iter().map(|pt| pt.omega));
         let mut work = 0.0;
+        let mut on_driven = 0.0;
+        let driven =
+            |p: usize| matches!(self.model.particles[p].motion, ParticleMotion::Velocity(_));
         for p in 0..n {
-            work += load_work(&self.state.contact_damping[p], &self.motion[p]);
+            let w = load_work(&self.state.contact_damping[p], &self.motion[p]);
+            work += w;
+            if driven(p) {
+                on_driven += w;
+            }
         }
         let contact = self.contact.as_mut().expect("called with contact");
         contact.damping_loads(
@@ -308,9 +327,15 @@ impl Solid {
             &mut self.state.contact_damping,
         );
         for p in 0..n {
-            work += load_work(&self.state.contact_damping[p], &self.motion[p]);
+            let w = load_work(&self.state.contact_damping[p], &self.motion[p]);
+            work += w;
+            if driven(p) {
+                on_driven += w;
+            }
         }
         self.state.dissipated -= 0.5 * work;
+        // The dashpots' pull on a driven particle is held by its constraint too.
+        self.state.driven_work -= 0.5 * on_driven;
         self.kin.1 = v;
         self.kin.2 = omega;
     }
@@ -435,7 +460,9 @@ impl Solid {
     /// minus without them, torques with `Ω Δt`), while the potential loses their whole energy
     /// at n, `ΔUⁿ` (link, volumetric and contact terms evaluated with and without them). Verlet
     /// with the remaining forces closes over the step to O(Δt³), so `ΔUⁿ − ½ ΔFⁿ·ΔX` is what
-    /// kinetic + potential loses, to that order; counted as dissipated, the ledger closes.
+    /// kinetic + potential loses, to that order; counted as dissipated, the ledger closes. The
+    /// sum runs over every particle: a driven particle's share is the part of its constraint's
+    /// work (`driven_work`, taken with the loads at n with the links) that the links did.
     /// (Taking `ΔU` at n+1 instead counts energy the kinetic energy never paid: a link
     /// stretched past its limit in one step dissipated its whole `½ k x²` while no force had
     /// acted.)
@@ -453,10 +480,6 @@ impl Solid {
         let without = potential(self);
         let mut work = 0.0;
         for (p, [dx, w]) in self.motion.iter().enumerate() {
-            // Only free particles are kicked (prescribed ones take no work into kinetic energy).
-            if self.model.particles[p].motion != ParticleMotion::Free {
-                continue;
-            }
             let df = Vector3::from(force[p]) - Vector3::from(self.force_int[p]);
             let dt = Vector3::from(torque[p]) - Vector3::from(self.torque_int[p]);
             work += df.dot(&Vector3::from(*dx)) + dt.dot(&Vector3::from(*w));
