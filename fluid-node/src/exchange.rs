@@ -27,6 +27,8 @@ pub struct RealFluid {
     probes: Vec<Probe>,
     /// Whether the scene has a solid (the embedded part is built from the first surface).
     coupled: bool,
+    /// Whether that solid may fracture (`[solid] fracture`).
+    fracture: bool,
     embedded: Option<Embedded>,
     /// Budget restored from a checkpoint before the surface arrived.
     pending_budget: Option<InterfaceBudget>,
@@ -77,6 +79,7 @@ impl RealFluid {
             name: scene.name.clone(),
             probes,
             coupled: scene.solid.is_some(),
+            fracture: scene.solid.as_ref().is_some_and(|s| s.fracture.is_some()),
             embedded: None,
             pending_budget: None,
             vtk_series: Series::default(),
@@ -288,7 +291,11 @@ impl FluidModel for RealFluid {
         let frame = SolidFrame::from_state(state)?;
         match &mut self.embedded {
             Some(e) => e.set_surface(frame)?,
-            None => self.embedded = Some(Embedded::new(&self.solver, frame)?),
+            None => {
+                let mut e = Embedded::new(&self.solver, frame)?;
+                e.set_fracture(self.fracture);
+                self.embedded = Some(e);
+            }
         }
         if let (Some(e), Some(b)) = (&mut self.embedded, self.pending_budget.take()) {
             e.set_budget(b);

@@ -72,6 +72,7 @@ fn issue_14_a_crack_opens_as_vacuum_and_fills_conserving_mass() {
     let mut solver = solver(SCENE);
     let u = 0.2;
     let mut embedded = Embedded::new(&solver, pair(0.0, u)).expect("embedded");
+    embedded.set_fracture(true);
     let m0 = embedded.totals(&solver).mass;
     let e0 = embedded.totals(&solver).energy;
 
