@@ -65,7 +65,7 @@ pub fn serve_ranks(opts: &ServeOptions, ranks: u32) -> anyhow::Result<()> {
     let model = RealFluid::from_scene_on(&scene, Box::new(comm));
     follow(model, || {
         let mut bytes = Vec::new();
-        calls.broadcast_idle(&mut bytes);
+        calls.broadcast(0, &mut bytes);
         bytes
     })
     .map_err(|e| anyhow::anyhow!("rank {rank}: {e}"))

@@ -65,28 +65,6 @@ impl MpiComm {
         }
     }
 
-    /// [`Comm::broadcast`] from rank 0 for a message that may be long in coming (the next call
-    /// of rank 0's node loop, which waits on the coupler): polled every 200 µs rather than
-    /// spun on, so that waiting ranks leave the cores to the coupler and the solid.
-    pub fn broadcast_idle(&self, buf: &mut Vec<u8>) {
-        let root = self.world.process_at_rank(0);
-        let mut len = buf.len() as u64;
-        mpi::request::scope(|scope| {
-            let mut request = root.immediate_broadcast_into(scope, &mut len);
-            loop {
-                match request.test() {
-                    Ok(_) => break,
-                    Err(pending) => {
-                        request = pending;
-                        std::thread::sleep(std::time::Duration::from_micros(200));
-                    }
-                }
-            }
-        });
-        buf.resize(len as usize, 0);
-        root.broadcast_into(&mut buf[..]);
-    }
-
     /// The halo timer of this rank.
     pub fn clock(&self) -> Arc<HaloClock> {
         self.clock.clone()
@@ -207,9 +185,24 @@ impl Comm for MpiComm {
     }
 
     fn broadcast(&self, root: usize, buf: &mut Vec<u8>) {
+        // NOTE: the length goes by a non-blocking broadcast polled every 200 µs on every rank
+        // (a non-blocking collective matches only non-blocking ones): the broadcasts carry rank
+        // 0's next call, which may be long in coming while rank 0 waits on the coupler, and a
+        // blocking one spins; polled, waiting ranks leave the cores to the coupler and the solid.
         let process = self.world.process_at_rank(root as i32);
         let mut len = buf.len() as u64;
-        process.broadcast_into(&mut len);
+        mpi::request::scope(|scope| {
+            let mut request = process.immediate_broadcast_into(scope, &mut len);
+            loop {
+                match request.test() {
+                    Ok(_) => break,
+                    Err(pending) => {
+                        request = pending;
+                        std::thread::sleep(std::time::Duration::from_micros(200));
+                    }
+                }
+            }
+        });
         buf.resize(len as usize, 0);
         process.broadcast_into(&mut buf[..]);
     }
