@@ -121,6 +121,13 @@ pub enum Command {
         /// The step to restart at (one with checkpoints: a multiple of `run.checkpoint_every`).
         #[arg(long, requires = "restart")]
         step: Option<u64>,
+        /// Run the fluid on this many MPI ranks (overrides `fluid.ranks`; needs mpirun and a
+        /// fluid-node built with `--features mpi`).
+        #[arg(long)]
+        fluid_ranks: Option<u32>,
+        /// Host file for `mpirun --hostfile` (a fluid of several ranks on several machines).
+        #[arg(long)]
+        hostfile: Option<PathBuf>,
     },
     /// Check a scene without running it: parse and validate it (the errors `run` gives), compare
     /// its memory estimate with the machine, open each `replay:FILE` record it names; print a
@@ -266,6 +273,8 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             timeout_s,
             restart,
             step,
+            fluid_ranks,
+            hostfile,
         } => {
             let out = match out {
                 Some(out) => out,
@@ -289,6 +298,8 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                 fluid_bin: None,
                 solid_bin: None,
                 restart: restart.zip(step),
+                fluid_ranks,
+                hostfile,
             })?;
             tracing::info!(
                 "{}: {} in {} steps, t = {:.6e} s, wall {:.2} s, iterations mean {:.2} max {}, mass err {:.2e}, energy err {:.2e}; outputs in {}",

@@ -62,6 +62,10 @@ pub struct RunOptions {
     pub solid_bin: Option<PathBuf>,
     /// Resume from the checkpoints of this record at this step.
     pub restart: Option<(PathBuf, u64)>,
+    /// `fluid.ranks` override (`--fluid-ranks`).
+    pub fluid_ranks: Option<u32>,
+    /// Host file passed to `mpirun --hostfile` for a fluid of several ranks.
+    pub hostfile: Option<PathBuf>,
 }
 
 /// Exit status of `coupler-node run` when SIGINT, SIGTERM or SIGHUP interrupted the run (the
@@ -183,7 +187,10 @@ pub fn available_memory() -> anyhow::Result<u64> {
 /// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`). An
 /// interrupted run returns [`Interrupted`] (after writing the summary).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
-    let scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    let mut scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    if let Some(ranks) = opts.fluid_ranks {
+        scene = with_fluid_ranks(scene, ranks, &opts.scene)?;
+    }
     scene
         .check_memory(available_memory()?)
         .with_context(|| opts.scene.display().to_string())?;
@@ -237,9 +244,27 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
         .with_context(|| format!("opening the bus for run {run_id}"))?;
 
+    let fluid_ranks = scene.fluid.as_ref().map_or(1, |f| f.ranks);
+    let mpirun = if fluid_ranks > 1 {
+        let fluid_bin = &binaries[0];
+        Some(crate::mpi_launch::MpiLaunch::find(
+            fluid_bin,
+            fluid_ranks,
+            opts.hostfile.as_deref(),
+        )?)
+    } else {
+        anyhow::ensure!(
+            opts.hostfile.is_none(),
+            "--hostfile is for a fluid of several ranks (fluid.ranks or --fluid-ranks > 1)"
+        );
+        None
+    };
     let mut children = Vec::new();
     for ((node, implementation), binary) in nodes.iter().zip(&binaries) {
-        let mut cmd = tokio::process::Command::new(binary);
+        let mut cmd = match (&mpirun, node) {
+            (Some(mpi), NodeKind::Fluid) => mpi.command(binary),
+            _ => tokio::process::Command::new(binary),
+        };
         cmd.arg("--scene")
             .arg(&resolved)
             .arg("--run-id")
@@ -257,7 +282,15 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             // as a node death).
             .process_group(0)
             .kill_on_drop(true);
-        children.push((*node, cmd));
+        let ranks = match node {
+            NodeKind::Fluid if mpirun.is_some() => {
+                // The launcher's report names a rank that died (read from its stderr).
+                cmd.stderr(Stdio::piped());
+                fluid_ranks
+            }
+            _ => 1,
+        };
+        children.push((*node, cmd, ranks));
     }
     let abort = Abort::default();
     let hung_up = Arc::new(AtomicBool::new(false));
@@ -354,6 +387,17 @@ pub struct ExitInfo {
     pub text: String,
 }
 
+/// `scene` with `fluid.ranks = ranks`, validated again.
+pub fn with_fluid_ranks(mut scene: Scene, ranks: u32, path: &Path) -> anyhow::Result<Scene> {
+    let name = path.display().to_string();
+    let f = scene
+        .fluid
+        .as_mut()
+        .with_context(|| format!("{name}: --fluid-ranks {ranks} but the scene has no [fluid]"))?;
+    f.ranks = ranks;
+    Ok(Scene::from_toml_str(&scene.to_toml(), &name)?)
+}
+
 /// Starts the children and watches them on a tokio runtime of its own thread.
 struct Supervisor {
     stop: tokio::sync::oneshot::Sender<Duration>,
@@ -375,7 +419,7 @@ fn describe(status: std::process::ExitStatus) -> ExitInfo {
 
 impl Supervisor {
     fn start(
-        children: Vec<(NodeKind, tokio::process::Command)>,
+        children: Vec<(NodeKind, tokio::process::Command, u32)>,
         abort: Abort,
         hung_up: Arc<AtomicBool>,
     ) -> anyhow::Result<Supervisor> {
@@ -412,7 +456,7 @@ impl Supervisor {
 }
 
 async fn supervise(
-    commands: Vec<(NodeKind, tokio::process::Command)>,
+    commands: Vec<(NodeKind, tokio::process::Command, u32)>,
     abort: Abort,
     hung_up: Arc<AtomicBool>,
     started: std::sync::mpsc::Sender<Result<(), String>>,
@@ -429,9 +473,15 @@ async fn supervise(
         }
     };
     let mut children = Vec::new();
-    for (node, mut cmd) in commands {
+    let mut rank_reports = Vec::new();
+    for (node, mut cmd, ranks) in commands {
         match cmd.spawn() {
-            Ok(child) => {
+            Ok(mut child) => {
+                if ranks > 1
+                    && let Some(stderr) = child.stderr.take()
+                {
+                    rank_reports.push((node, crate::mpi_launch::watch_stderr(stderr)));
+                }
                 tracing::debug!(
                     "started the {node} node: {} (pid {})",
                     cmd.as_std().get_program().to_string_lossy(),
@@ -468,10 +518,13 @@ async fn supervise(
                 abort.raise("interrupted by a signal (SIGHUP)".to_string());
             }
             ((node, status), _, _) = futures_select_all(waits) => {
-                let info = match status {
+                let mut info = match status {
                     Ok(s) => describe(s),
                     Err(e) => ExitInfo { success: false, text: format!("wait failed: {e}") },
                 };
+                if let Some((_, report)) = rank_reports.iter_mut().find(|(n, _)| *n == node) {
+                    crate::mpi_launch::name_rank(&mut info.text, report).await;
+                }
                 let reason = format!("{node} node exited before the end of the run ({})", info.text);
                 exits.push((node, info));
                 abort.raise(reason);
@@ -482,6 +535,7 @@ async fn supervise(
         if exits.iter().any(|(n, _)| n == node) {
             continue;
         }
+        let mpi = rank_reports.iter().any(|(n, _)| n == node);
         let info = match tokio::time::timeout(grace, child.wait()).await {
             Ok(Ok(status)) => describe(status),
             Ok(Err(e)) => ExitInfo {
@@ -489,6 +543,10 @@ async fn supervise(
                 text: format!("wait failed: {e}"),
             },
             Err(_) => {
+                if mpi {
+                    // The ranks share mpirun's process group: none is left behind.
+                    crate::mpi_launch::kill_group(child.id());
+                }
                 let _ = child.kill().await;
                 ExitInfo {
                     success: false,

@@ -25,6 +25,7 @@ pub mod inspect;
 pub mod iqn;
 pub mod launch;
 pub mod ledger;
+pub mod mpi_launch;
 pub mod out_folder;
 pub mod progress;
 pub mod record;

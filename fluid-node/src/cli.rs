@@ -31,6 +31,10 @@ pub struct Args {
     /// Deadline for each message from the coupler, in seconds.
     #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
     pub timeout_s: Duration,
+    /// Print the optional features this binary was built with, one per line (`mpi`), and
+    /// exit (the launcher asks before it starts a fluid of several ranks).
+    #[arg(long)]
+    pub features: bool,
     /// -v/-q.
     #[command(flatten)]
     pub log: protocol::logs::Verbosity,
@@ -68,6 +72,23 @@ pub enum Report {
         #[arg(long, default_value = "out/report")]
         out: PathBuf,
     },
+}
+
+/// Optional features of this build (`--features`).
+pub const FEATURES: &[&str] = &[
+    #[cfg(feature = "mpi")]
+    "mpi",
+];
+
+/// `fluid.ranks` of a scene file (1 when it has no `[fluid]`; a bad scene is reported by the
+/// node loop as usual).
+fn fluid_ranks(scene: &std::path::Path) -> anyhow::Result<u32> {
+    let text = std::fs::read_to_string(scene)
+        .with_context(|| format!("reading scene {}", scene.display()))?;
+    Ok(Scene::from_toml_str(&text, &scene.display().to_string())
+        .ok()
+        .and_then(|s| s.fluid.map(|f| f.ranks))
+        .unwrap_or(1))
 }
 
 /// Entry point of the binary: installs the logs ([`protocol::logs`], lines prefixed `fluid`),
@@ -113,6 +134,12 @@ fn run(args: Args) -> anyhow::Result<()> {
             }
         };
     }
+    if args.features {
+        for feature in FEATURES {
+            println!("{feature}");
+        }
+        return Ok(());
+    }
     let opts = ServeOptions {
         scene: args.scene.context("--scene is required")?,
         run_id: args.run_id.context("--run-id is required")?,
@@ -120,6 +147,16 @@ fn run(args: Args) -> anyhow::Result<()> {
         timeout: args.timeout_s,
         out: args.out,
     };
+    let ranks = fluid_ranks(&opts.scene)?;
+    if ranks > 1 {
+        #[cfg(feature = "mpi")]
+        return crate::ranks::launch::serve_ranks(&opts, ranks);
+        #[cfg(not(feature = "mpi"))]
+        anyhow::bail!(
+            "fluid.ranks = {ranks} but this fluid-node was built without MPI (build it with \
+             `cargo build --release -p fluid-node --features mpi`)"
+        );
+    }
     serve(
         NodeKind::Fluid,
         &opts,

@@ -15,6 +15,7 @@ use protocol::vtk::Series;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::embedded::{COVERED_TOLERANCE, Embedded, InterfaceBudget, SolidFrame};
+use crate::fv::comm::{Comm, Serial};
 use crate::fv::{FluidSolver, Trouble};
 use crate::node::FluidModel;
 
@@ -38,13 +39,21 @@ pub struct RealFluid {
 
 struct Probe {
     name: String,
+    /// Cell of the whole grid.
     cell: usize,
     rows: Vec<String>,
 }
 
 impl RealFluid {
-    /// Builds the solver of a fluid-only scene.
+    /// Builds the solver of a scene on one rank.
     pub fn from_scene(scene: &Scene) -> Result<RealFluid, String> {
+        RealFluid::from_scene_on(scene, Box::new(Serial))
+    }
+
+    /// Builds this rank's part of the fluid of a scene on the ranks of `comm` (issue 16). With
+    /// several ranks every [`NodeModel`] and [`FluidModel`] method is collective (all ranks call
+    /// it in the same order, `crate::ranks::node`) and only rank 0 writes files.
+    pub fn from_scene_on(scene: &Scene, comm: Box<dyn Comm>) -> Result<RealFluid, String> {
         let cfg = scene
             .fluid
             .as_ref()
@@ -55,11 +64,18 @@ impl RealFluid {
                     .into(),
             );
         }
-        let solver = FluidSolver::from_scene(cfg, scene.run.threads as usize)?;
+        if scene.solid.is_some() && comm.size() > 1 {
+            return Err(format!(
+                "fluid.ranks = {}: the embedded solid does not run on several ranks yet",
+                comm.size()
+            ));
+        }
+        let solver = FluidSolver::from_scene_on(cfg, scene.run.threads as usize, comm)?;
         let mut probes = Vec::new();
         for probe in &scene.output.probes {
             if let Some(point) = &probe.point {
-                let ijk = solver.grid().locate(point).ok_or_else(|| {
+                let global = solver.global_grid();
+                let ijk = global.locate(point).ok_or_else(|| {
                     format!(
                         "probe {:?}: point {point:?} is outside the grid",
                         probe.name
@@ -67,7 +83,7 @@ impl RealFluid {
                 })?;
                 probes.push(Probe {
                     name: probe.name.clone(),
-                    cell: solver.grid().index(ijk[0], ijk[1], ijk[2]),
+                    cell: global.index(ijk[0], ijk[1], ijk[2]),
                     rows: Vec::new(),
                 });
             }
@@ -92,10 +108,27 @@ impl RealFluid {
             .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))
     }
 
+    /// Whether this rank writes the files (rank 0).
+    fn writes(&self) -> bool {
+        self.solver.comm().rank() == 0
+    }
+
     /// Cells holding fluid whose density or pressure is below the `fluid.vacuum` thresholds
     /// (the test that picks the Lax–Friedrichs flux); a cell the solid covers holds a ghost
-    /// state and is left out.
+    /// state and is left out. Summed over the ranks (collective).
     fn vacuum_cells(&self) -> u64 {
+        let mine = self.vacuum_cells_here();
+        let comm = self.solver.comm();
+        if comm.size() == 1 {
+            return mine;
+        }
+        comm.all_gather(&mine.to_le_bytes())
+            .iter()
+            .map(|b| u64::from_le_bytes(b[..8].try_into().expect("8 bytes")))
+            .sum()
+    }
+
+    fn vacuum_cells_here(&self) -> u64 {
         let params = self.solver.params();
         let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
         let n_cells = self.solver.grid().n_cells();
@@ -148,7 +181,7 @@ impl NodeModel for RealFluid {
             Some(e) if e.one_cell_dt() < cfl => (e.one_cell_dt(), "one-cell".into()),
             _ => {
                 // The cell that limits the step, so that a collapsing step names it.
-                let grid = self.solver.grid();
+                let grid = self.solver.global_grid();
                 let ijk = grid.ijk(self.solver.limiting_cell());
                 let centre = grid.cell_center(ijk);
                 let dim = grid.dim;
@@ -209,8 +242,12 @@ impl NodeModel for RealFluid {
     }
 
     fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
-        let grid = self.solver.grid();
-        let state = self.solver.state();
+        // Collective: the whole grid on rank 0, which writes what one rank would.
+        let Some(gathered) = self.solver.gather_state() else {
+            return Ok(());
+        };
+        let grid = self.solver.global_grid();
+        let state = &gathered;
         let alpha = self.embedded.as_ref().map(Embedded::fluid_fraction);
         if self.formats.contains(&OutputFormat::Csv) {
             let mut w =
@@ -256,8 +293,37 @@ impl NodeModel for RealFluid {
 
     fn record_probes(&mut self, t: f64) {
         let dim = self.dim();
-        for probe in &mut self.probes {
-            let (rho, u, p) = self.solver.primitive(probe.cell);
+        // Each probe's cell is read on the rank that owns it and gathered on rank 0 (collective).
+        let range = self.solver.slab().global_range();
+        let owned: Vec<(u64, f64, [f64; 3], f64)> = self
+            .probes
+            .iter()
+            .enumerate()
+            .filter(|(_, probe)| range.contains(&probe.cell))
+            .map(|(k, probe)| {
+                let (rho, u, p) = self.solver.primitive(probe.cell - range.start);
+                (k as u64, rho, u, p)
+            })
+            .collect();
+        let comm = self.solver.comm();
+        let values = if comm.size() == 1 {
+            owned
+        } else {
+            let Some(parts) = comm.gather(0, &protocol::codec::encode_blob(&owned)) else {
+                return;
+            };
+            let mut all: Vec<(u64, f64, [f64; 3], f64)> = parts
+                .iter()
+                .flat_map(|b| {
+                    protocol::codec::decode_blob::<Vec<(u64, f64, [f64; 3], f64)>>(b)
+                        .expect("ranks send valid probe values")
+                })
+                .collect();
+            all.sort_by_key(|v| v.0);
+            all
+        };
+        for (k, rho, u, p) in values {
+            let probe = &mut self.probes[k as usize];
             let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
             probe
                 .rows
@@ -266,6 +332,9 @@ impl NodeModel for RealFluid {
     }
 
     fn write_probes(&self, out: &Path) -> std::io::Result<()> {
+        if !self.writes() {
+            return Ok(());
+        }
         let vel = ["u", "v", "w"][..self.dim()].join(",");
         for probe in &self.probes {
             let mut text = format!("t,rho,{vel},p\n");

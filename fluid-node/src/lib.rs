@@ -24,4 +24,5 @@ pub mod grid;
 mod memory;
 pub mod node;
 pub mod output;
+pub mod ranks;
 pub mod report;

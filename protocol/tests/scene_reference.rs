@@ -119,6 +119,7 @@ fn scenes() -> Vec<Scene> {
             impedance: 1.0,
         }),
         profile: Some(profile),
+        ranks: 2,
     };
     let body = |shape: Shape, motion: Motion| BodyConfig {
         shape,

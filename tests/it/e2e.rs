@@ -104,7 +104,7 @@ pub(crate) fn summary(out: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("summary is JSON")
 }
 
-fn frames_by_topic(path: &Path) -> Vec<(String, Vec<Vec<u8>>)> {
+pub(crate) fn frames_by_topic(path: &Path) -> Vec<(String, Vec<Vec<u8>>)> {
     let rec = record::read_recording(&std::fs::read(path).expect("record")).expect("readable");
     let mut topics: Vec<(String, Vec<Vec<u8>>)> = Vec::new();
     for m in rec

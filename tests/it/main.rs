@@ -9,4 +9,6 @@ mod issue_14;
 mod issue_15;
 mod issue_15_cli;
 mod issue_15_logs;
+#[cfg(feature = "mpi")]
+mod issue_16_mpi;
 mod tidy;

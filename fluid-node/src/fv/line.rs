@@ -67,6 +67,11 @@ pub struct LineSetup {
     pub vacuum_p: f64,
     /// Whether the low / high end of the line is a wall face.
     pub wall: [bool; 2],
+    /// The cells `own[0]..own[1]` this line reports on (`0..n` unless a decomposed pencil
+    /// also updates cells of its neighbours, `slab.rs`): the counters, the fixes and the first
+    /// bad cell count these cells, and the faces `own[0]..own[1]` (plus face `n` when
+    /// `own[1] == n`), so that a face shared by two ranks is counted once.
+    pub own: [usize; 2],
 }
 
 /// Which flux a face used.
@@ -90,7 +95,7 @@ pub struct LineStats {
     pub hlle: u32,
     /// Cells whose faces were recomputed by the positivity fix.
     pub positivity_fixes: u32,
-    /// First interior cell still non-physical after the fixes.
+    /// First interior cell still non-physical after the fixes (counted from `own[0]`).
     pub first_bad: Option<u32>,
 }
 
@@ -211,7 +216,9 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
                 continue;
             }
             clean = false;
-            stats.positivity_fixes += 1;
+            if (setup.own[0]..setup.own[1]).contains(&m) {
+                stats.positivity_fixes += 1;
+            }
             for f in [m, m + 1] {
                 let (ul, ur) = (s.u[ng - 1 + f], s.u[ng + f]);
                 let (flux, kind) = match s.kind[f] {
@@ -237,11 +244,13 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
         update_cells(s, setup, 0, n);
         clean = false;
     }
-    stats.first_bad = (0..n)
+    let [own_lo, own_hi] = setup.own;
+    stats.first_bad = (own_lo..own_hi)
         .filter(|_| !clean)
         .find(|&m| !state_ok(&s.new[m], gamma, setup.vacuum_rho, setup.vacuum_p))
-        .map(|m| m as u32);
-    for k in &s.kind[..=n] {
+        .map(|m| (m - own_lo) as u32);
+    let last_face = if own_hi == n { n + 1 } else { own_hi };
+    for k in &s.kind[own_lo..last_face] {
         match k {
             FaceFlux::Hlle => stats.hlle += 1,
             FaceFlux::LaxFriedrichs => stats.lax_friedrichs += 1,

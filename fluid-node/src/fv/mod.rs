@@ -63,11 +63,13 @@
 // Index loops over the state components read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod comm;
 pub mod euler;
 pub mod exact_riemann;
 pub mod init;
 pub mod line;
 pub mod osmp;
+pub mod slab;
 pub mod solver;
 pub mod state;
 pub mod study;
@@ -76,7 +78,9 @@ pub mod sweep;
 #[cfg(test)]
 mod tests;
 
+pub use comm::{Comm, Serial};
 pub use line::FluxKind;
+pub use slab::Slab;
 pub use solver::{
     FluidSolver, GhostFill, SplitHooks, StepReport, Totals, Trouble, TroubleKind, sweep_order,
 };

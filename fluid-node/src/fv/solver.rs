@@ -7,17 +7,19 @@ use rayon::prelude::*;
 
 use protocol::scene::FluidConfig;
 
+use crate::fv::comm::{Comm, HaloExchange, Serial, bytes_f64, f64_bytes};
 use crate::fv::euler::{NQ, Primitive, sound_speed};
 use crate::fv::line::{FluxKind, LineScratch, state_ok};
-use crate::fv::state::{FluidParams, FluidState, from_scene};
+use crate::fv::slab::Slab;
+use crate::fv::state::{BoundaryKind, FluidParams, FluidState, from_scene};
 use crate::fv::sweep::{
-    FaceTap, PencilOut, Pencils, Wall, WallRun, frame, from_local, mirror, pencil_to_cells,
-    sweep_axis, to_local,
+    FaceTap, PencilOut, Pencils, SlabHalo, Wall, WallRun, frame, from_local, mirror,
+    pencil_to_cells, sweep_axis, to_local,
 };
 use crate::grid::Grid;
 use crate::memory::vec_bytes;
 
-/// Cells per block of the fixed-order reductions (totals).
+/// Cells per block of the parallel loops over cells (CFL step, directional pressures).
 const BLOCK_CELLS: usize = 4096;
 
 /// At most this many troubled cells are listed in one [`StepReport`].
@@ -63,7 +65,7 @@ pub struct Trouble {
     pub kind: TroubleKind,
     /// Sweep axis that produced it (0, 1, 2).
     pub axis: usize,
-    /// Cell `(i, j, k)`.
+    /// Cell `(i, j, k)` of the whole grid (on any rank).
     pub cell: [usize; 3],
     /// Cell centre \[m\].
     pub position: [f64; 3],
@@ -190,9 +192,30 @@ struct Checkpoint {
 
 const CHECKPOINT_VERSION: u32 = 1;
 
-/// The finite-volume Euler solver on a Cartesian grid of 1, 2 or 3 dimensions.
+/// What one rank's sweeps of a step found, gathered from every rank in rank order and merged
+/// in a fixed order (so that the report does not depend on the number of ranks).
+#[derive(Default, serde::Serialize, serde::Deserialize)]
+struct SweepSummary {
+    /// Outflow partial sums `dt × area × flux`: per plane of the slab axis for a sweep along
+    /// another axis; for a sweep along the slab axis one for the low and one for the high
+    /// domain face, from the ranks that hold them.
+    partials: Vec<[f64; NQ]>,
+    lax_friedrichs: u64,
+    hlle: u64,
+    positivity_fixes: u64,
+    /// `(global pencil, trouble)`, pencils ascending, at most [`MAX_TROUBLES`].
+    troubles: Vec<(u64, Trouble)>,
+}
+
+/// The finite-volume Euler solver on a Cartesian grid of 1, 2 or 3 dimensions, on one rank or
+/// on one slab of a grid decomposed over several ([`Slab`], [`Comm`]).
 pub struct FluidSolver {
+    /// This rank's cells (the whole grid on one rank).
     grid: Grid,
+    slab: Slab,
+    comm: Box<dyn Comm>,
+    /// Halo planes of the neighbours below and above (empty without neighbours).
+    halo: [Vec<f64>; 2],
     params: FluidParams,
     state: FluidState,
     buffer: Vec<f64>,
@@ -204,7 +227,6 @@ pub struct FluidSolver {
     /// `max_dt` of the current state and the cell that limits it, once computed (reset whenever
     /// the state changes).
     dt_cache: OnceLock<(f64, usize)>,
-    n_blocks: usize,
     step: u64,
     time: f64,
     outflow: [f64; NQ],
@@ -218,12 +240,38 @@ impl FluidSolver {
         FluidSolver::new(grid, params, state, threads)
     }
 
+    /// Builds this rank's slab of the solver of the scene's `[fluid]` table, the grid
+    /// decomposed over the ranks of `comm` (see [`FluidSolver::decomposed`]).
+    pub fn from_scene_on(
+        cfg: &FluidConfig,
+        threads: usize,
+        comm: Box<dyn Comm>,
+    ) -> Result<FluidSolver, String> {
+        let (grid, params, state) = from_scene(cfg)?;
+        FluidSolver::decomposed(grid, params, state, threads, comm)
+    }
+
     /// Builds the solver from parts (`state` must have `grid.dim + 2` values per cell).
     pub fn new(
         grid: Grid,
         params: FluidParams,
         state: FluidState,
         threads: usize,
+    ) -> Result<FluidSolver, String> {
+        FluidSolver::decomposed(grid, params, state, threads, Box::new(Serial))
+    }
+
+    /// Builds this rank's slab of a solver over the ranks of `comm`: `grid` and `state` are the
+    /// whole grid's (every rank builds the same), the rank keeps its planes along the slowest
+    /// axis ([`Slab`]). Every method that reduces over the grid (the step, the CFL step, the
+    /// totals, checkpoints, [`FluidSolver::gather_state`]) is then collective: every rank calls
+    /// it, in the same order.
+    pub fn decomposed(
+        grid: Grid,
+        params: FluidParams,
+        state: FluidState,
+        threads: usize,
+        comm: Box<dyn Comm>,
     ) -> Result<FluidSolver, String> {
         if state.nvar != grid.dim + 2 || state.u.len() != state.nvar * grid.n_cells() {
             return Err(format!(
@@ -239,6 +287,42 @@ impl FluidSolver {
         {
             return Err(format!("osmp order must be 3, 5 or 7, got {order}"));
         }
+        let slab = if comm.size() == 1 {
+            Slab::whole(&grid)
+        } else {
+            let axis = grid.dim - 1;
+            Slab::new(
+                &grid,
+                comm.rank(),
+                comm.size(),
+                params.ghost_cells(),
+                params.boundary[axis],
+            )?
+        };
+        let nvar = state.nvar;
+        let state = if slab.ranks == 1 {
+            state
+        } else {
+            let range = slab.global_range();
+            FluidState {
+                nvar,
+                u: state.u[range.start * nvar..range.end * nvar].to_vec(),
+            }
+        };
+        let grid = slab.local.clone();
+        let halo_len = slab.depth * slab.plane() * nvar;
+        let halo = [
+            if slab.lo.is_some() {
+                vec![0.0; halo_len]
+            } else {
+                Vec::new()
+            },
+            if slab.hi.is_some() {
+                vec![0.0; halo_len]
+            } else {
+                Vec::new()
+            },
+        ];
         let threads = threads.max(1);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -248,8 +332,10 @@ impl FluidSolver {
             .map(|a| grid.n_cells() / grid.cells[a])
             .max()
             .unwrap_or(1);
-        let n_cells = grid.n_cells();
         Ok(FluidSolver {
+            slab,
+            comm,
+            halo,
             buffer: vec![0.0; state.u.len()],
             pencil_out: vec![PencilOut::default(); max_pencils],
             scratch: (0..threads)
@@ -258,7 +344,6 @@ impl FluidSolver {
             pool,
             pbar: Vec::new(),
             dt_cache: OnceLock::new(),
-            n_blocks: n_cells.div_ceil(BLOCK_CELLS),
             grid,
             params,
             state,
@@ -268,9 +353,26 @@ impl FluidSolver {
         })
     }
 
-    /// The grid.
+    /// This rank's grid: the cells of [`FluidSolver::state`] (the whole grid on one rank;
+    /// on several, its `lower`/`upper` are those of the slab up to rounding, so positions are
+    /// taken from [`FluidSolver::global_grid`]).
     pub fn grid(&self) -> &Grid {
         &self.grid
+    }
+
+    /// The whole grid over all ranks.
+    pub fn global_grid(&self) -> &Grid {
+        &self.slab.global
+    }
+
+    /// This rank's part of the grid.
+    pub fn slab(&self) -> &Slab {
+        &self.slab
+    }
+
+    /// The ranks of the grid.
+    pub fn comm(&self) -> &dyn Comm {
+        &*self.comm
     }
 
     /// The parameters.
@@ -339,6 +441,7 @@ impl FluidSolver {
             + self.pbar.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&self.pencil_out)
             + vec_bytes(&self.scratch)
+            + self.halo.iter().map(vec_bytes).sum::<usize>()
     }
 
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
@@ -348,23 +451,23 @@ impl FluidSolver {
         self.dt_cache.get_or_init(|| self.compute_max_dt()).0
     }
 
-    /// The cell that limits [`FluidSolver::max_dt`] (index into the grid; the first such cell,
-    /// or the first non-finite one).
+    /// The cell that limits [`FluidSolver::max_dt`] (index into the whole grid,
+    /// [`FluidSolver::global_grid`]; the first such cell, or the first non-finite one).
     pub fn limiting_cell(&self) -> usize {
         self.dt_cache.get_or_init(|| self.compute_max_dt()).1
     }
 
     /// `(max_dt, limiting cell)`; the reduction keeps the largest rate and, among equal ones,
-    /// the lowest cell index, so the cell does not depend on the thread count.
+    /// the lowest cell index, so the cell does not depend on the thread or rank count (a max
+    /// is exact in any order).
     fn compute_max_dt(&self) -> (f64, usize) {
         let grid = &self.grid;
         let gamma = self.params.gamma;
         let nvar = self.state.nvar;
         let dim = grid.dim;
+        let u = &self.state.u;
         let (rate, cell) = self.pool.install(|| {
-            self.state
-                .u
-                .par_chunks(nvar * BLOCK_CELLS)
+            u.par_chunks(nvar * BLOCK_CELLS)
                 .enumerate()
                 .map(|(block, chunk)| {
                     let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
@@ -384,26 +487,25 @@ impl FluidSolver {
                     }
                     acc
                 })
-                .reduce(
-                    || (0.0, usize::MAX),
-                    |a, b| match (a.0.is_nan(), b.0.is_nan()) {
-                        (true, true) => {
-                            if a.1 <= b.1 {
-                                a
-                            } else {
-                                b
-                            }
-                        }
-                        (true, false) => a,
-                        (false, true) => b,
-                        _ if a.0 > b.0 || (a.0 == b.0 && a.1 <= b.1) => a,
-                        _ => b,
-                    },
-                )
+                .reduce(|| (0.0, usize::MAX), fastest)
         });
+        let global = &self.slab.global;
+        let mut best = (rate, self.slab.to_global(cell.min(grid.n_cells() - 1)));
+        if self.slab.ranks > 1 {
+            let mine = f64_bytes(&[best.0, best.1 as f64]);
+            best = self
+                .comm
+                .all_gather(&mine)
+                .iter()
+                .map(|b| {
+                    let v = bytes_f64(b);
+                    (v[0], v[1] as usize)
+                })
+                .fold((0.0, usize::MAX), fastest);
+        }
         (
-            self.params.cfl / rate,
-            cell.min(grid.n_cells().saturating_sub(1)),
+            self.params.cfl / best.0,
+            best.1.min(global.n_cells().saturating_sub(1)),
         )
     }
 
@@ -460,6 +562,7 @@ impl FluidSolver {
             .map(|a| dt * self.grid.cell_volume() / self.grid.dx[a])
             .collect();
         self.dt_cache = OnceLock::new();
+        let mut summaries: Vec<SweepSummary> = Vec::with_capacity(order.len());
         for &axis in &order {
             self.record_pressures(axis);
             if let Some((h, _)) = hooks.as_mut() {
@@ -475,9 +578,32 @@ impl FluidSolver {
                 Some((h, _)) => (Some(&mut h.taps[axis]), &h.walls[axis][..]),
                 None => (None, &[][..]),
             };
+            let slab = &self.slab;
+            let along_slab = axis == slab.axis && slab.decomposed();
+            if along_slab {
+                let d = self.halo[0].len().max(self.halo[1].len());
+                let [lo, hi] = &mut self.halo;
+                self.comm.exchange_halo(HaloExchange {
+                    to_lo: slab.lo.map(|r| (r, &u[..d])),
+                    to_hi: slab.hi.map(|r| (r, &u[u.len() - d..])),
+                    from_lo: slab.lo.map(|r| (r, &mut lo[..])),
+                    from_hi: slab.hi.map(|r| (r, &mut hi[..])),
+                });
+            }
+            let halo = if along_slab {
+                SlabHalo {
+                    lo: slab.lo.map(|_| &self.halo[0][..]),
+                    hi: slab.hi.map(|_| &self.halo[1][..]),
+                    depth: slab.depth,
+                    overlap: slab.overlap,
+                    n_global: slab.global.cells[axis],
+                }
+            } else {
+                SlabHalo::none(grid.cells[axis])
+            };
             self.pool.install(|| {
                 sweep_axis(
-                    grid, params, axis, dt, u, buffer, scratch, pencil_out, tap, walls,
+                    grid, params, axis, dt, u, buffer, scratch, pencil_out, tap, walls, &halo,
                 );
             });
             if axis == 0 {
@@ -487,27 +613,65 @@ impl FluidSolver {
                 self.pool.install(|| pencil_to_cells(grid, axis, src, dst));
             }
             let count = self.grid.n_cells() / self.grid.cells[axis];
-            // Fixed-order sums over pencils.
-            for rep in &self.pencil_out[..count] {
-                for q in 0..NQ {
-                    report.outflow[q] += area_dt[axis] * rep.outflow[q];
+            let mut summary = SweepSummary::default();
+            let reps = &self.pencil_out[..count];
+            let area = area_dt[axis];
+            let slab = &self.slab;
+            // Outflow partials, each a sum in pencil order (see `SweepSummary::partials`).
+            let (per_plane, first_pencil) = if axis == slab.axis {
+                (count, 0)
+            } else {
+                let per_plane = count / self.grid.cells[slab.axis];
+                (per_plane, slab.offset * per_plane)
+            };
+            if axis == slab.axis {
+                let bc = self.params.boundary[axis];
+                let mine = [
+                    bc[0] != BoundaryKind::Periodic && slab.lo.is_none(),
+                    bc[1] != BoundaryKind::Periodic && slab.hi.is_none(),
+                ];
+                for side in 0..2 {
+                    if mine[side] {
+                        let mut acc = [0.0; NQ];
+                        for rep in reps {
+                            for q in 0..NQ {
+                                acc[q] += area * rep.outflow[side][q];
+                            }
+                        }
+                        summary.partials.push(acc);
+                    }
                 }
-                report.lax_friedrichs_faces += u64::from(rep.stats.lax_friedrichs);
-                report.hlle_faces += u64::from(rep.stats.hlle);
-                report.positivity_fixes += u64::from(rep.stats.positivity_fixes);
+            } else {
+                for plane in reps.chunks(per_plane) {
+                    let mut acc = [0.0; NQ];
+                    for rep in plane {
+                        for q in 0..NQ {
+                            acc[q] += area * (rep.outflow[0][q] + rep.outflow[1][q]);
+                        }
+                    }
+                    summary.partials.push(acc);
+                }
+            }
+            for (p, rep) in reps.iter().enumerate() {
+                summary.lax_friedrichs += u64::from(rep.stats.lax_friedrichs);
+                summary.hlle += u64::from(rep.stats.hlle);
+                summary.positivity_fixes += u64::from(rep.stats.positivity_fixes);
                 if let Some(idx) = rep.trouble
-                    && report.troubles.len() < MAX_TROUBLES
+                    && summary.troubles.len() < MAX_TROUBLES
                 {
                     let found = match &hooks {
                         Some((_, covered)) => self.first_checked_trouble(axis, idx, *covered),
                         None => Some(idx),
                     };
                     if let Some(idx) = found {
-                        report.troubles.push(self.trouble_at(idx, axis));
+                        let pencil = (first_pencil + p) as u64;
+                        summary.troubles.push((pencil, self.trouble_at(idx, axis)));
                     }
                 }
             }
+            summaries.push(summary);
         }
+        self.merge_summaries(summaries, &mut report);
         for q in 0..NQ {
             self.outflow[q] += report.outflow[q];
         }
@@ -515,6 +679,46 @@ impl FluidSolver {
         self.time += dt;
         report.time = self.time;
         report
+    }
+
+    /// Adds the sweeps' summaries of every rank to `report` in a fixed order: sweep by sweep,
+    /// the partials in rank order (= plane order), the troubles by pencil (on the slab axis,
+    /// the lowest rank's trouble of a pencil is the one nearest its start).
+    fn merge_summaries(&self, mine: Vec<SweepSummary>, report: &mut StepReport) {
+        let all: Vec<Vec<SweepSummary>> = if self.slab.ranks == 1 {
+            vec![mine]
+        } else {
+            let bytes = protocol::codec::encode_blob(&mine);
+            self.comm
+                .all_gather(&bytes)
+                .iter()
+                .map(|b| protocol::codec::decode_blob(b).expect("ranks send valid summaries"))
+                .collect()
+        };
+        let n_sweeps = all[0].len();
+        for sweep in 0..n_sweeps {
+            let mut troubles: Vec<(u64, Trouble)> = Vec::new();
+            for rank in &all {
+                let s = &rank[sweep];
+                for partial in &s.partials {
+                    for q in 0..NQ {
+                        report.outflow[q] += partial[q];
+                    }
+                }
+                report.lax_friedrichs_faces += s.lax_friedrichs;
+                report.hlle_faces += s.hlle;
+                report.positivity_fixes += s.positivity_fixes;
+                troubles.extend(s.troubles.iter().copied());
+            }
+            // Stable: among equal pencils the lowest rank stays first.
+            troubles.sort_by_key(|(pencil, _)| *pencil);
+            troubles.dedup_by_key(|(pencil, _)| *pencil);
+            for (_, t) in troubles {
+                if report.troubles.len() < MAX_TROUBLES {
+                    report.troubles.push(t);
+                }
+            }
+        }
     }
 
     /// The first troubled cell of the pencil through `idx` along `axis` that is not covered
@@ -620,20 +824,22 @@ impl FluidSolver {
         } else {
             TroubleKind::Pressure
         };
-        let ijk = self.grid.ijk(idx);
+        let global = &self.slab.global;
+        let ijk = global.ijk(self.slab.to_global(idx));
         Trouble {
             kind,
             axis,
             cell: ijk,
-            position: self.grid.cell_center(ijk),
+            position: global.cell_center(ijk),
             rho,
             velocity,
             p,
         }
     }
 
-    /// Conserved totals, summed in a fixed order (blocks of cells, then blocks in order), so
-    /// the result does not depend on the thread count.
+    /// Conserved totals over the whole grid, summed in a fixed order (each plane of the slab
+    /// axis, then the planes in order), so the result does not depend on the thread or rank
+    /// count.
     pub fn totals(&self) -> Totals {
         self.totals_by(None)
     }
@@ -649,13 +855,16 @@ impl FluidSolver {
     fn totals_by(&self, solid_fraction: Option<&[f64]>) -> Totals {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
-        // NOTE: compensated sums per block and over blocks, so that the totals are
-        // exact to a few ulps and a conservation check measures the scheme, not the sum.
-        let mut partial = vec![[CompensatedSum::default(); NQ]; self.n_blocks];
+        let plane = self.slab.plane();
+        // NOTE: compensated sums per plane and over planes, so that the totals are exact to a
+        // few ulps and a conservation check measures the scheme, not the sum; planes of the
+        // slab axis are the blocks, so that a rank sums whole blocks.
+        let mut partial = vec![[CompensatedSum::default(); NQ]; self.grid.cells[self.slab.axis]];
+        let u = &self.state.u;
         self.pool.install(|| {
             partial
                 .par_iter_mut()
-                .zip(self.state.u.par_chunks(BLOCK_CELLS * nvar))
+                .zip(u.par_chunks(plane * nvar))
                 .enumerate()
                 .for_each(|(block, (acc, cells))| match solid_fraction {
                     None => {
@@ -668,7 +877,7 @@ impl FluidSolver {
                         }
                     }
                     Some(lambda) => {
-                        let lambda = &lambda[block * BLOCK_CELLS..];
+                        let lambda = &lambda[block * plane..];
                         for (cell, l) in cells.chunks_exact(nvar).zip(lambda) {
                             let alpha = 1.0 - l;
                             if alpha <= 0.0 {
@@ -683,11 +892,24 @@ impl FluidSolver {
                     }
                 });
         });
+        let flat: Vec<f64> = partial
+            .iter()
+            .flat_map(|acc| acc.iter().flat_map(|c| [c.sum, c.comp]))
+            .collect();
+        let flat = if self.slab.ranks == 1 {
+            flat
+        } else {
+            self.comm
+                .all_gather(&f64_bytes(&flat))
+                .iter()
+                .flat_map(|b| bytes_f64(b))
+                .collect()
+        };
         let mut total = [CompensatedSum::default(); NQ];
-        for acc in &partial {
+        for acc in flat.chunks_exact(2 * NQ) {
             for q in 0..NQ {
-                total[q].add(acc[q].sum);
-                total[q].add(acc[q].comp);
+                total[q].add(acc[2 * q]);
+                total[q].add(acc[2 * q + 1]);
             }
         }
         let sum: [f64; NQ] = std::array::from_fn(|q| total[q].value());
@@ -702,7 +924,25 @@ impl FluidSolver {
         }
     }
 
-    /// Whether every cell is physical (see `line::state_ok`); the first bad cell otherwise.
+    /// The whole grid's conserved state, gathered on rank 0 (`None` on the other ranks;
+    /// collective). On one rank a copy of [`FluidSolver::state`].
+    pub fn gather_state(&self) -> Option<FluidState> {
+        let nvar = self.state.nvar;
+        let u = self.gather_cells(&self.state.u)?;
+        Some(FluidState { nvar, u })
+    }
+
+    /// Per-cell values of every rank concatenated in rank order (the global order) on rank 0.
+    fn gather_cells(&self, mine: &[f64]) -> Option<Vec<f64>> {
+        if self.slab.ranks == 1 {
+            return Some(mine.to_vec());
+        }
+        let parts = self.comm.gather(0, &f64_bytes(mine))?;
+        Some(parts.iter().flat_map(|b| bytes_f64(b)).collect())
+    }
+
+    /// Whether every cell of this rank is physical (see `line::state_ok`); the first bad cell
+    /// otherwise.
     pub fn check_state(&self) -> Option<Trouble> {
         let gamma = self.params.gamma;
         (0..self.grid.n_cells())
@@ -714,21 +954,28 @@ impl FluidSolver {
     }
 
     /// Node-private checkpoint bytes: state, step counter, time, outflow and directional
-    /// pressures (encoded with `protocol::codec::encode_blob`).
+    /// pressures (encoded with `protocol::codec::encode_blob`). Collective: the whole grid is
+    /// gathered on rank 0, which gets the bytes one rank would write; the other ranks get none.
     pub fn to_checkpoint(&self) -> Vec<u8> {
+        let u = self.gather_cells(&self.state.u);
+        let pbar: Vec<Option<Vec<f64>>> = self.pbar.iter().map(|p| self.gather_cells(p)).collect();
+        let Some(u) = u else {
+            return Vec::new();
+        };
         let c = Checkpoint {
             version: CHECKPOINT_VERSION,
-            cells: self.grid.cells.map(|n| n as u64),
+            cells: self.slab.global.cells.map(|n| n as u64),
             step: self.step,
             time: self.time,
-            u: self.state.u.clone(),
+            u,
             outflow: self.outflow,
-            pbar: self.pbar.clone(),
+            pbar: pbar.into_iter().flatten().collect(),
         };
         protocol::codec::encode_blob(&c)
     }
 
-    /// Restores a checkpoint written by [`FluidSolver::to_checkpoint`] for the same grid.
+    /// Restores a checkpoint written by [`FluidSolver::to_checkpoint`] for the same grid (every
+    /// rank passes the whole checkpoint and keeps its slab, so any rank count restores it).
     pub fn restore_checkpoint(&mut self, bytes: &[u8]) -> Result<(), String> {
         let c: Checkpoint = protocol::codec::decode_blob(bytes)?;
         if c.version != CHECKPOINT_VERSION {
@@ -737,21 +984,26 @@ impl FluidSolver {
                 c.version
             ));
         }
-        let cells = self.grid.cells.map(|n| n as u64);
+        let global = &self.slab.global;
+        let cells = global.cells.map(|n| n as u64);
+        let nvar = self.state.nvar;
         if c.cells != cells
-            || c.u.len() != self.state.u.len()
+            || c.u.len() != nvar * global.n_cells()
             || (!c.pbar.is_empty() && c.pbar.len() != self.grid.dim)
-            || c.pbar.iter().any(|p| p.len() != self.grid.n_cells())
+            || c.pbar.iter().any(|p| p.len() != global.n_cells())
         {
             return Err(format!(
                 "checkpoint for grid {:?} with {} values, this solver has {:?} with {}",
                 c.cells,
                 c.u.len(),
                 cells,
-                self.state.u.len()
+                nvar * global.n_cells()
             ));
         }
-        self.state.u = c.u;
+        let range = self.slab.global_range();
+        self.state
+            .u
+            .copy_from_slice(&c.u[range.start * nvar..range.end * nvar]);
         self.step = c.step;
         self.time = c.time;
         self.outflow = c.outflow;
@@ -760,11 +1012,29 @@ impl FluidSolver {
             if c.pbar.is_empty() {
                 self.keep_directional_pressures(true);
             } else {
-                self.pbar = c.pbar;
+                self.pbar = c.pbar.iter().map(|p| p[range.clone()].to_vec()).collect();
             }
         }
         self.dt_cache = OnceLock::new();
         Ok(())
+    }
+}
+
+/// The faster of two `(rate, cell)` candidates of the CFL step: a NaN rate first (the lowest
+/// cell among NaNs), else the larger rate, the lower cell among equal ones.
+fn fastest(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    match (a.0.is_nan(), b.0.is_nan()) {
+        (true, true) => {
+            if a.1 <= b.1 {
+                a
+            } else {
+                b
+            }
+        }
+        (true, false) => a,
+        (false, true) => b,
+        _ if a.0 > b.0 || (a.0 == b.0 && a.1 <= b.1) => a,
+        _ => b,
     }
 }
 

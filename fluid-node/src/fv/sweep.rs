@@ -68,10 +68,10 @@ pub fn frame(dim: usize, axis: usize) -> [Option<usize>; 3] {
 /// What one pencil reports back.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PencilOut {
-    /// Flux leaving through the pencil's two domain faces during the sweep, per unit face area
-    /// and per unit time, in the physical order `(mass, p_x, p_y, p_z, energy)`; periodic
-    /// faces are not counted.
-    pub outflow: [f64; NQ],
+    /// Flux leaving through the pencil's low and high domain faces during the sweep, per unit
+    /// face area and per unit time, in the physical order `(mass, p_x, p_y, p_z, energy)`;
+    /// periodic faces and faces between two ranks are not counted (zero).
+    pub outflow: [[f64; NQ]; 2],
     /// Face counters.
     pub stats: LineStats,
     /// First cell of the pencil left non-physical after the update (linear index).
@@ -168,7 +168,46 @@ pub fn characteristic_ghost(
     ]
 }
 
-/// Fills the line of pencil `p` (interior and ghosts) from `u`.
+/// The halo of a sweep along the decomposed axis (`slab.rs`): the neighbours' planes nearest
+/// this rank, x-fastest within a plane, lowest plane first; `None` at a domain face.
+#[derive(Clone, Copy, Debug)]
+pub struct SlabHalo<'a> {
+    /// `depth` planes of the rank below.
+    pub lo: Option<&'a [f64]>,
+    /// `depth` planes of the rank above.
+    pub hi: Option<&'a [f64]>,
+    /// Planes per side.
+    pub depth: usize,
+    /// Cells of a neighbour's side each pencil updates as well (`depth − ng`).
+    pub overlap: usize,
+    /// Cells along the axis over all ranks (the characteristic boundary's domain length).
+    pub n_global: usize,
+}
+
+impl SlabHalo<'_> {
+    /// No neighbours: a pencil of `n` cells is the whole line.
+    pub fn none(n: usize) -> SlabHalo<'static> {
+        SlabHalo {
+            lo: None,
+            hi: None,
+            depth: 0,
+            overlap: 0,
+            n_global: n,
+        }
+    }
+
+    /// Extra cells updated below and above the rank's own.
+    fn overlaps(&self) -> [usize; 2] {
+        [
+            if self.lo.is_some() { self.overlap } else { 0 },
+            if self.hi.is_some() { self.overlap } else { 0 },
+        ]
+    }
+}
+
+/// Fills the line of pencil `p` (interior and ghosts) from `u`, and from the halo planes of
+/// `halo` where a neighbour rank is: the line then holds `n + k_lo + k_hi` updated cells
+/// (`k` = [`SlabHalo::overlap`] on each side with a neighbour) and `ng` ghosts beyond them.
 #[allow(clippy::too_many_arguments)]
 fn gather(
     line: &mut [State],
@@ -180,13 +219,32 @@ fn gather(
     fr: &[Option<usize>; 3],
     bc: [BoundaryKind; 2],
     gamma: f64,
+    halo: &SlabHalo<'_>,
 ) {
     let dim = nvar - 2;
-    let n = pencils.n;
+    let own = pencils.n;
+    let [k_lo, k_hi] = halo.overlaps();
+    let n = own + k_lo + k_hi;
     let base = pencils.base(p);
-    for m in 0..n {
+    for m in 0..own {
         let c = base + m * pencils.stride;
-        line[ng + m] = to_local(&u[c * nvar..(c + 1) * nvar], dim, fr);
+        line[ng + k_lo + m] = to_local(&u[c * nvar..(c + 1) * nvar], dim, fr);
+    }
+    // Pencils along the slab axis are numbered like the cells of a plane.
+    let plane = pencils.count;
+    let from_plane = |planes: &[f64], t: usize| {
+        let c = (t * plane + p) * nvar;
+        to_local(&planes[c..c + nvar], dim, fr)
+    };
+    if let Some(planes) = halo.lo {
+        for t in 0..halo.depth {
+            line[t] = from_plane(planes, t);
+        }
+    }
+    if let Some(planes) = halo.hi {
+        for t in 0..halo.depth {
+            line[ng + k_lo + own + t] = from_plane(planes, t);
+        }
     }
     let mirror = |mut s: State| {
         s[1] = -s[1];
@@ -194,27 +252,31 @@ fn gather(
     };
     let far = |side: usize, s: State, outward: f64| match bc[side] {
         BoundaryKind::Characteristic { p_far, sigma } => {
-            characteristic_ghost(&s, outward, p_far, sigma, gamma, n)
+            characteristic_ghost(&s, outward, p_far, sigma, gamma, halo.n_global)
         }
         _ => s,
     };
     let ghost_lo = far(0, line[ng], -1.0);
     let ghost_hi = far(1, line[ng + n - 1], 1.0);
     for g in 0..ng {
-        // Low side: ghost ng−1−g.
-        line[ng - 1 - g] = match bc[0] {
-            BoundaryKind::Periodic => line[ng + (n - 1 - g % n)],
-            BoundaryKind::Outflow => line[ng],
-            BoundaryKind::Characteristic { .. } => ghost_lo,
-            BoundaryKind::Wall => mirror(line[ng + g.min(n - 1)]),
-        };
+        // Low side: ghost ng−1−g (a neighbour's halo already sits there).
+        if halo.lo.is_none() {
+            line[ng - 1 - g] = match bc[0] {
+                BoundaryKind::Periodic => line[ng + (n - 1 - g % n)],
+                BoundaryKind::Outflow => line[ng],
+                BoundaryKind::Characteristic { .. } => ghost_lo,
+                BoundaryKind::Wall => mirror(line[ng + g.min(n - 1)]),
+            };
+        }
         // High side: ghost ng+n+g.
-        line[ng + n + g] = match bc[1] {
-            BoundaryKind::Periodic => line[ng + g % n],
-            BoundaryKind::Outflow => line[ng + n - 1],
-            BoundaryKind::Characteristic { .. } => ghost_hi,
-            BoundaryKind::Wall => mirror(line[ng + n - 1 - g.min(n - 1)]),
-        };
+        if halo.hi.is_none() {
+            line[ng + n + g] = match bc[1] {
+                BoundaryKind::Periodic => line[ng + g % n],
+                BoundaryKind::Outflow => line[ng + n - 1],
+                BoundaryKind::Characteristic { .. } => ghost_hi,
+                BoundaryKind::Wall => mirror(line[ng + n - 1 - g.min(n - 1)]),
+            };
+        }
     }
 }
 
@@ -357,7 +419,9 @@ fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Ve
 }
 
 /// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states pencil-major into
-/// `out`, one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names.
+/// `out`, one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
+/// the neighbours' planes of a sweep along the decomposed axis ([`SlabHalo::none`] otherwise;
+/// no tap and no wall runs then).
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_axis(
     grid: &Grid,
@@ -370,8 +434,14 @@ pub fn sweep_axis(
     pencil_out: &mut [PencilOut],
     tap: Option<&mut FaceTap>,
     walls: &[WallRun],
+    halo: &SlabHalo<'_>,
 ) {
     debug_assert!(walls.is_sorted_by_key(|w| (w.pencil, w.lo)));
+    let [k_lo, k_hi] = halo.overlaps();
+    assert!(
+        (k_lo == 0 && k_hi == 0) || (tap.is_none() && walls.is_empty()),
+        "a decomposed sweep keeps no fluxes and cuts no pencils"
+    );
     let dim = grid.dim;
     let nvar = dim + 2;
     let pencils = Pencils::new(grid, axis);
@@ -379,8 +449,9 @@ pub fn sweep_axis(
     let ng = params.ghost_cells();
     let fr = frame(dim, axis);
     let bc = params.boundary[axis];
+    let n_line = n + k_lo + k_hi;
     let setup = LineSetup {
-        n,
+        n: n_line,
         ng,
         flux: params.flux,
         sigma: dt / grid.dx[axis],
@@ -388,11 +459,15 @@ pub fn sweep_axis(
         n_shear: dim - 1,
         vacuum_rho: params.vacuum_rho,
         vacuum_p: params.vacuum_p,
-        wall: [bc[0] == BoundaryKind::Wall, bc[1] == BoundaryKind::Wall],
+        wall: [
+            bc[0] == BoundaryKind::Wall && halo.lo.is_none(),
+            bc[1] == BoundaryKind::Wall && halo.hi.is_none(),
+        ],
+        own: [k_lo, k_lo + n],
     };
     let open = [
-        bc[0] != BoundaryKind::Periodic,
-        bc[1] != BoundaryKind::Periodic,
+        bc[0] != BoundaryKind::Periodic && halo.lo.is_none(),
+        bc[1] != BoundaryKind::Periodic && halo.hi.is_none(),
     ];
     let pencil_out = &mut pencil_out[..pencils.count];
     let (offsets, positions, flux): (&[u32], Option<&[u32]>, &mut [State]) = match tap {
@@ -413,7 +488,7 @@ pub fn sweep_axis(
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             let line = &mut *guard;
-            line.resize(n, ng);
+            line.resize(n_line, ng);
             for (k, rep) in rep_block.iter_mut().enumerate() {
                 let p = block * BLOCK_PENCILS + k;
                 gather(
@@ -426,6 +501,7 @@ pub fn sweep_axis(
                     &fr,
                     bc,
                     params.gamma,
+                    halo,
                 );
                 let lo = walls.partition_point(|w| w.pencil < p as u32);
                 let hi = walls.partition_point(|w| w.pencil <= p as u32);
@@ -437,7 +513,12 @@ pub fn sweep_axis(
                 let dst = &mut out_block[k * n * nvar..(k + 1) * n * nvar];
                 let base = pencils.base(p);
                 for m in 0..n {
-                    from_local(&line.new[m], dim, &fr, &mut dst[m * nvar..(m + 1) * nvar]);
+                    from_local(
+                        &line.new[k_lo + m],
+                        dim,
+                        &fr,
+                        &mut dst[m * nvar..(m + 1) * nvar],
+                    );
                 }
                 if let Some(positions) = positions {
                     let (lo, hi) = (offsets[k] as usize, offsets[k + 1] as usize);
@@ -454,17 +535,18 @@ pub fn sweep_axis(
                     }
                 }
                 let trouble = stats.first_bad.map(|m| base + m as usize * pencils.stride);
-                let mut outflow = [0.0; NQ];
-                for (side, sign, f) in [(0, -1.0, 0), (1, 1.0, n)] {
+                let mut outflow = [[0.0; NQ]; 2];
+                for (side, sign, f) in [(0, -1.0, 0), (1, 1.0, n_line)] {
                     if open[side] {
                         let flux = &line.face[f];
-                        outflow[0] += sign * flux[0];
+                        let out = &mut outflow[side];
+                        out[0] = sign * flux[0];
                         for slot in 0..3 {
                             if let Some(a) = fr[slot] {
-                                outflow[1 + a] += sign * flux[1 + slot];
+                                out[1 + a] = sign * flux[1 + slot];
                             }
                         }
-                        outflow[4] += sign * flux[4];
+                        out[4] = sign * flux[4];
                     }
                 }
                 *rep = PencilOut {
@@ -509,6 +591,7 @@ fn advance_segments(
         let seg = LineSetup {
             n: m,
             wall: [start == 0 && setup.wall[0], end == n && setup.wall[1]],
+            own: [0, m],
             ..*setup
         };
         line.resize(m, ng);

@@ -48,6 +48,19 @@ pub struct FluidConfig {
     /// A smooth analytic initial state (verification cases); replaces `init` when present.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub profile: Option<Profile>,
+    /// MPI ranks of the fluid (default 1): the grid is cut into this many slabs along its
+    /// slowest axis, each at least [`FluidConfig::halo_planes`] cells thick; results do not
+    /// depend on it. `coupler-node run --fluid-ranks` overrides it.
+    #[serde(default = "default_ranks", skip_serializing_if = "is_one")]
+    pub ranks: u32,
+}
+
+fn default_ranks() -> u32 {
+    1
+}
+
+fn is_one(n: &u32) -> bool {
+    *n == 1
 }
 
 /// `fluid.profile`: smooth initial states with exact solutions (exact cell averages).
@@ -265,6 +278,13 @@ pub struct PressureField {
 }
 
 impl FluidConfig {
+    /// Planes of the slowest axis a rank needs when the grid is decomposed: the flux's ghost
+    /// cells (3 for OSMP 3 and 5, 4 for OSMP 7) and the 3 rounds of the positivity fix.
+    pub fn halo_planes(&self) -> u32 {
+        let ghost = if self.flux.order >= 7 { 4 } else { 3 };
+        ghost + 3
+    }
+
     /// The `[fluid]` rules.
     pub(super) fn validate(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let fluid = self;
@@ -329,6 +349,31 @@ impl FluidConfig {
         }
         c.positive("fluid.vacuum.rho", fluid.vacuum.rho)?;
         c.positive("fluid.vacuum.p", fluid.vacuum.p)?;
+        if !(1..=4096).contains(&fluid.ranks) {
+            return Err(c.invalid("fluid.ranks", "1 to 4096", fluid.ranks.to_string()));
+        }
+        if fluid.ranks > 1 {
+            if fluid.node != "real" {
+                return Err(c.invalid(
+                    "fluid.ranks",
+                    "1 unless fluid.node is \"real\" (only the solver runs on MPI ranks)",
+                    format!("{} with node {:?}", fluid.ranks, fluid.node),
+                ));
+            }
+            let planes = fluid.cells[dim - 1] / fluid.ranks;
+            if planes < fluid.halo_planes() {
+                return Err(c.invalid(
+                    "fluid.ranks",
+                    &format!(
+                        "at most {} ranks: each needs {} planes of the last axis ({} cells)",
+                        (fluid.cells[dim - 1] / fluid.halo_planes()).max(1),
+                        fluid.halo_planes(),
+                        fluid.cells[dim - 1]
+                    ),
+                    fluid.ranks.to_string(),
+                ));
+            }
+        }
         if let Some(ch) = &fluid.characteristic {
             let dim = fluid.lower.len().min(3);
             let any = (0..dim).any(|a| fluid.boundary.axis(a).contains(&Boundary::Characteristic));

@@ -1,0 +1,191 @@
+//! The fluid node on K ranks (issue 16): rank 0 runs the usual node loop over the bus with a
+//! [`Leader`] model, which tells the other ranks before each model call which call comes next;
+//! the other ranks ([`follow`]) make the same call on their slab. Every call of
+//! [`RealFluid`] is collective, so the ranks meet inside it; results (totals, outputs,
+//! checkpoints) end on rank 0, which alone writes files and talks to the coupler.
+//!
+//! A call's errors are deterministic, so every rank meets the same error: rank 0 reports it to
+//! the coupler, the others go on waiting for the next call. Rank 0 sends [`Call::Stop`] when its
+//! loop ends, however it ends; a rank that dies takes the whole MPI job down (`mpirun` ends
+//! the others), which the coupler sees as the fluid's exit.
+
+use std::path::{Path, PathBuf};
+
+use protocol::session::NodeModel;
+use protocol::wire::{ConservedTotals, InterfaceLoads, SolidState, Stamp, StepPlan};
+
+use crate::exchange::RealFluid;
+use crate::fv::comm::Comm;
+use crate::node::FluidModel;
+
+/// What rank 0 asks the other ranks to do next.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+pub enum Call {
+    /// [`NodeModel::dt_max`].
+    DtMax,
+    /// [`NodeModel::totals`].
+    Totals(Stamp, f64),
+    /// [`NodeModel::checkpoint`].
+    Checkpoint,
+    /// [`NodeModel::restore`] with these bytes.
+    Restore(Vec<u8>),
+    /// [`NodeModel::write_output`].
+    WriteOutput(u32, f64, PathBuf),
+    /// [`NodeModel::record_probes`].
+    RecordProbes(f64),
+    /// [`FluidModel::set_initial_surface`].
+    InitialSurface(Box<SolidState>),
+    /// [`FluidModel::predict`].
+    Predict(StepPlan),
+    /// [`FluidModel::correct`] (fluid-only scenes: no solid state).
+    Correct(StepPlan),
+    /// The end of the run.
+    Stop,
+}
+
+/// Rank 0's model: announces each call on `calls`, then makes it.
+pub struct Leader<'c> {
+    /// Rank 0's slab of the fluid.
+    pub inner: RealFluid,
+    /// Where the calls go (a communicator of its own, so that they never meet the solver's
+    /// collectives).
+    pub calls: &'c dyn Comm,
+}
+
+impl Leader<'_> {
+    fn announce(&self, call: &Call) {
+        let mut bytes = protocol::codec::encode_blob(call);
+        self.calls.broadcast(0, &mut bytes);
+    }
+}
+
+/// Tells the other ranks the run is over (rank 0, after its loop, whatever its outcome).
+pub fn stop(calls: &dyn Comm) {
+    let mut bytes = protocol::codec::encode_blob(&Call::Stop);
+    calls.broadcast(0, &mut bytes);
+}
+
+impl NodeModel for Leader<'_> {
+    fn implementation(&self) -> &'static str {
+        self.inner.implementation()
+    }
+
+    fn dt_max(&self) -> (f64, String) {
+        self.announce(&Call::DtMax);
+        self.inner.dt_max()
+    }
+
+    fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
+        self.announce(&Call::Totals(stamp, t));
+        self.inner.totals(stamp, t)
+    }
+
+    fn checkpoint(&self) -> Vec<u8> {
+        self.announce(&Call::Checkpoint);
+        self.inner.checkpoint()
+    }
+
+    fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.announce(&Call::Restore(bytes.to_vec()));
+        self.inner.restore(bytes)
+    }
+
+    fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()> {
+        self.announce(&Call::WriteOutput(k, t, out.to_path_buf()));
+        self.inner.write_output(k, t, out)
+    }
+
+    fn record_probes(&mut self, t: f64) {
+        self.announce(&Call::RecordProbes(t));
+        self.inner.record_probes(t);
+    }
+
+    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
+        // Rank 0 holds every probe's rows: nothing to ask of the others.
+        self.inner.write_probes(out)
+    }
+}
+
+impl FluidModel for Leader<'_> {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
+        self.announce(&Call::InitialSurface(Box::new(state.clone())));
+        self.inner.set_initial_surface(state)
+    }
+
+    fn predict(&mut self, plan: &StepPlan) -> Result<(), String> {
+        self.announce(&Call::Predict(plan.clone()));
+        self.inner.predict(plan)
+    }
+
+    fn loads(&mut self, plan: &StepPlan, _state: &SolidState) -> Result<InterfaceLoads, String> {
+        Err(format!(
+            "step {}: the fluid on several ranks computes no loads (the embedded solid does not \
+             run on ranks yet)",
+            plan.stamp.step
+        ))
+    }
+
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+        if state.is_some() {
+            return Err(format!(
+                "step {}: the fluid on several ranks takes no solid state",
+                plan.stamp.step
+            ));
+        }
+        self.announce(&Call::Correct(plan.clone()));
+        self.inner.correct(plan, None)
+    }
+}
+
+/// A rank other than 0: makes rank 0's calls on its slab until [`Call::Stop`]. `model` is
+/// `Err` when building it failed; rank 0 meets the same error and stops, and the error is
+/// returned then. `wait` receives the next call (a broadcast from rank 0 that may wait long).
+pub fn follow(
+    model: Result<RealFluid, String>,
+    mut wait: impl FnMut() -> Vec<u8>,
+) -> Result<(), String> {
+    let mut model = model;
+    loop {
+        let bytes = wait();
+        let call: Call = protocol::codec::decode_blob(&bytes)?;
+        let Ok(m) = model.as_mut() else {
+            match call {
+                Call::Stop => return model.map(|_| ()),
+                other => return Err(format!("rank 0 asked {other:?} of a rank that failed")),
+            }
+        };
+        // Results and errors are rank 0's to report: the other ranks only take part.
+        match call {
+            Call::Stop => return Ok(()),
+            Call::DtMax => {
+                m.dt_max();
+            }
+            Call::Totals(stamp, t) => {
+                m.totals(stamp, t);
+            }
+            Call::Checkpoint => {
+                m.checkpoint();
+            }
+            Call::Restore(bytes) => {
+                let _ = m.restore(&bytes);
+            }
+            Call::WriteOutput(k, t, out) => {
+                let _ = m.write_output(k, t, &out);
+            }
+            Call::RecordProbes(t) => m.record_probes(t),
+            Call::InitialSurface(state) => {
+                let _ = m.set_initial_surface(&state);
+            }
+            Call::Predict(plan) => {
+                let _ = m.predict(&plan);
+            }
+            Call::Correct(plan) => {
+                let _ = m.correct(&plan, None);
+            }
+        }
+    }
+}
