@@ -418,7 +418,9 @@ impl Embedded {
         Ok(e)
     }
 
-    /// Declares that the solid may fracture (links break): see [`Embedded::fracture`]'s field.
+    /// Declares that the solid may fracture (links break). Faces between two cells covered at
+    /// t^n then carry no flux in the correct: beside a crack the sweeps' ghost states there can
+    /// mirror the gas outside the particle's far side.
     pub fn set_fracture(&mut self, fracture: bool) {
         self.fracture = fracture;
     }
