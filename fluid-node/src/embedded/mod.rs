@@ -1393,7 +1393,11 @@ impl Embedded {
                     break next;
                 }
                 if let Some(pos) = path.iter().position(|&p| p == next) {
-                    break nearest_target(path[0])
+                    // From the walk's first cell with an open way out (a covered source has
+                    // none: searching only from it put a 2e-12 cell of a thin gap at the root).
+                    break path
+                        .iter()
+                        .find_map(|&p| nearest_target(p))
                         .unwrap_or_else(|| *path[pos..].iter().min().expect("non-empty cycle"));
                 }
                 if is_source(next).is_none() || path.len() > 64 {
