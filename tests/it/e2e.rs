@@ -45,8 +45,13 @@ pub(crate) fn shared_start() -> RwLockReadGuard<'static, ()> {
 }
 
 pub(crate) fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    run_scene_with(coupler(), scene, out, extra)
+}
+
+/// [`run_scene`] with a `coupler-node` command prepared by the caller (its environment).
+pub(crate) fn run_scene_with(mut cmd: Command, scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let _start = shared_start();
-    let output = coupler()
+    let output = cmd
         .arg("run")
         .arg(scene)
         .arg("--out")
@@ -57,7 +62,7 @@ pub(crate) fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
         .expect("coupler-node starts");
     assert!(
         output.status.success(),
-        "run failed: {}",
+        "run {extra:?} failed: {}",
         String::from_utf8_lossy(&output.stderr)
     );
     output

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::e2e::{coupler, frames_by_topic, out_dir, shared_start, summary};
+use crate::e2e::{coupler, frames_by_topic, out_dir, run_scene_with, shared_start, summary};
 
 /// Open MPI as root (CI runs as root) and in containers without ptrace between processes.
 fn mpi_env(cmd: &mut Command) -> &mut Command {
@@ -61,22 +61,9 @@ point = [0.5, 0.5, 0.8]
 }
 
 fn run(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let _start = shared_start();
-    let output = mpi_env(&mut coupler())
-        .arg("run")
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .args(extra)
-        .output()
-        .expect("coupler-node starts");
-    assert!(
-        output.status.success(),
-        "run {extra:?} failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    output
+    let mut cmd = coupler();
+    mpi_env(&mut cmd);
+    run_scene_with(cmd, scene, out, extra)
 }
 
 /// Every file of a run but the two that hold wall-clock times or the rank count
