@@ -13,25 +13,7 @@ use fv_common::*;
 
 /// A blast (ρ = 8, p = 116.5 in a ball, ρ = 1.4, p = 1 outside) with a swirl, on an n^dim grid.
 fn blast(dim: usize, n: usize, bc: BoundaryKind, order: u32, threads: usize) -> FluidSolver {
-    let lower = vec![0.0; dim];
-    let upper = vec![1.0; dim];
-    let cells = vec![n; dim];
-    let grid = Grid::new(&lower, &upper, &cells).expect("grid");
-    let mut state = FluidState::zeros(dim, grid.n_cells());
-    for idx in 0..grid.n_cells() {
-        let x = grid.cell_center(grid.ijk(idx));
-        let r2: f64 = (0..dim).map(|a| (x[a] - 0.45).powi(2)).sum();
-        let (rho, p) = if r2 < 0.2 * 0.2 {
-            (8.0, 116.5)
-        } else {
-            (1.4, 1.0)
-        };
-        let mut vel = [0.0; 3];
-        for a in 0..dim {
-            vel[a] = 0.3 * (2.0 * std::f64::consts::PI * x[(a + 1) % dim]).sin();
-        }
-        state.set_primitive(idx, rho, vel, p, 1.4);
-    }
+    let (grid, state) = blast_state(&vec![n; dim], 0.45);
     let mut b = [[bc; 2]; 3];
     if bc == BoundaryKind::Outflow {
         b = [[BoundaryKind::Outflow; 2]; 3];

@@ -210,3 +210,26 @@ pub fn run_case(
 pub fn slow_tests() -> bool {
     std::env::var("COSIM_SLOW_TESTS").is_ok_and(|v| v == "1")
 }
+
+/// A blast with a swirl on the unit box of `cells`: ρ = 8, p = 116.5 in the ball of radius 0.2
+/// about `(c, c, c)`, ρ = 1.4, p = 1 outside; velocity `0.3 sin(2π x_{a+1})` along each axis a.
+pub fn blast_state(cells: &[usize], c: f64) -> (Grid, FluidState) {
+    let dim = cells.len();
+    let grid = Grid::new(&vec![0.0; dim], &vec![1.0; dim], cells).expect("grid");
+    let mut state = FluidState::zeros(dim, grid.n_cells());
+    for idx in 0..grid.n_cells() {
+        let x = grid.cell_center(grid.ijk(idx));
+        let r2: f64 = (0..dim).map(|a| (x[a] - c).powi(2)).sum();
+        let (rho, p) = if r2 < 0.2 * 0.2 {
+            (8.0, 116.5)
+        } else {
+            (1.4, 1.0)
+        };
+        let mut vel = [0.0; 3];
+        for a in 0..dim {
+            vel[a] = 0.3 * (2.0 * std::f64::consts::PI * x[(a + 1) % dim]).sin();
+        }
+        state.set_primitive(idx, rho, vel, p, 1.4);
+    }
+    (grid, state)
+}
