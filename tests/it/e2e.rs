@@ -560,26 +560,7 @@ fn kill_node_and_time_the_coupler(node: &str) {
         !pid.is_empty(),
         "no {node} node process found for run {run_id}"
     );
-    let killed = Instant::now();
-    let status = Command::new("kill")
-        .args(["-9", &pid])
-        .status()
-        .expect("kill");
-    assert!(status.success());
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        assert!(
-            killed.elapsed() < Duration::from_secs(10),
-            "coupler still running 10 s after the kill"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    let took = killed.elapsed();
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut child.stderr.take().expect("stderr"), &mut stderr)
-        .expect("read");
+    let (status, took, stderr) = kill_and_wait(&pid, &mut child, Duration::from_secs(10));
     assert!(!status.success());
     // NOTE: a generous bound (a loaded 2-core machine stretches the 0.1-0.2 s it takes); the
     // figure itself is measured by `cargo bench -p cosim-tests --bench kill_detection`.
@@ -1213,4 +1194,34 @@ fn doubles_stand_in_for_either_node_beside_the_real_other() {
     assert_eq!(s["status"], "completed", "{s}");
     assert_eq!(s["nodes"]["fluid"], "pressure");
     let _ = std::fs::remove_dir_all(dir);
+}
+
+/// SIGKILLs `pid`, then waits for the coupler `child` to exit, at most `limit`: its status, the
+/// time it took after the kill, and its stderr.
+pub(crate) fn kill_and_wait(
+    pid: &str,
+    child: &mut std::process::Child,
+    limit: Duration,
+) -> (std::process::ExitStatus, Duration, String) {
+    let killed = Instant::now();
+    let kill = Command::new("kill")
+        .args(["-9", pid])
+        .status()
+        .expect("kill");
+    assert!(kill.success(), "kill -9 {pid}");
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(
+            killed.elapsed() < limit,
+            "coupler still running {limit:?} after the kill"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let took = killed.elapsed();
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().expect("stderr"), &mut stderr)
+        .expect("read");
+    (status, took, stderr)
 }

@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::e2e::{coupler, frames_by_topic, out_dir, run_scene_with, shared_start, summary};
+use crate::e2e::{
+    coupler, frames_by_topic, kill_and_wait, out_dir, run_scene_with, shared_start, summary,
+};
 
 /// Open MPI as root (CI runs as root) and in containers without ptrace between processes.
 fn mpi_env(cmd: &mut Command) -> &mut Command {
@@ -219,31 +221,9 @@ fn a_killed_rank_is_named_and_no_rank_is_left() {
         std::thread::sleep(Duration::from_millis(50));
     };
     drop(start);
-    let killed = Instant::now();
-    assert!(
-        Command::new("kill")
-            .args(["-9", &rank1.to_string()])
-            .status()
-            .expect("kill")
-            .success()
-    );
-    let status = loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            break status;
-        }
-        assert!(
-            killed.elapsed() < Duration::from_secs(20),
-            "coupler still running 20 s after the kill"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    eprintln!(
-        "the coupler ended {:?} after rank 1 was killed",
-        killed.elapsed()
-    );
-    let mut stderr = String::new();
-    std::io::Read::read_to_string(&mut child.stderr.take().expect("stderr"), &mut stderr)
-        .expect("read");
+    let (status, took, stderr) =
+        kill_and_wait(&rank1.to_string(), &mut child, Duration::from_secs(20));
+    eprintln!("the coupler ended {took:?} after rank 1 was killed");
     assert!(!status.success());
     let s = summary(&out);
     let status = s["status"].as_str().expect("status");
