@@ -435,11 +435,18 @@ fn drive_inner(
     loop {
         starts.observe(coupler);
         let waiting_since = Instant::now();
+        // NOTE: waiting for one node, the transport watches that node alone (cheaper than a
+        // wait set over both); the other's early frames wait in its queue, as in the state
+        // machine's.
+        let expected = match coupler.waiting_for().as_slice() {
+            [one] => Some(*one),
+            _ => None,
+        };
         let (from, frame) = loop {
             if let Some(reason) = abort.check() {
                 return Err(DriverError::Aborted(reason));
             }
-            match transport.recv(None, slice) {
+            match transport.recv(expected, slice) {
                 Ok(got) => break got,
                 Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
                 Err(TransportError::Timeout { .. }) => {
@@ -498,7 +505,8 @@ fn drive_inner(
         }
         let actions = coupler.on_message(from, msg)?;
         starts.observe(coupler);
-        for action in actions {
+        let mut actions = actions.into_iter().peekable();
+        while let Some(action) = actions.next() {
             match action {
                 Action::Send(to, msg) => {
                     log_sent(to, &msg);
@@ -506,7 +514,12 @@ fn drive_inner(
                     let t = starts.of(msg.stamp().step, coupler);
                     sink.frame(NodeKind::Coupler, to, t, wall_ns(), &out)
                         .map_err(DriverError::Record)?;
-                    transport.send(to, &out)?;
+                    // A trial and its decision, a plan and its predicted state: one wake-up.
+                    if matches!(actions.peek(), Some(Action::Send(next, _)) if *next == to) {
+                        transport.send_more(to, &out)?;
+                    } else {
+                        transport.send(to, &out)?;
+                    }
                 }
                 Action::Checkpoint(_) => {}
                 Action::CouplerCheckpoint(c) => {

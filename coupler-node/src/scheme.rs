@@ -843,12 +843,12 @@ impl Coupler {
         };
         for node in self.cfg.nodes() {
             actions.push(Action::Send(node, Message::StepPlan(plan.clone())));
-        }
-        if let Some((state, true)) = &first {
-            actions.push(Action::Send(
-                NodeKind::Fluid,
-                Message::SolidState(state.clone()),
-            ));
+            if let (NodeKind::Fluid, Some((state, true))) = (node, &first) {
+                actions.push(Action::Send(
+                    NodeKind::Fluid,
+                    Message::SolidState(state.clone()),
+                ));
+            }
         }
         self.residuals.clear();
         self.input = first.map(|(state, _)| state);
@@ -906,21 +906,23 @@ impl Coupler {
                 residuals: self.residuals.clone(),
             });
         }
-        actions.push(Action::Send(
-            NodeKind::Solid,
-            Message::FixedPointDecision(decision.clone()),
-        ));
         let next_input = if accept {
             trial.clone()
         } else {
             self.acceleration.next_input(input, &trial)
         };
+        // NOTE: the fluid first: its loads (or its correction) are the next work on the step's
+        // path, the solid only waits for them.
         actions.push(Action::Send(
             NodeKind::Fluid,
             Message::SolidState(next_input.clone()),
         ));
         actions.push(Action::Send(
             NodeKind::Fluid,
+            Message::FixedPointDecision(decision.clone()),
+        ));
+        actions.push(Action::Send(
+            NodeKind::Solid,
             Message::FixedPointDecision(decision),
         ));
         if accept {

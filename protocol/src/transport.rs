@@ -40,6 +40,14 @@ pub trait Transport {
     /// Sends one frame to `to`.
     fn send(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError>;
 
+    /// Sends one frame to `to` that another [`Transport::send`] to `to` follows at once: a
+    /// transport that wakes its receiver per frame may leave that to the frame that follows
+    /// (the receiver takes both at its wake-up). Nothing is lost if none follows: the frame is
+    /// taken at the receiver's next look.
+    fn send_more(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError> {
+        self.send(to, frame)
+    }
+
     /// Waits at most `timeout` for a frame from `from` (`None`: from any peer). Frames from other
     /// peers that arrive meanwhile are kept for later calls, never dropped.
     fn recv(

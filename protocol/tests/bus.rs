@@ -189,6 +189,46 @@ fn recv_from_one_peer_keeps_the_others_queued() {
 }
 
 #[test]
+fn frames_sent_without_a_wake_up_are_never_lost() {
+    let run = Run::new("more");
+    let mut coupler = Bus::open(
+        &run.0,
+        NodeKind::Coupler,
+        &[NodeKind::Fluid, NodeKind::Solid],
+    )
+    .unwrap();
+    let id = run.0.clone();
+    let (go_tx, go_rx) = mpsc::channel::<()>();
+    let fluid = thread::spawn(move || {
+        let mut fluid = Bus::open(&id, NodeKind::Fluid, &[NodeKind::Coupler]).unwrap();
+        let mut solid = Bus::open(&id, NodeKind::Solid, &[NodeKind::Coupler]).unwrap();
+        let mut got = Vec::new();
+        for _ in 0..2 {
+            got.push(fluid.recv(Some(NodeKind::Coupler), LONG).unwrap().1);
+        }
+        // The solid speaks first while the coupler waits for the fluid alone.
+        solid.send(NodeKind::Coupler, b"s").unwrap();
+        thread::sleep(Duration::from_millis(50));
+        fluid.send(NodeKind::Coupler, b"f").unwrap();
+        go_tx.send(()).unwrap();
+        // Already waiting when a frame comes with no wake-up at all.
+        got.push(fluid.recv(Some(NodeKind::Coupler), LONG).unwrap().1);
+        got
+    });
+    coupler.send_more(NodeKind::Fluid, b"a").unwrap();
+    coupler.send(NodeKind::Fluid, b"b").unwrap();
+    let (from, frame) = coupler.recv(Some(NodeKind::Fluid), LONG).unwrap();
+    assert_eq!((from, frame.as_slice()), (NodeKind::Fluid, &b"f"[..]));
+    let (from, frame) = coupler.recv(Some(NodeKind::Solid), LONG).unwrap();
+    assert_eq!((from, frame.as_slice()), (NodeKind::Solid, &b"s"[..]));
+    go_rx.recv_timeout(LONG).unwrap();
+    thread::sleep(Duration::from_millis(50));
+    coupler.send_more(NodeKind::Fluid, b"c").unwrap();
+    let got = fluid.join().unwrap();
+    assert_eq!(got, [b"a".to_vec(), b"b".to_vec(), b"c".to_vec()]);
+}
+
+#[test]
 fn a_burst_larger_than_the_queue_is_delivered_in_order() {
     let run = Run::new("burst");
     let id = run.0.clone();
