@@ -41,7 +41,9 @@ struct Probe {
     name: String,
     /// Cell of the whole grid.
     cell: usize,
-    rows: Vec<String>,
+    /// `t, ρ, u, v, w, p` per recorded step (formatted when written: formatting every step
+    /// cost 1 % of a coupled beam's fluid time).
+    rows: Vec<[f64; 6]>,
 }
 
 impl RealFluid {
@@ -292,7 +294,6 @@ impl NodeModel for RealFluid {
     }
 
     fn record_probes(&mut self, t: f64) {
-        let dim = self.dim();
         // Each probe's cell is read on the rank that owns it and gathered on rank 0 (collective).
         let range = self.solver.slab().global_range();
         let owned: Vec<(u64, f64, [f64; 3], f64)> = self
@@ -323,11 +324,9 @@ impl NodeModel for RealFluid {
             all
         };
         for (k, rho, u, p) in values {
-            let probe = &mut self.probes[k as usize];
-            let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
-            probe
+            self.probes[k as usize]
                 .rows
-                .push(format!("{t:e},{rho:e},{},{p:e}", vel.join(",")));
+                .push([t, rho, u[0], u[1], u[2], p]);
         }
     }
 
@@ -338,9 +337,9 @@ impl NodeModel for RealFluid {
         let vel = ["u", "v", "w"][..self.dim()].join(",");
         for probe in &self.probes {
             let mut text = format!("t,rho,{vel},p\n");
-            for row in &probe.rows {
-                text.push_str(row);
-                text.push('\n');
+            for [t, rho, u @ .., p] in &probe.rows {
+                let vel: Vec<String> = u[..self.dim()].iter().map(|v| format!("{v:e}")).collect();
+                text.push_str(&format!("{t:e},{rho:e},{},{p:e}\n", vel.join(",")));
             }
             std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
         }
