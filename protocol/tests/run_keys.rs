@@ -46,6 +46,7 @@ fn out_of_range_fixed_point_keys_are_refused_by_key() {
         ("relaxation_initial = 1.5", "run.relaxation_initial"),
         ("iqn_filter = 1.0", "run.iqn_filter"),
         ("iqn_filter = 0.0", "run.iqn_filter"),
+        ("iqn_filter = 1e-7", "run.iqn_filter"),
         ("iqn_reuse = 65", "run.iqn_reuse"),
     ] {
         match scene(run) {

@@ -202,10 +202,12 @@ impl RunConfig {
                 format!("{}", run.relaxation_initial),
             ));
         }
-        if !(run.iqn_filter > 0.0 && run.iqn_filter < 1.0) {
+        // NOTE: the filter compares G_jj − Σ R_ij² with filter² G_jj on the Gram matrix
+        // (coupler-node's iqn.rs); below 1e-6 that difference is lost in round-off.
+        if !(run.iqn_filter >= 1e-6 && run.iqn_filter < 1.0) {
             return Err(c.invalid(
                 "run.iqn_filter",
-                "a number in (0, 1)",
+                "a number in [1e-6, 1)",
                 format!("{}", run.iqn_filter),
             ));
         }
