@@ -7,12 +7,12 @@ use dem_support::*;
 use solid_node::dem::{ParticleId, Solid};
 
 /// Big enough that links and particles span several rayon chunks (256 items) and reach the
-/// pool at all (1024 items: fewer run serially).
+/// pool at all (2048 items: fewer run serially).
 fn scene() -> protocol::scene::SolidConfig {
     let mut cfg = box_config(
         vec![0.0; 3],
-        vec![1.6, 0.8, 0.8],
-        vec![16, 8, 8],
+        vec![1.6, 1.6, 0.8],
+        vec![16, 16, 8],
         1e6,
         0.25,
         1000.0,

@@ -25,11 +25,11 @@ use crate::dem::wet::{
 /// every reduction runs serially in index order, so results do not depend on the thread count.
 pub(crate) const CHUNK: usize = 256;
 
-/// [`par_fill`] runs serially below this many items: waking the pool costs tens of µs per
-/// call, more than a few chunks of link or particle updates take (a 2-D beam of 728
-/// particles spent most of its trial in futex wake-ups). Items are independent, so the bits
-/// are the same either way.
-pub(crate) const SERIAL_BELOW: usize = 4 * CHUNK;
+/// [`par_fill`] runs serially below this many items: waking the pool, and its workers'
+/// spinning after the job, cost tens of µs per call, more than a few chunks of link or particle
+/// updates take (a 2-D beam of 728 particles and 1390 links spent most of its trial in futex
+/// wake-ups). Items are independent, so the bits are the same either way.
+pub(crate) const SERIAL_BELOW: usize = 8 * CHUNK;
 
 /// Safety factor applied to the elastic bound in [`Solid::max_dt`].
 pub const ELASTIC_SAFETY: f64 = 0.9;
