@@ -332,18 +332,22 @@ mod tests {
         panic!("no convergence in {max} trials");
     }
 
+    /// Uniform numbers in [−0.5, 0.5) from a linear congruential sequence.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// `H(x) = x* + M (x − x*)` in `n` dimensions with `M = U T Uᵀ`, `U` orthonormal `n × rank`,
     /// `T` upper triangular with the eigenvalues 0.8, −0.6, 0.5, … on its diagonal: rank
     /// `rank`, not symmetric, contracting.
     fn affine(n: usize, rank: usize) -> (impl Fn(&[f64]) -> Vec<f64>, Vec<f64>) {
         let x_star: Vec<f64> = (0..n).map(|i| 0.3 + 0.1 * i as f64).collect();
-        let mut seed: u64 = 12345;
-        let mut rand = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rand = uniform(12345);
         let mut u: Vec<Vec<f64>> = Vec::new();
         for _ in 0..rank {
             let mut v: Vec<f64> = (0..n).map(|_| rand()).collect();
@@ -454,13 +458,7 @@ mod tests {
         // Random columns in 40 dimensions, over two steps: next() against a dense least-squares
         // solve of ΔR α = −r by nalgebra's Householder QR, with nothing dropped.
         let n = 40;
-        let mut seed: u64 = 7;
-        let mut rand = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rand = uniform(7);
         let mut vec = |scale: f64| -> Vec<f64> { (0..n).map(|_| scale * rand()).collect() };
         let mut model = IqnIls::new(1, 1e-2, 0.5);
         let (mut rs, mut xts) = (Vec::new(), Vec::new());

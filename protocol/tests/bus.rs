@@ -158,15 +158,21 @@ fn round_trip_1b_to_16mib() {
     echo.join().unwrap();
 }
 
-#[test]
-fn recv_from_one_peer_keeps_the_others_queued() {
-    let run = Run::new("q");
-    let mut coupler = Bus::open(
+/// A run and its coupler's end, linked to a fluid and a solid.
+fn coupler_of_two(tag: &str) -> (Run, Bus) {
+    let run = Run::new(tag);
+    let coupler = Bus::open(
         &run.0,
         NodeKind::Coupler,
         &[NodeKind::Fluid, NodeKind::Solid],
     )
     .unwrap();
+    (run, coupler)
+}
+
+#[test]
+fn recv_from_one_peer_keeps_the_others_queued() {
+    let (run, mut coupler) = coupler_of_two("q");
     let id = run.0.clone();
     let (done_tx, done_rx) = mpsc::channel::<()>();
     let nodes = thread::spawn(move || {
@@ -190,13 +196,7 @@ fn recv_from_one_peer_keeps_the_others_queued() {
 
 #[test]
 fn frames_sent_without_a_wake_up_are_never_lost() {
-    let run = Run::new("more");
-    let mut coupler = Bus::open(
-        &run.0,
-        NodeKind::Coupler,
-        &[NodeKind::Fluid, NodeKind::Solid],
-    )
-    .unwrap();
+    let (run, mut coupler) = coupler_of_two("more");
     let id = run.0.clone();
     let (go_tx, go_rx) = mpsc::channel::<()>();
     let fluid = thread::spawn(move || {
