@@ -306,7 +306,7 @@ impl FluidSolver {
             let c = (c as usize - range.start) * nvar;
             mine.extend_from_slice(&self.state.u[c..c + nvar]);
         }
-        if self.slab.ranks == 1 {
+        if self.slab.ranks == 1 || cells.is_empty() {
             return mine;
         }
         // Ranks hold consecutive ranges of cells: rank order is the order of `cells`.
