@@ -305,15 +305,16 @@ fn bodies(frames: &[SolidFrame]) -> SolidFrame {
         dim: frames[0].dim,
         ..SolidFrame::default()
     };
-    for (p, f) in frames.iter().enumerate() {
+    for f in frames {
         let first = (all.vertices.len() / f.dim) as u32;
+        let particles = all.n_particles() as u32;
         all.position.extend_from_slice(&f.position);
         all.velocity.extend_from_slice(&f.velocity);
         all.angular_velocity.extend_from_slice(&f.angular_velocity);
         all.vertices.extend_from_slice(&f.vertices);
         all.elements.extend(f.elements.iter().map(|v| v + first));
         all.element_particle
-            .extend(std::iter::repeat_n(p as u32, f.wet.len()));
+            .extend(f.element_particle.iter().map(|p| p + particles));
         all.wet.extend_from_slice(&f.wet);
     }
     all
@@ -487,6 +488,27 @@ fn a_moving_body_across_the_cut_2d_is_bit_identical_on_1_2_and_4_ranks() {
             10,
         );
     }
+    // Periodic along y, with a plate on planes 1–2 beside the seam between the last rank and
+    // rank 0 (each the other's neighbour there).
+    let seam = embedded_support::polygon_2d(
+        &[[0.55, 0.0205], [0.75, 0.0205], [0.75, 0.063], [0.55, 0.063]],
+        [0.0, 0.5],
+        0.0,
+    );
+    let solid = bodies(&[solid, seam]);
+    let periodic = [
+        [BoundaryKind::Wall; 2],
+        [BoundaryKind::Periodic; 2],
+        [BoundaryKind::Wall; 2],
+    ];
+    assert_coupled_same_for_ranks(
+        "2-D periodic",
+        &grid,
+        &state,
+        &params(5, periodic),
+        &solid,
+        10,
+    );
 }
 
 /// The same in 3-D: a rotated box and a plate two cells thick across the cut at z = 0.5,

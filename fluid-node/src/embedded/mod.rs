@@ -21,6 +21,11 @@
 //!    cells left with content (paper 000 §3.3, recursive). Away from the solid the predicted
 //!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
 //!
+//! On a grid decomposed over ranks ([`crate::fv::Slab`]) every rank holds the whole surface and
+//! runs all of this on the whole grid; the solver applies and gathers the sweeps' hooks per
+//! slab, and the states of near cells come from their ranks ([`FluidSolver::cells_at`]), so
+//! every rank computes the bits of one rank (`fluid-node/tests/fv_ranks.rs`, docs/mpi.md).
+//!
 //! Properties (tested in `fluid-node/tests/embedded_*.rs`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the
 //! face fluxes are shared); a uniform pressure gives no force on any cut cell and no velocity
