@@ -463,8 +463,8 @@ fn a_moving_body_across_the_cut_2d_is_bit_identical_on_1_2_and_4_ranks() {
     // at y = 0.25 on 4 ranks (planes 16–17 above rank 0's line, which ends at plane 15;
     // planes 6–7 below rank 1's, which starts at plane 9): their segments' mirror ghosts fall
     // into the lines' ghost cells. (Own cells see those ghosts only through the positivity fix
-    // of the overlap cells, which this flow does not trigger there: the path runs, but a wrong
-    // mirror would not show here.)
+    // of the overlap cells, which this flow does not trigger there: the path runs here, and
+    // `fv::tests::wall_runs_in_a_decomposed_lines_ghost_cells_give_one_rank_fluxes` pins it.)
     let above = embedded_support::polygon_2d(
         &[[0.55, 0.332], [0.75, 0.332], [0.75, 0.377], [0.55, 0.377]],
         [0.0, -0.4],
