@@ -66,12 +66,6 @@ impl RealFluid {
                     .into(),
             );
         }
-        if scene.solid.is_some() && comm.size() > 1 {
-            return Err(format!(
-                "fluid.ranks = {}: the embedded solid does not run on several ranks yet",
-                comm.size()
-            ));
-        }
         let solver = FluidSolver::from_scene_on(cfg, scene.run.threads as usize, comm)?;
         let mut probes = Vec::new();
         for probe in &scene.output.probes {
@@ -132,11 +126,13 @@ impl RealFluid {
 
     fn vacuum_cells_here(&self) -> u64 {
         let params = self.solver.params();
+        // Λ is the whole grid's; this rank's cells start at `first` in it.
         let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
+        let first = self.solver.slab().global_range().start;
         let n_cells = self.solver.grid().n_cells();
         (0..n_cells)
             .filter(|&c| {
-                if lambda.is_some_and(|l| l[c] >= 1.0 - COVERED_TOLERANCE) {
+                if lambda.is_some_and(|l| l[first + c] >= 1.0 - COVERED_TOLERANCE) {
                     return false;
                 }
                 let (rho, _, p) = self.solver.primitive(c);

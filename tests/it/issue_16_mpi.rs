@@ -15,7 +15,7 @@ use crate::e2e::{
 };
 
 /// Open MPI as root (CI runs as root) and in containers without ptrace between processes.
-fn mpi_env(cmd: &mut Command) -> &mut Command {
+pub(crate) fn mpi_env(cmd: &mut Command) -> &mut Command {
     cmd.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none")
@@ -62,7 +62,7 @@ point = [0.5, 0.5, 0.8]
     path
 }
 
-fn run(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+pub(crate) fn run(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut cmd = coupler();
     mpi_env(&mut cmd);
     run_scene_with(cmd, scene, out, extra)
@@ -70,7 +70,7 @@ fn run(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
 
 /// Every file of a run but the two that hold wall-clock times or the rank count
 /// (`summary.json`, `scene.toml`) and the record (compared frame by frame).
-fn files(out: &Path) -> Vec<(String, Vec<u8>)> {
+pub(crate) fn files(out: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(out)
         .expect("out")
         .map(|e| e.expect("entry").path())

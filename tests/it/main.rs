@@ -10,5 +10,7 @@ mod issue_15;
 mod issue_15_cli;
 mod issue_15_logs;
 #[cfg(feature = "mpi")]
+mod issue_16_coupled;
+#[cfg(feature = "mpi")]
 mod issue_16_mpi;
 mod tidy;

@@ -21,6 +21,11 @@
 //!    cells left with content (paper 000 §3.3, recursive). Away from the solid the predicted
 //!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
 //!
+//! On a grid decomposed over ranks ([`crate::fv::Slab`]) every rank holds the whole surface and
+//! runs all of this on the whole grid; the solver applies and gathers the sweeps' hooks per
+//! slab, and the states of near cells come from their ranks ([`FluidSolver::cells_at`]), so
+//! every rank computes the bits of one rank (`fluid-node/tests/fv_ranks.rs`, docs/mpi.md).
+//!
 //! Properties (tested in `fluid-node/tests/embedded_*.rs`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the
 //! face fluxes are shared); a uniform pressure gives no force on any cut cell and no velocity
@@ -385,7 +390,11 @@ impl NearWall {
 impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, String> {
-        let grid = solver.grid().clone();
+        // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
+        // geometry and the correct on the whole grid (replicated, issue 16): the cut-cell data
+        // are surface-sized, and the same inputs give every rank the bits of one rank. Only the
+        // states of cells near the surface cross ranks (`FluidSolver::cells_at`).
+        let grid = solver.global_grid().clone();
         if grid.dim != solid.dim {
             return Err(format!(
                 "the fluid is {}-D and the solid {}-D",
@@ -494,9 +503,9 @@ impl Embedded {
         1.0 / rate
     }
 
-    /// Fluid totals weighted by the fluid fraction of the accepted surface.
+    /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
-        solver.totals_with_solid(&self.geom.solid_fraction)
+        solver.totals_with_solid(&self.geom.solid_fraction[solver.slab().global_range()])
     }
 
     /// Step 1 of paper 003 §3.4: the split sweeps, keeping what the correct needs.
@@ -630,7 +639,7 @@ impl Embedded {
         solver.apply_ghosts(first, &self.hooks.ghosts[first]);
         solver.apply_vacuum(&self.hooks.vacuum);
         let nvar = dim + 2;
-        let u = &solver.state().u;
+        let u = solver.cells_at(&self.near);
         // NOTE: a covered cell the first sweep gives no ghost keeps a stale state (the interior
         // of a solid, farther than the stencil from any fluid along that axis); its `U^n` is
         // vacuum, so that a crack opening there in this step (its faces are wet only at
@@ -639,14 +648,13 @@ impl Embedded {
         ghosted.sort_unstable();
         let lambda = &self.geom.solid_fraction;
         self.saved.clear();
-        for &c in &self.near {
+        for (k, &c) in self.near.iter().enumerate() {
             let stale =
                 lambda[c as usize] >= 1.0 - COVERED_TOLERANCE && ghosted.binary_search(&c).is_err();
-            let c = c as usize * nvar;
             if stale {
                 self.saved.extend(std::iter::repeat_n(0.0, nvar));
             } else {
-                self.saved.extend_from_slice(&u[c..c + nvar]);
+                self.saved.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
             }
         }
     }
@@ -1146,7 +1154,7 @@ impl Embedded {
                 entry += 1;
             }
         }
-        let n_mixed = self.mix(solver, &mut report)?;
+        let (n_mixed, written) = self.mix(solver, &mut report)?;
         report.mixed_cells = n_mixed;
         report.work_received = work_received;
         self.budget.work_given -= work_received;
@@ -1156,15 +1164,17 @@ impl Embedded {
         }
         // Check what the correct wrote.
         let (vr, vp) = self.vacuum;
-        let u = &solver.state().u;
         for (k, &c) in self.near.iter().enumerate() {
-            let c = c as usize;
             if self.kind[k] == CellKind::Predicted
-                || self.trial.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+                || self.trial.solid_fraction[c as usize] >= 1.0 - COVERED_TOLERANCE
             {
                 continue;
             }
-            let full = full_state(&u[c * nvar..(c + 1) * nvar], dim, 1.0);
+            let w = written
+                .binary_search_by_key(&c, |w| w.0)
+                .expect("the correct wrote every updated cell it left uncovered");
+            let c = c as usize;
+            let full = full_state(&written[w].1[..nvar], dim, 1.0);
             if !state_ok(&full, self.gamma, vr, vp) {
                 let w = crate::fv::euler::primitive(&full, self.gamma);
                 let ijk = grid.ijk(c);
@@ -1229,12 +1239,19 @@ impl Embedded {
     }
 
     /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
-    /// and covered-with-content cells into their targets; returns the cells mixed.
+    /// and covered-with-content cells into their targets; returns the cells mixed and the
+    /// values written, one per cell (the last), by cell.
+    ///
+    /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
+    /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
+    /// group's members) are gathered first, and every rank computes every group; the solver
+    /// keeps the writes of its own cells.
+    #[allow(clippy::type_complexity)]
     fn mix(
         &mut self,
         solver: &mut FluidSolver,
         report: &mut CorrectReport,
-    ) -> Result<usize, String> {
+    ) -> Result<(usize, Vec<(u32, [f64; NQ])>), String> {
         let grid = &self.grid;
         let dim = grid.dim;
         let nvar = dim + 2;
@@ -1411,23 +1428,48 @@ impl Embedded {
         groups.sort_unstable();
         let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
         roots.dedup();
+        // The predicted states the groups can read: none of these cells is written before it
+        // is read (roots, sources and claimed cells are never taken into another group).
+        let wide = offsets(dim, WIDEN_RINGS as isize);
+        let mut reads: Vec<u32> = Vec::new();
+        for &(root, k) in &groups {
+            for c in [root, self.near[k] as usize] {
+                reads.push(c as u32);
+                let ijk = grid.ijk(c);
+                for d in &wide {
+                    if let Some(q) = shifted(grid, ijk, *d) {
+                        reads.push(grid.index(q[0], q[1], q[2]) as u32);
+                    }
+                }
+            }
+        }
+        reads.sort_unstable();
+        reads.dedup();
+        let predicted = solver.cells_at(&reads);
+        let u = |c: usize, q: usize| -> f64 {
+            let k = reads
+                .binary_search(&(c as u32))
+                .expect("a mixing group reads only cells of its read set");
+            predicted[k * nvar + q]
+        };
+        let mut writes: Vec<(u32, [f64; NQ])> = Vec::new();
         // Cells taken into a widened group (ascending).
         let mut claimed: Vec<usize> = Vec::new();
-        let u = &mut solver.state_mut().u;
         // Updated, unmixed cells: U = content / α.
         for (k, &c) in self.near.iter().enumerate() {
-            let c = c as usize;
             if self.kind[k] != CellKind::Updated || sources.binary_search(&k).is_ok() {
                 continue;
             }
-            let a = alpha(c);
+            let a = alpha(c as usize);
             if a <= COVERED_TOLERANCE {
                 // Covered, nothing to keep: the cell holds a ghost state.
                 continue;
             }
+            let mut v = [0.0; NQ];
             for q in 0..nvar {
-                u[c * nvar + q] = self.content[k][q] / a;
+                v[q] = self.content[k][q] / a;
             }
+            writes.push((c, v));
         }
         // Groups.
         let mut i = 0;
@@ -1446,7 +1488,7 @@ impl Embedded {
             } else {
                 let a = alpha(root);
                 for q in 0..nvar {
-                    sum[q] += a * u[root * nvar + q];
+                    sum[q] += a * u(root, q);
                 }
             }
             vol += alpha(root);
@@ -1515,7 +1557,7 @@ impl Embedded {
                     } else {
                         let a = alpha(q);
                         for x in 0..nvar {
-                            sum[x] += a * u[q * nvar + x];
+                            sum[x] += a * u(q, x);
                         }
                     }
                     vol += alpha(q);
@@ -1530,23 +1572,21 @@ impl Embedded {
                     claimed.insert(pos, q);
                 }
             }
+            let mut mixture = [0.0; NQ];
             for q in 0..nvar {
-                u[root * nvar + q] = sum[q] / vol;
+                mixture[q] = sum[q] / vol;
             }
+            writes.push((root as u32, mixture));
             for g in &groups[i..j] {
                 let c = self.near[g.1] as usize;
                 if c != root && alpha(c) > COVERED_TOLERANCE {
-                    for q in 0..nvar {
-                        u[c * nvar + q] = sum[q] / vol;
-                    }
+                    writes.push((c as u32, mixture));
                 }
                 self.kind[g.1] = CellKind::Mixed;
                 mixed += 1;
             }
             for &c in &extra {
-                for q in 0..nvar {
-                    u[c * nvar + q] = sum[q] / vol;
-                }
+                writes.push((c as u32, mixture));
                 let k = self.slot_of[c] as usize;
                 if k > 0 {
                     self.kind[k - 1] = CellKind::Mixed;
@@ -1557,7 +1597,12 @@ impl Embedded {
             }
             i = j;
         }
-        Ok(mixed)
+        solver.set_cells(&writes);
+        // The last value written of each cell, by cell.
+        writes.reverse();
+        writes.sort_by_key(|w| w.0);
+        writes.dedup_by_key(|w| w.0);
+        Ok((mixed, writes))
     }
 }
 

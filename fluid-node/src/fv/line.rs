@@ -70,8 +70,12 @@ pub struct LineSetup {
     /// The cells `own[0]..own[1]` this line reports on (`0..n` unless a decomposed pencil
     /// also updates cells of its neighbours, `slab.rs`): the counters, the fixes and the first
     /// bad cell count these cells, and the faces `own[0]..own[1]` (plus face `n` when
-    /// `own[1] == n`), so that a face shared by two ranks is counted once.
+    /// `own[1] == n` and `end_face`), so that a face shared by two ranks is counted once.
     pub own: [usize; 2],
+    /// Whether face `n` is this line's to count when `own[1] == n`: true for a whole line; false
+    /// for a segment of a decomposed pencil that ends at the first cell of the rank above
+    /// (`sweep.rs`, a wall run starting there), whose face that rank counts.
+    pub end_face: bool,
 }
 
 /// Which flux a face used.
@@ -249,7 +253,11 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
         .filter(|_| !clean)
         .find(|&m| !state_ok(&s.new[m], gamma, setup.vacuum_rho, setup.vacuum_p))
         .map(|m| (m - own_lo) as u32);
-    let last_face = if own_hi == n { n + 1 } else { own_hi };
+    let last_face = if own_hi == n && setup.end_face {
+        n + 1
+    } else {
+        own_hi
+    };
     for k in &s.kind[own_lo..last_face] {
         match k {
             FaceFlux::Hlle => stats.hlle += 1,

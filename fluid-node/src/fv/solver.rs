@@ -1,23 +1,24 @@
 //! [`FluidSolver`]: owns the state, the scratch buffers and the worker pool, and advances the
 //! flow by split steps; reports totals and trouble as data.
 
+mod hooks;
+
 use std::sync::{Mutex, OnceLock};
 
 use rayon::prelude::*;
 
 use protocol::scene::FluidConfig;
 
-use crate::fv::comm::{Comm, HaloExchange, Serial, bytes_f64, f64_bytes};
+use crate::fv::comm::{Comm, Serial, bytes_f64, f64_bytes};
 use crate::fv::euler::{NQ, Primitive, sound_speed};
 use crate::fv::line::{FluxKind, LineScratch, state_ok};
 use crate::fv::slab::Slab;
 use crate::fv::state::{BoundaryKind, FluidParams, FluidState, from_scene};
-use crate::fv::sweep::{
-    FaceTap, PencilOut, Pencils, SlabHalo, Wall, WallRun, frame, from_local, mirror,
-    pencil_to_cells, sweep_axis, to_local,
-};
+use crate::fv::sweep::{PencilOut, Pencils, SlabHalo, pencil_to_cells, sweep_axis};
 use crate::grid::Grid;
 use crate::memory::vec_bytes;
+
+pub use hooks::{GhostFill, SplitHooks};
 
 /// Cells per block of the parallel loops over cells (CFL step, directional pressures).
 const BLOCK_CELLS: usize = 4096;
@@ -110,43 +111,6 @@ impl StepReport {
     }
 }
 
-/// A ghost state written into a cell the solid covers before a sweep: the state of the fluid
-/// cell at the mirror position along the sweep line, its velocity reflected about the wall
-/// relative to the wall's (paper 003 §2.3, numerics §2.6; see [`mirror`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GhostFill {
-    /// The covered cell written.
-    pub cell: u32,
-    /// The fluid cell mirrored into it.
-    pub mirror_of: u32,
-    /// The wall between them (storage axes).
-    pub wall: Wall,
-}
-
-/// What a coupled step asks of the split sweeps besides the update (paper 003 §3.4 step 1):
-/// ghost states in the covered cells before each sweep, the directional pressures `p̄` of the
-/// cells near the wet surface and the fluxes of their faces. Only these cells and faces are
-/// kept, not the whole grid.
-#[derive(Clone, Debug, Default)]
-pub struct SplitHooks {
-    /// Per axis: the ghost states written before the sweep along it, in order.
-    pub ghosts: [Vec<GhostFill>; 3],
-    /// Cells whose `p̄` is recorded, ascending.
-    pub pressure_cells: Vec<u32>,
-    /// Output: `p̄_axis` \[Pa\] of `pressure_cells[k]` in `pressures[axis][k]`: the pressure of
-    /// the state the sweep along `axis` starts from.
-    pub pressures: [Vec<f64>; 3],
-    /// Per axis: the faces whose fluxes are kept.
-    pub taps: [FaceTap; 3],
-    /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
-    /// by pencil and position.
-    pub walls: [Vec<WallRun>; 3],
-    /// Covered cells that hold no fluid yet beside a wet face (a crack that has just opened,
-    /// paper 000 §3.2): set to vacuum (all zero) before each sweep, after the ghosts, so the
-    /// faces beside them take the Lax–Friedrichs flux.
-    pub vacuum: Vec<u32>,
-}
-
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
 /// steps cover all permutations.
 ///
@@ -216,6 +180,8 @@ pub struct FluidSolver {
     comm: Box<dyn Comm>,
     /// Halo planes of the neighbours below and above (empty without neighbours).
     halo: [Vec<f64>; 2],
+    /// The [`SplitHooks`] of a coupled step on this rank's slab (scratch).
+    local: hooks::LocalHooks,
     params: FluidParams,
     state: FluidState,
     buffer: Vec<f64>,
@@ -336,6 +302,7 @@ impl FluidSolver {
             slab,
             comm,
             halo,
+            local: hooks::LocalHooks::default(),
             buffer: vec![0.0; state.u.len()],
             pencil_out: vec![PencilOut::default(); max_pencils],
             scratch: (0..threads)
@@ -523,6 +490,11 @@ impl FluidSolver {
     /// fluxes `hooks` asks for. Cells for which `covered` is true hold ghost states and are not
     /// checked. The report's totals are left empty: the embedded update corrects the cells near
     /// the solid afterwards, and its totals weigh cells by their fluid fraction.
+    ///
+    /// `hooks` and `covered` name cells of the whole grid ([`FluidSolver::global_grid`]): each
+    /// rank applies the ghosts and vacuum of its own cells and keeps the pressures and fluxes of
+    /// its own cells and faces, and the outputs are gathered, so that every rank ends with all
+    /// of them (collective).
     pub fn predict(
         &mut self,
         dt: f64,
@@ -569,34 +541,34 @@ impl FluidSolver {
                 self.apply_ghosts(axis, &h.ghosts[axis]);
                 self.apply_vacuum(&h.vacuum);
                 self.record_pressures_at(&h.pressure_cells, &mut h.pressures[axis]);
+                self.local
+                    .localize(&self.slab, axis, &h.taps[axis], &h.walls[axis]);
+            }
+            let along_slab = axis == self.slab.axis && self.slab.decomposed();
+            if along_slab {
+                self.exchange_halo();
             }
             let grid = &self.grid;
             let params = &self.params;
             let (u, buffer) = (&self.state.u, &mut self.buffer);
             let (scratch, pencil_out) = (&self.scratch, &mut self.pencil_out);
             let (tap, walls) = match hooks.as_mut() {
-                Some((h, _)) => (Some(&mut h.taps[axis]), &h.walls[axis][..]),
+                Some(_) => (
+                    Some(&mut self.local.taps[axis]),
+                    &self.local.walls[axis][..],
+                ),
                 None => (None, &[][..]),
             };
             let slab = &self.slab;
-            let along_slab = axis == slab.axis && slab.decomposed();
-            if along_slab {
-                let d = self.halo[0].len().max(self.halo[1].len());
-                let [lo, hi] = &mut self.halo;
-                self.comm.exchange_halo(HaloExchange {
-                    to_lo: slab.lo.map(|r| (r, &u[..d])),
-                    to_hi: slab.hi.map(|r| (r, &u[u.len() - d..])),
-                    from_lo: slab.lo.map(|r| (r, &mut lo[..])),
-                    from_hi: slab.hi.map(|r| (r, &mut hi[..])),
-                });
-            }
             let halo = if along_slab {
+                let below = if slab.lo.is_some() { slab.overlap } else { 0 };
                 SlabHalo {
                     lo: slab.lo.map(|_| &self.halo[0][..]),
                     hi: slab.hi.map(|_| &self.halo[1][..]),
                     depth: slab.depth,
                     overlap: slab.overlap,
                     n_global: slab.global.cells[axis],
+                    start: slab.offset as isize - below as isize,
                 }
             } else {
                 SlabHalo::none(grid.cells[axis])
@@ -671,6 +643,9 @@ impl FluidSolver {
             }
             summaries.push(summary);
         }
+        if let Some((h, _)) = hooks.as_mut() {
+            self.gather_hook_outputs(h, &order);
+        }
         self.merge_summaries(summaries, &mut report);
         for q in 0..NQ {
             self.outflow[q] += report.outflow[q];
@@ -722,14 +697,15 @@ impl FluidSolver {
     }
 
     /// The first troubled cell of the pencil through `idx` along `axis` that is not covered
-    /// (`idx` itself when it is not).
+    /// (`idx` itself when it is not; `covered` takes cells of the whole grid).
     fn first_checked_trouble(
         &self,
         axis: usize,
         idx: usize,
         covered: &dyn Fn(usize) -> bool,
     ) -> Option<usize> {
-        if !covered(idx) {
+        let global = |c: usize| covered(self.slab.to_global(c));
+        if !global(idx) {
             return Some(idx);
         }
         let pencils = Pencils::new(&self.grid, axis);
@@ -737,45 +713,11 @@ impl FluidSolver {
         let gamma = self.params.gamma;
         (0..pencils.n)
             .map(|m| base + m * pencils.stride)
-            .filter(|&c| !covered(c))
+            .filter(|&c| !global(c))
             .find(|&c| {
                 let full = to_full(self.state.cell(c), self.grid.dim);
                 !state_ok(&full, gamma, self.params.vacuum_rho, self.params.vacuum_p)
             })
-    }
-
-    /// Sets `cells` to vacuum (every conserved quantity zero).
-    pub fn apply_vacuum(&mut self, cells: &[u32]) {
-        let nvar = self.state.nvar;
-        for &c in cells {
-            let c = c as usize * nvar;
-            self.state.u[c..c + nvar].fill(0.0);
-        }
-    }
-
-    /// Writes the ghost states of `fills` (see [`GhostFill`]) for a sweep along `axis`.
-    pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
-        let nvar = self.state.nvar;
-        let dim = self.grid.dim;
-        let fr = frame(dim, axis);
-        for g in fills {
-            let src = g.mirror_of as usize * nvar;
-            let local = to_local(&self.state.u[src..src + nvar], dim, &fr);
-            let ghost = mirror(&local, &g.wall.in_frame(&fr));
-            let dst = g.cell as usize * nvar;
-            from_local(&ghost, dim, &fr, &mut self.state.u[dst..dst + nvar]);
-        }
-    }
-
-    fn record_pressures_at(&self, cells: &[u32], out: &mut Vec<f64>) {
-        let nvar = self.state.nvar;
-        let dim = self.grid.dim;
-        let gamma = self.params.gamma;
-        out.clear();
-        out.extend(cells.iter().map(|&c| {
-            let c = c as usize * nvar;
-            cell_primitive(&self.state.u[c..c + nvar], dim, gamma).p
-        }));
     }
 
     /// Advances with CFL-limited steps until `t_end` \[s\] (the last step is shortened to land on

@@ -180,8 +180,12 @@ pub struct SlabHalo<'a> {
     pub depth: usize,
     /// Cells of a neighbour's side each pencil updates as well (`depth − ng`).
     pub overlap: usize,
-    /// Cells along the axis over all ranks (the characteristic boundary's domain length).
+    /// Cells along the axis over all ranks (the characteristic boundary's domain length, and
+    /// the pencil length the [`WallRun`]s' segments are measured on).
     pub n_global: usize,
+    /// Position along the whole pencil of the line's first updated cell (the rank's first
+    /// plane less the overlap below it; negative on rank 0 with a periodic neighbour below).
+    pub start: isize,
 }
 
 impl SlabHalo<'_> {
@@ -193,6 +197,7 @@ impl SlabHalo<'_> {
             depth: 0,
             overlap: 0,
             n_global: n,
+            start: 0,
         }
     }
 
@@ -287,7 +292,9 @@ pub struct FaceTap {
     /// `positions[pencil_offsets[p]..pencil_offsets[p + 1]]` are the faces kept in pencil `p`
     /// (`pencil_offsets.len()` = pencils + 1).
     pub pencil_offsets: Vec<u32>,
-    /// Face positions along the pencil, `0..=n` (face `m` is the low face of cell `m`).
+    /// Face positions along the gathered line, `0..=n` (face `m` is the low face of cell `m`);
+    /// a decomposed sweep's line starts at [`SlabHalo::start`], so there face `m` of the line is
+    /// face `m + start` of the whole pencil.
     pub positions: Vec<u32>,
     /// Output: the flux of each kept face in the physical order `(mass, p_x, p_y, p_z,
     /// energy)`, per unit area and time; filled by [`sweep_axis`].
@@ -378,7 +385,9 @@ pub fn mirror(s: &State, wall: &Wall) -> State {
 /// A short run of covered cells with fluid on both sides along one pencil: a wall thinner than
 /// the two stencils that meet in it. The sweep cuts the pencil there and gives each fluid
 /// segment its own mirror ghosts, so that no face's stencil reaches through the wall into the
-/// fluid on its far side.
+/// fluid on its far side. Positions are along the whole pencil (all ranks); a decomposed sweep
+/// gets every run of its pencils, also those outside its line, since a segment's mirror ghosts
+/// depend on its length on one rank.
 ///
 /// NOTE: a single state per covered cell cannot serve both sides once the run is shorter than
 /// `2 ng`: the ghosts split the run between the two sides, and the third cell of an order-5
@@ -420,8 +429,7 @@ fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Ve
 
 /// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states pencil-major into
 /// `out`, one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
-/// the neighbours' planes of a sweep along the decomposed axis ([`SlabHalo::none`] otherwise;
-/// no tap and no wall runs then).
+/// the neighbours' planes of a sweep along the decomposed axis ([`SlabHalo::none`] otherwise).
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_axis(
     grid: &Grid,
@@ -438,10 +446,6 @@ pub fn sweep_axis(
 ) {
     debug_assert!(walls.is_sorted_by_key(|w| (w.pencil, w.lo)));
     let [k_lo, k_hi] = halo.overlaps();
-    assert!(
-        (k_lo == 0 && k_hi == 0) || (tap.is_none() && walls.is_empty()),
-        "a decomposed sweep keeps no fluxes and cuts no pencils"
-    );
     let dim = grid.dim;
     let nvar = dim + 2;
     let pencils = Pencils::new(grid, axis);
@@ -464,6 +468,7 @@ pub fn sweep_axis(
             bc[1] == BoundaryKind::Wall && halo.hi.is_none(),
         ],
         own: [k_lo, k_lo + n],
+        end_face: true,
     };
     let open = [
         bc[0] != BoundaryKind::Periodic && halo.lo.is_none(),
@@ -508,7 +513,7 @@ pub fn sweep_axis(
                 let stats = if lo == hi {
                     advance_line(line, &setup)
                 } else {
-                    advance_segments(line, &setup, &walls[lo..hi], &fr)
+                    advance_segments(line, &setup, &walls[lo..hi], &fr, halo)
                 };
                 let dst = &mut out_block[k * n * nvar..(k + 1) * n * nvar];
                 let base = pencils.base(p);
@@ -563,13 +568,22 @@ pub fn sweep_axis(
 /// the pencil's own ghosts at the domain ends. Covered cells keep their state; faces inside a
 /// run carry no flux. A segment's fluxes and states are those of a pencil that ended at the wall,
 /// so a run of `2 ng` or more cells gives bit for bit what the uncut pencil gives its fluid.
+///
+/// The segments are those of the whole pencil (`halo.n_global` cells, `runs` at positions along
+/// it); a decomposed line (`halo.start`) updates the part of each segment it holds, with the
+/// segment's mirror ghosts where they fall inside its ghost cells and the neighbour's cells
+/// elsewhere, so that its own cells see what they see on one rank (the overlap absorbs the
+/// truncation, as for a line without walls).
 fn advance_segments(
     line: &mut LineScratch,
     setup: &LineSetup,
     runs: &[WallRun],
     fr: &[Option<usize>; 3],
+    halo: &SlabHalo<'_>,
 ) -> LineStats {
     let (n, ng) = (setup.n, setup.ng);
+    let (start, n_pencil) = (halo.start, halo.n_global as isize);
+    let [own_lo, own_hi] = setup.own;
     let mut full = std::mem::take(&mut line.pencil);
     let mut new = std::mem::take(&mut line.pencil_new);
     let mut face = std::mem::take(&mut line.pencil_face);
@@ -578,45 +592,61 @@ fn advance_segments(
     new.extend_from_slice(&full[ng..ng + n]);
     face.clear();
     face.resize(n + 1, [0.0; NQ]);
+    // The line cell at position `p` (−ng ≤ p < n + ng) of the input.
+    let at = |full: &[State], p: isize| full[(p + ng as isize) as usize];
     let mut stats = LineStats::default();
-    let mut start = 0usize;
+    let mut seg_lo = 0isize;
     for k in 0..=runs.len() {
-        let (end, w_hi) = match runs.get(k) {
-            Some(r) => (r.lo as usize, Some(r.walls[0].in_frame(fr))),
-            None => (n, None),
-        };
-        let w_lo = k.checked_sub(1).map(|j| runs[j].walls[1].in_frame(fr));
-        let m = end - start;
-        debug_assert!(m > 0, "wall runs of one pencil are separated by fluid");
+        let seg_hi = runs.get(k).map_or(n_pencil, |r| r.lo as isize);
+        let (w_lo, w_hi) = (
+            k.checked_sub(1).map(|j| runs[j].walls[1].in_frame(fr)),
+            runs.get(k).map(|r| r.walls[0].in_frame(fr)),
+        );
+        let (ls, le) = (seg_lo - start, seg_hi - start);
+        let m_full = seg_hi - seg_lo;
+        debug_assert!(m_full > 0, "wall runs of one pencil are separated by fluid");
+        if let Some(r) = runs.get(k) {
+            seg_lo = r.hi as isize;
+        }
+        if le <= 0 || ls >= n as isize {
+            continue;
+        }
+        let (cs, ce) = (ls.max(0) as usize, le.min(n as isize) as usize);
+        let m = ce - cs;
+        let (lo, hi) = (own_lo.clamp(cs, ce), own_hi.clamp(cs, ce));
         let seg = LineSetup {
             n: m,
-            wall: [start == 0 && setup.wall[0], end == n && setup.wall[1]],
-            own: [0, m],
+            wall: [cs == 0 && setup.wall[0], ce == n && setup.wall[1]],
+            own: [lo - cs, hi - cs],
+            end_face: (own_lo..own_hi).contains(&ce) || (ce == own_hi && ce == n && setup.end_face),
             ..*setup
         };
         line.resize(m, ng);
-        line.u.copy_from_slice(&full[start..end + 2 * ng]);
+        line.u.copy_from_slice(&full[cs..ce + 2 * ng]);
+        // Mirror ghosts where the whole segment's fall inside this line's ghost cells: ghost `g`
+        // of the segment is the mirror of its cell `min(g, m_full − 1)`.
         if let Some(w) = w_lo {
-            for g in 0..ng {
-                line.u[ng - 1 - g] = mirror(&line.u[ng + g.min(m - 1)], &w);
+            for p in (cs as isize - ng as isize)..(cs as isize).min(ls) {
+                let g = ls - 1 - p;
+                let src = at(&full, ls + g.min(m_full - 1));
+                line.u[(p - cs as isize + ng as isize) as usize] = mirror(&src, &w);
             }
         }
         if let Some(w) = w_hi {
-            for g in 0..ng {
-                line.u[ng + m + g] = mirror(&line.u[ng + m - 1 - g.min(m - 1)], &w);
+            for p in le.max(ce as isize)..(ce + ng) as isize {
+                let g = p - le;
+                let src = at(&full, le - 1 - g.min(m_full - 1));
+                line.u[(p - cs as isize + ng as isize) as usize] = mirror(&src, &w);
             }
         }
         let s = advance_line(line, &seg);
-        new[start..end].copy_from_slice(&line.new[..m]);
-        face[start..=end].copy_from_slice(&line.face[..=m]);
+        new[cs..ce].copy_from_slice(&line.new[..m]);
+        face[cs..=ce].copy_from_slice(&line.face[..=m]);
         stats.lax_friedrichs += s.lax_friedrichs;
         stats.hlle += s.hlle;
         stats.positivity_fixes += s.positivity_fixes;
         if stats.first_bad.is_none() {
-            stats.first_bad = s.first_bad.map(|b| b + start as u32);
-        }
-        if let Some(r) = runs.get(k) {
-            start = r.hi as usize;
+            stats.first_bad = s.first_bad.map(|b| b + (lo - own_lo) as u32);
         }
     }
     line.resize(n, ng);

@@ -347,3 +347,232 @@ fn a_mirror_state_reverses_the_velocity_normal_to_the_wall_only() {
     assert_eq!(g[1], s[0] * 2.0 * 0.2 - s[1]);
     assert_eq!([g[0], g[2], g[3]], [s[0], s[2], s[3]]);
 }
+
+/// A decomposed line whose wall runs begin or end inside its ghost cells (issue 16): the ghosts
+/// there are the mirror ghosts of the one-rank segment, so every face of the line, up to its
+/// last, gets the one-rank flux bit for bit (the kept fluxes at both ends of the line see the
+/// mirrored cells), and the rank's own cells the one-rank states.
+#[test]
+fn wall_runs_in_a_decomposed_lines_ghost_cells_give_one_rank_fluxes() {
+    use crate::fv::line::FluxKind;
+    use crate::fv::line::LineScratch;
+    use crate::fv::slab::Slab;
+    use crate::fv::state::{BoundaryKind, FluidParams};
+    use crate::fv::sweep::{FaceTap, PencilOut, SlabHalo, Wall, WallRun, sweep_axis};
+    use crate::grid::Grid;
+    use std::sync::Mutex;
+
+    let n = 40;
+    let global = Grid::new(&[0.0], &[1.0], &[n]).expect("grid");
+    let params = FluidParams {
+        gamma: 1.4,
+        cfl: 0.5,
+        flux: FluxKind::Osmp(5),
+        boundary: [[BoundaryKind::Wall; 2]; 3],
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+    };
+    // Rank 1 of 5 owns cells 8..16; its line runs over 5..19 with ghosts 2..5 and 19..22.
+    let slab = Slab::new(&global, 1, 5, 3, [BoundaryKind::Wall; 2]).expect("slab");
+    assert_eq!((slab.offset, slab.depth, slab.overlap), (8, 6, 3));
+    let nvar = 3;
+    let mut u = vec![0.0; n * nvar];
+    for i in 0..n {
+        let x = (i as f64 + 0.5) / n as f64;
+        let (rho, vel, p) = (
+            1.0 + 0.3 * (7.0 * x).sin(),
+            0.4 * (5.0 * x).cos(),
+            1.0 + 0.2 * x,
+        );
+        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[
+            rho,
+            rho * vel,
+            p / 0.4 + 0.5 * rho * vel * vel,
+        ]);
+    }
+    // Covered cells 2–3 and 20–21 hold states of their own (a ghost state of another sweep).
+    for i in [2, 3, 20, 21] {
+        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[5.0, 1.0, 20.0]);
+    }
+    let mut moving = Wall::at_rest(0);
+    moving.velocity[0] = 0.1;
+    let walls = [
+        WallRun {
+            pencil: 0,
+            lo: 2,
+            hi: 4,
+            walls: [moving, Wall::at_rest(0)],
+        },
+        WallRun {
+            pencil: 0,
+            lo: 20,
+            hi: 22,
+            walls: [Wall::at_rest(0), moving],
+        },
+    ];
+    let dt = 0.2 / n as f64;
+    let scratch = vec![Mutex::new(LineScratch::default())];
+    let sweep = |grid: &Grid, u_in: &[f64], positions: Vec<u32>, halo: &SlabHalo<'_>| {
+        let mut out = vec![0.0; u_in.len()];
+        let mut reports = vec![PencilOut::default(); 1];
+        let mut tap = FaceTap::default();
+        tap.clear(1);
+        tap.pencil_offsets[1] = positions.len() as u32;
+        tap.positions = positions;
+        sweep_axis(
+            grid,
+            &params,
+            0,
+            dt,
+            u_in,
+            &mut out,
+            &scratch,
+            &mut reports,
+            Some(&mut tap),
+            &walls,
+            halo,
+        );
+        (out, tap.flux)
+    };
+    let (one, one_flux) = sweep(&global, &u, vec![5, 12, 19], &SlabHalo::none(n));
+    let halo = SlabHalo {
+        lo: Some(&u[2 * nvar..8 * nvar]),
+        hi: Some(&u[16 * nvar..22 * nvar]),
+        depth: 6,
+        overlap: 3,
+        n_global: n,
+        start: 5,
+    };
+    let (rank, rank_flux) = sweep(&slab.local, &u[8 * nvar..16 * nvar], vec![0, 7, 14], &halo);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (k, (a, b)) in one_flux.iter().zip(&rank_flux).enumerate() {
+        assert_eq!(
+            bits(a),
+            bits(b),
+            "kept face {k}: {a:?} on one rank, {b:?} on the slab"
+        );
+    }
+    assert_eq!(bits(&one[8 * nvar..16 * nvar]), bits(&rank), "own cells");
+}
+
+/// The same pencil cut into 5 slabs of 8 cells, with wall runs that start at a cut (cells
+/// 16–17, the first of rank 2) and end at one (22–23, before rank 3): every rank's cells get
+/// the one-rank states, and the face counters summed over the ranks are the one-rank ones
+/// (a face at a cut is counted once), also when every face takes Lax–Friedrichs (all cells
+/// below the vacuum threshold).
+#[test]
+fn wall_runs_at_the_cuts_give_one_rank_states_and_counters() {
+    use crate::fv::line::FluxKind;
+    use crate::fv::line::LineScratch;
+    use crate::fv::slab::Slab;
+    use crate::fv::state::{BoundaryKind, FluidParams};
+    use crate::fv::sweep::{PencilOut, SlabHalo, Wall, WallRun, sweep_axis};
+    use crate::grid::Grid;
+    use std::sync::Mutex;
+
+    let n = 40;
+    let global = Grid::new(&[0.0], &[1.0], &[n]).expect("grid");
+    let nvar = 3;
+    let mut u = vec![0.0; n * nvar];
+    for i in 0..n {
+        let x = (i as f64 + 0.5) / n as f64;
+        let (rho, vel, p) = (
+            1.0 + 0.3 * (7.0 * x).sin(),
+            0.4 * (5.0 * x).cos(),
+            1.0 + 0.2 * x,
+        );
+        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[
+            rho,
+            rho * vel,
+            p / 0.4 + 0.5 * rho * vel * vel,
+        ]);
+    }
+    for i in [16, 17, 22, 23] {
+        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[5.0, 1.0, 20.0]);
+    }
+    let walls = [
+        WallRun {
+            pencil: 0,
+            lo: 16,
+            hi: 18,
+            walls: [Wall::at_rest(0); 2],
+        },
+        WallRun {
+            pencil: 0,
+            lo: 22,
+            hi: 24,
+            walls: [Wall::at_rest(0); 2],
+        },
+    ];
+    let dt = 0.2 / n as f64;
+    let scratch = vec![Mutex::new(LineScratch::default())];
+    for vacuum_rho in [1e-10, 100.0] {
+        let params = FluidParams {
+            gamma: 1.4,
+            cfl: 0.5,
+            flux: FluxKind::Osmp(5),
+            boundary: [[BoundaryKind::Wall; 2]; 3],
+            vacuum_rho,
+            vacuum_p: 1e-10,
+        };
+        let sweep = |grid: &Grid, u_in: &[f64], halo: &SlabHalo<'_>| {
+            let mut out = vec![0.0; u_in.len()];
+            let mut reports = vec![PencilOut::default(); 1];
+            sweep_axis(
+                grid,
+                &params,
+                0,
+                dt,
+                u_in,
+                &mut out,
+                &scratch,
+                &mut reports,
+                None,
+                &walls,
+                halo,
+            );
+            (out, reports[0].stats)
+        };
+        let (one, one_stats) = sweep(&global, &u, &SlabHalo::none(n));
+        let mut states = Vec::new();
+        let mut counts = [0u32; 3];
+        for rank in 0..5 {
+            let slab = Slab::new(&global, rank, 5, 3, [BoundaryKind::Wall; 2]).expect("slab");
+            let (lo, hi, d) = (slab.offset, slab.offset + 8, slab.depth);
+            let halo = SlabHalo {
+                lo: slab.lo.map(|_| &u[(lo - d) * nvar..lo * nvar]),
+                hi: slab.hi.map(|_| &u[hi * nvar..(hi + d) * nvar]),
+                depth: d,
+                overlap: slab.overlap,
+                n_global: n,
+                start: lo as isize - if slab.lo.is_some() { 3 } else { 0 },
+            };
+            let (out, stats) = sweep(&slab.local, &u[lo * nvar..hi * nvar], &halo);
+            states.extend(out);
+            counts[0] += stats.lax_friedrichs;
+            counts[1] += stats.hlle;
+            counts[2] += stats.positivity_fixes;
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(&one),
+            bits(&states),
+            "vacuum below {vacuum_rho}: states"
+        );
+        let expected = [
+            one_stats.lax_friedrichs,
+            one_stats.hlle,
+            one_stats.positivity_fixes,
+        ];
+        assert_eq!(
+            expected, counts,
+            "vacuum below {vacuum_rho}: lf, hlle, fixes"
+        );
+        if vacuum_rho > 1.0 {
+            assert!(
+                expected[0] > 30,
+                "every face takes Lax–Friedrichs: {expected:?}"
+            );
+        }
+    }
+}

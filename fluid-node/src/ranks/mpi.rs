@@ -158,6 +158,11 @@ impl Comm for MpiComm {
 
     fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
         let counts = self.counts(mine.len());
+        // NOTE: Open MPI refuses an all-gather of nothing at all (MPI_ERR_ARG for the empty
+        // receive buffer); every rank knows the counts, so every rank skips it.
+        if counts.iter().all(|&n| n == 0) {
+            return vec![Vec::new(); counts.len()];
+        }
         let displs = displacements(&counts);
         let mut buf = vec![0u8; counts.iter().map(|&n| n as usize).sum()];
         {
@@ -170,6 +175,9 @@ impl Comm for MpiComm {
     fn gather(&self, root: usize, mine: &[u8]) -> Option<Vec<Vec<u8>>> {
         // Every rank learns the counts (one small all-gather), so that only the root allocates.
         let counts = self.counts(mine.len());
+        if counts.iter().all(|&n| n == 0) {
+            return (self.rank() == root).then(|| vec![Vec::new(); counts.len()]);
+        }
         let process = self.world.process_at_rank(root as i32);
         if self.rank() != root {
             process.gather_varcount_into(mine);

@@ -37,8 +37,10 @@ pub enum Call {
     InitialSurface(Box<SolidState>),
     /// [`FluidModel::predict`].
     Predict(StepPlan),
-    /// [`FluidModel::correct`] (fluid-only scenes: no solid state).
-    Correct(StepPlan),
+    /// [`FluidModel::loads`] on this trial solid state.
+    Loads(StepPlan, Box<SolidState>),
+    /// [`FluidModel::correct`], with the accepted solid state in a coupled scene.
+    Correct(StepPlan, Option<Box<SolidState>>),
     /// The end of the run.
     Stop,
 }
@@ -121,23 +123,19 @@ impl FluidModel for Leader<'_> {
         self.inner.predict(plan)
     }
 
-    fn loads(&mut self, plan: &StepPlan, _state: &SolidState) -> Result<InterfaceLoads, String> {
-        Err(format!(
-            "step {}: the fluid on several ranks computes no loads (the embedded solid does not \
-             run on ranks yet)",
-            plan.stamp.step
-        ))
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
+        // Every rank holds the whole surface and the gathered pressures, so every rank computes
+        // the same loads (`crate::embedded`); rank 0's go to the coupler.
+        self.announce(&Call::Loads(plan.clone(), Box::new(state.clone())));
+        self.inner.loads(plan, state)
     }
 
     fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
-        if state.is_some() {
-            return Err(format!(
-                "step {}: the fluid on several ranks takes no solid state",
-                plan.stamp.step
-            ));
-        }
-        self.announce(&Call::Correct(plan.clone()));
-        self.inner.correct(plan, None)
+        self.announce(&Call::Correct(
+            plan.clone(),
+            state.map(|s| Box::new(s.clone())),
+        ));
+        self.inner.correct(plan, state)
     }
 }
 
@@ -183,8 +181,11 @@ pub fn follow(
             Call::Predict(plan) => {
                 let _ = m.predict(&plan);
             }
-            Call::Correct(plan) => {
-                let _ = m.correct(&plan, None);
+            Call::Loads(plan, state) => {
+                let _ = m.loads(&plan, &state);
+            }
+            Call::Correct(plan, state) => {
+                let _ = m.correct(&plan, state.as_deref());
             }
         }
     }

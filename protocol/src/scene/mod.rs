@@ -211,17 +211,6 @@ impl Scene {
         if let Some(solid) = &self.solid {
             solid.validate(&c)?;
         }
-        if let (Some(fluid), Some(_)) = (&self.fluid, &self.solid)
-            && fluid.ranks > 1
-        {
-            // NOTE: refused rather than run wrong: the cut cells, ghost states and mixing of a
-            // wet surface crossing ranks are not decomposed yet (issue 16 item 3).
-            return Err(c.invalid(
-                "fluid.ranks",
-                "1 in a scene with a [solid] (the embedded solid does not run on MPI ranks yet)",
-                fluid.ranks.to_string(),
-            ));
-        }
         self.output
             .validate(&c, self.fluid.is_some(), self.solid.is_some())
     }
