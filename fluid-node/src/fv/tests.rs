@@ -376,20 +376,7 @@ fn wall_runs_in_a_decomposed_lines_ghost_cells_give_one_rank_fluxes() {
     let slab = Slab::new(&global, 1, 5, 3, [BoundaryKind::Wall; 2]).expect("slab");
     assert_eq!((slab.offset, slab.depth, slab.overlap), (8, 6, 3));
     let nvar = 3;
-    let mut u = vec![0.0; n * nvar];
-    for i in 0..n {
-        let x = (i as f64 + 0.5) / n as f64;
-        let (rho, vel, p) = (
-            1.0 + 0.3 * (7.0 * x).sin(),
-            0.4 * (5.0 * x).cos(),
-            1.0 + 0.2 * x,
-        );
-        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[
-            rho,
-            rho * vel,
-            p / 0.4 + 0.5 * rho * vel * vel,
-        ]);
-    }
+    let mut u = smooth_1d(n);
     // Covered cells 2–3 and 20–21 hold states of their own (a ghost state of another sweep).
     for i in [2, 3, 20, 21] {
         u[i * nvar..(i + 1) * nvar].copy_from_slice(&[5.0, 1.0, 20.0]);
@@ -473,20 +460,7 @@ fn wall_runs_at_the_cuts_give_one_rank_states_and_counters() {
     let n = 40;
     let global = Grid::new(&[0.0], &[1.0], &[n]).expect("grid");
     let nvar = 3;
-    let mut u = vec![0.0; n * nvar];
-    for i in 0..n {
-        let x = (i as f64 + 0.5) / n as f64;
-        let (rho, vel, p) = (
-            1.0 + 0.3 * (7.0 * x).sin(),
-            0.4 * (5.0 * x).cos(),
-            1.0 + 0.2 * x,
-        );
-        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[
-            rho,
-            rho * vel,
-            p / 0.4 + 0.5 * rho * vel * vel,
-        ]);
-    }
+    let mut u = smooth_1d(n);
     for i in [16, 17, 22, 23] {
         u[i * nvar..(i + 1) * nvar].copy_from_slice(&[5.0, 1.0, 20.0]);
     }
@@ -575,4 +549,25 @@ fn wall_runs_at_the_cuts_give_one_rank_states_and_counters() {
             );
         }
     }
+}
+
+/// A smooth 1-D state of `n` cells (ρ, ρu, E with γ = 1.4) for the kernel tests of pencils cut
+/// by walls at the rank cuts.
+fn smooth_1d(n: usize) -> Vec<f64> {
+    let nvar = 3;
+    let mut u = vec![0.0; n * nvar];
+    for i in 0..n {
+        let x = (i as f64 + 0.5) / n as f64;
+        let (rho, vel, p) = (
+            1.0 + 0.3 * (7.0 * x).sin(),
+            0.4 * (5.0 * x).cos(),
+            1.0 + 0.2 * x,
+        );
+        u[i * nvar..(i + 1) * nvar].copy_from_slice(&[
+            rho,
+            rho * vel,
+            p / 0.4 + 0.5 * rho * vel * vel,
+        ]);
+    }
+    u
 }
