@@ -436,8 +436,8 @@ fn drive_inner(
         starts.observe(coupler);
         let waiting_since = Instant::now();
         // NOTE: waiting for one node, the transport watches that node alone (cheaper than a
-        // wait set over both); the other's early frames wait in its queue, as in the state
-        // machine's.
+        // wait set over both); the other node's early frames stay queued in the transport
+        // until the state machine waits for them.
         let expected = match coupler.waiting_for().as_slice() {
             [one] => Some(*one),
             _ => None,

@@ -164,8 +164,12 @@ impl IqnIls {
         self.old.clear();
         self.now.clear();
         self.next_id = 0;
-        for step in columns.old.iter().rev() {
-            self.now.clear();
+        let oldest_first = columns.old.iter().rev().chain([&columns.now]);
+        for (k, step) in oldest_first.enumerate() {
+            if k > 0 {
+                let done = std::mem::take(&mut self.now);
+                self.old.push_front(done);
+            }
             for (dr, dxt) in step {
                 let c = self.make_column(
                     DVector::from_column_slice(dr),
@@ -173,15 +177,6 @@ impl IqnIls {
                 );
                 self.now.push(c);
             }
-            let cols = std::mem::take(&mut self.now);
-            self.old.push_front(cols);
-        }
-        for (dr, dxt) in &columns.now {
-            let c = self.make_column(
-                DVector::from_column_slice(dr),
-                DVector::from_column_slice(dxt),
-            );
-            self.now.push(c);
         }
         self.last = None;
         self.dropped = 0;

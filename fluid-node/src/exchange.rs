@@ -330,11 +330,12 @@ impl NodeModel for RealFluid {
         if !self.writes() {
             return Ok(());
         }
-        let vel = ["u", "v", "w"][..self.dim()].join(",");
+        let dim = self.dim();
+        let vel = ["u", "v", "w"][..dim].join(",");
         for probe in &self.probes {
             let mut text = format!("t,rho,{vel},p\n");
             for [t, rho, u @ .., p] in &probe.rows {
-                let vel: Vec<String> = u[..self.dim()].iter().map(|v| format!("{v:e}")).collect();
+                let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
                 text.push_str(&format!("{t:e},{rho:e},{},{p:e}\n", vel.join(",")));
             }
             std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
