@@ -15,6 +15,8 @@ struct World {
     fluid_dt: f64,
     solid_dt: f64,
     surface_x: f64,
+    /// From this step on the solid's answers carry wet surface revision 1 (links broke).
+    revision_from: Option<u64>,
     sent: Vec<(NodeKind, Message)>,
 }
 
@@ -110,6 +112,7 @@ impl World {
             fluid_dt: 0.1,
             solid_dt: 0.3,
             surface_x: 0.0,
+            revision_from: None,
             sent: Vec::new(),
         }
     }
@@ -181,10 +184,11 @@ impl World {
                             (NodeKind::Solid, Message::InterfaceLoads(l)) => {
                                 let x =
                                     self.a + self.drift * l.stamp.step as f64 + self.b * l.force[0];
-                                inbox.push_back((
-                                    NodeKind::Solid,
-                                    Message::SolidState(state(l.stamp, x)),
-                                ));
+                                let mut answer = state(l.stamp, x);
+                                if self.revision_from.is_some_and(|from| l.stamp.step >= from) {
+                                    answer.surface.revision = 1;
+                                }
+                                inbox.push_back((NodeKind::Solid, Message::SolidState(answer)));
                             }
                             (NodeKind::Solid, Message::FixedPointDecision(d))
                                 if d.decision == Decision::Accept =>
@@ -374,6 +378,45 @@ fn linear_predictor_gives_iteration_zero_from_the_accepted_states() {
     }
     let last = reports.last().expect("steps").step as f64;
     assert!((world.surface_x - x_star(last)).abs() < 1e-12);
+}
+
+/// A solid whose answer does not depend on the loads (a prescribed motion) meets the linear
+/// predictor's input exactly, so each step is accepted on its first trial; but in the step where
+/// its wet surface changes revision (links broke at the end of the last step) that trial was
+/// computed on loads of the old surface, and one more iteration must take them on the new one.
+#[test]
+fn a_trial_on_a_new_surface_revision_is_not_accepted() {
+    let (a, d) = (1.0, 0.1);
+    let mut world = World::new(a, 0.0, 0.5);
+    world.drift = d;
+    world.revision_from = Some(3);
+    let mut config = cfg(Scheme::SemiImplicit, Relaxation::IqnIls, vec![0.6]);
+    config.predictor = Predictor::Linear;
+    let mut coupler = Coupler::new(config);
+    let (reports, _) = world.run(&mut coupler).expect("converges");
+    let iterations: Vec<u32> = reports.iter().map(|r| r.iterations).collect();
+    println!("iterations per step: {iterations:?}");
+    assert_eq!(iterations.len(), 6);
+    // Step 0 has no prediction and step 1 extrapolates from off the line; from step 2 the first
+    // trial is the answer, but step 3's is on revision 1 and its input on revision 0.
+    assert_eq!(iterations[2..], [1, 2, 1, 1]);
+    assert!(
+        reports[3].residuals[0] <= 1e-12,
+        "{:?}",
+        reports[3].residuals
+    );
+    let accepted: Vec<u64> = world
+        .sent
+        .iter()
+        .filter_map(|(to, m)| match (to, m) {
+            (NodeKind::Fluid, Message::SolidState(s)) if s.stamp.step == 3 => {
+                Some(s.surface.revision)
+            }
+            _ => None,
+        })
+        .collect();
+    // The prediction (revision 0), the input of iteration 1 and the accepted state (revision 1).
+    assert_eq!(accepted, [0, 1, 1]);
 }
 
 #[test]
