@@ -216,9 +216,19 @@ fn add_body(
                 return Err(format!("ring: at least 3 particles around, found {n}"));
             }
             let c = point(center);
+            // NOTE: vertex n − k is the mirror image of vertex k about the x-axis to the last bit
+            // (sin(2π − φ) is not −sin φ in floating point, nor sin π zero), so a ring symmetric
+            // about the line through its centre along x is built symmetric.
             let on = |r: f64, k: usize| {
-                let phi = 2.0 * std::f64::consts::PI * (k % n) as f64 / n as f64;
-                c + Vector3::new(r * phi.cos(), r * phi.sin(), 0.0)
+                let k = k % n;
+                let m = k.min(n - k);
+                let (sin, cos) = if 2 * m == n {
+                    (0.0, -1.0)
+                } else {
+                    (2.0 * std::f64::consts::PI * m as f64 / n as f64).sin_cos()
+                };
+                let sin = if m == k { sin } else { -sin };
+                c + Vector3::new(r * cos, r * sin, 0.0)
             };
             for k in 0..n {
                 // Counter-clockwise: inner k, outer k, outer k+1, inner k+1.
@@ -319,4 +329,42 @@ fn add_body(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod ring_tests {
+    use super::*;
+
+    /// A ring is built mirror-symmetric about the line through its centre along x: vertex n − k
+    /// has vertex k's x to the last bit and its y reflected (to the rounding of the centre plus
+    /// the offset, one ulp where the two lie in different binades), and the vertices at angles 0
+    /// and π lie on that line (the blast of `scenes/cylinder-explosion.toml` is symmetric about
+    /// it).
+    #[test]
+    fn a_ring_is_symmetric_about_its_x_line_to_the_last_bit() {
+        let text = r#"
+name = "ring"
+[solid]
+density = 7860.0
+young = 2.1e11
+poisson = 0.0
+[[solid.bodies]]
+shape = { ring = { center = [20.0, 7.5], inner_radius = 5.0, outer_radius = 5.1 } }
+divisions = [50]
+"#;
+        let scene = protocol::scene::Scene::from_toml_str(text, "test").expect("scene");
+        let solid = scene.solid.expect("a [solid]");
+        let lattice = build_lattice(&solid.bodies, 2).expect("lattice");
+        let on_line = lattice.vertices.iter().filter(|v| v.y == 7.5).count();
+        assert_eq!(on_line, 4, "inner and outer vertices at angles 0 and π");
+        for v in &lattice.vertices {
+            assert!(
+                lattice
+                    .vertices
+                    .iter()
+                    .any(|w| w.x == v.x && (w.y + v.y - 15.0).abs() <= 2e-15),
+                "vertex {v:?} has no mirror image"
+            );
+        }
+    }
 }
