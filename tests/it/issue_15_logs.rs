@@ -75,11 +75,24 @@ fn is_progress(line: &str) -> bool {
     line.contains(" ETA ")
 }
 
+/// Whether `line` is iceoryx2's own log output: `<n> [W] "origin" ` and the `| message` lines
+/// under it. iceoryx2 warns once per process, at warn level, the first time anything looks up its
+/// global config ("No config file was loaded"); whether a run does depends on the shutdown path,
+/// so such a line comes and goes between runs of one scene. It is a log line, not a report.
+fn iceoryx2_line(line: &str) -> bool {
+    let digits = line.bytes().take_while(u8::is_ascii_digit).count();
+    line.starts_with("| ")
+        || (digits > 0
+            && ["[T]", "[D]", "[I]", "[W]", "[E]", "[F]"]
+                .iter()
+                .any(|tag| line[digits..].starts_with(&format!(" {tag} "))))
+}
+
 /// The lines of `stderr` that are neither log nor progress lines: the error reports.
 fn reports(stderr: &str) -> Vec<&str> {
     stderr
         .lines()
-        .filter(|l| log_line(l).is_none() && !is_progress(l))
+        .filter(|l| log_line(l).is_none() && !iceoryx2_line(l) && !is_progress(l))
         .collect()
 }
 
