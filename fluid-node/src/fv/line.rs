@@ -398,23 +398,23 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
                 flux[q] = 0.5 * (phys[j][q] + phys[j + 1][q]);
             }
             let mut a = [0.0; NQ];
-            let mut term = [[0.0; NQ]; NQ];
+            let mut coef = [0.0; NQ];
             for k in 0..NQ {
                 a[k] = alpha[k][j];
-                let coef = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
-                let r = roe_eigenvector(&roe[j], k);
-                for q in 0..NQ {
-                    term[k][q] = coef * r[q];
-                }
+                coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
             }
             // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
             // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
             // image is the mirror image of the flux to the last bit (a problem symmetric about
             // a plane stays symmetric, `tests/fv_mirror.rs`), whatever the order of the others.
+            let (r0, r1) = (roe_eigenvector(&roe[j], 0), roe_eigenvector(&roe[j], 1));
             for q in 0..NQ {
-                flux[q] -= term[0][q] + term[1][q];
-                for t in &term[2..] {
-                    flux[q] -= t[q];
+                flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
+            }
+            for k in 2..NQ {
+                let r = roe_eigenvector(&roe[j], k);
+                for q in 0..NQ {
+                    flux[q] -= coef[k] * r[q];
                 }
             }
             face[j] = flux;

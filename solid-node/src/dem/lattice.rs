@@ -341,7 +341,7 @@ mod ring_tests {
     /// and π lie on that line (the blast of `scenes/cylinder-explosion.toml` is symmetric about
     /// it).
     #[test]
-    fn a_ring_is_symmetric_about_its_x_line_to_the_last_bit() {
+    fn a_ring_is_symmetric_about_its_x_line() {
         let text = r#"
 name = "ring"
 [solid]
