@@ -602,3 +602,170 @@ fn vacuum_cells_may_hold_round_off_of_either_sign() {
     assert!(!ok(w(f64::NAN, 0.0, 1.0)));
     assert!(!ok(w(1.0, f64::INFINITY, 1.0)));
 }
+
+/// A y line of `cylinder-explosion` beside the ring's symmetry axis (step 2, x = 14.9 m): the
+/// flow is mirror-symmetric about the face between cells 8 and 9 up to 1e-14 of round-off, and
+/// the entropy and shear waves stagnate there (v = ±0.5 m/s on either side). The fluxes of the
+/// two faces next to it must be mirror images to the size of that round-off: with the UL bound
+/// divided by ν_up alone they differed by 2.3e-4 (α_up/ν_up was round-off over round-off).
+#[test]
+fn osmp_bounds_are_well_conditioned_at_a_stagnation_point() {
+    use crate::fv::line::{FluxKind, LineScratch, LineSetup, advance_line};
+    let cells: [State; 18] = [
+        [
+            1.1799046273189822e0,
+            -3.458900995309489e-2,
+            6.75329163348555e-3,
+            0e0,
+            2.5328414319943776e5,
+        ],
+        [
+            1.1173858785201667e0,
+            2.2357541397410635e1,
+            9.839868489599746e-1,
+            0e0,
+            2.3439940079133774e5,
+        ],
+        [
+            2.868860860326211e-1,
+            2.742242654281947e1,
+            5.430311590458234e1,
+            0e0,
+            7.590896242434661e4,
+        ],
+        [
+            2.228096630561372e-1,
+            -2.3651104397392392e-1,
+            5.867094951516644e1,
+            0e0,
+            5.6209779503528545e4,
+        ],
+        [
+            2.2990768477818474e-1,
+            -2.733991161750956e-1,
+            6.261362179348206e1,
+            0e0,
+            5.821986550371284e4,
+        ],
+        [
+            2.4103397321515366e-1,
+            -5.672832526886702e0,
+            6.43075862394897e1,
+            0e0,
+            6.144040491876542e4,
+        ],
+        [
+            8.452910897894417e-1,
+            -1.2839060462681666e0,
+            1.754416335270112e1,
+            0e0,
+            1.8267369272046836e5,
+        ],
+        [
+            8.745088192389155e-1,
+            -1.0030898674942272e0,
+            1.785653622066777e1,
+            0e0,
+            1.8879304577950112e5,
+        ],
+        [
+            9.085292247279981e-1,
+            -4.660128805880735e-1,
+            1.8370375183483883e1,
+            0e0,
+            1.9607360052243783e5,
+        ],
+        [
+            9.085292247280043e-1,
+            4.6601288058732065e-1,
+            1.8370375183484335e1,
+            0e0,
+            1.960736005224394e5,
+        ],
+        [
+            8.745088192389421e-1,
+            1.003089867493518e0,
+            1.7856536220667692e1,
+            0e0,
+            1.887930457795067e5,
+        ],
+        [
+            8.452910897893636e-1,
+            1.2839060462688396e0,
+            1.754416335269919e1,
+            0e0,
+            1.8267369272045148e5,
+        ],
+        [
+            2.410339732151502e-1,
+            5.672832526886873e0,
+            6.430758623948745e1,
+            0e0,
+            6.144040491876442e4,
+        ],
+        [
+            2.299076847781501e-1,
+            2.7339911617464446e-1,
+            6.261362179347195e1,
+            0e0,
+            5.821986550370421e4,
+        ],
+        [
+            2.2280966305612282e-1,
+            2.3651104397427003e-1,
+            5.867094951516263e1,
+            0e0,
+            5.6209779503524944e4,
+        ],
+        [
+            2.868860860326589e-1,
+            -2.7422426542837513e1,
+            5.430311590457717e1,
+            0e0,
+            7.59089624243602e4,
+        ],
+        [
+            1.1173858785201762e0,
+            -2.2357541397391913e1,
+            9.839868489574933e-1,
+            0e0,
+            2.3439940079133373e5,
+        ],
+        [
+            1.179904627318794e0,
+            3.4589009952323314e-2,
+            6.753291637501213e-3,
+            0e0,
+            2.5328414319939798e5,
+        ],
+    ];
+    let ng = 3;
+    let n = cells.len() - 2 * ng;
+    let setup = LineSetup {
+        n,
+        ng,
+        flux: FluxKind::Osmp(5),
+        sigma: 2.6666666666666673e-4,
+        gamma: 1.4,
+        n_shear: 1,
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+        wall: [false, false],
+        own: [0, n],
+        end_face: true,
+    };
+    let mut s = LineScratch::default();
+    s.resize(n, ng);
+    s.u.copy_from_slice(&cells);
+    advance_line(&mut s, &setup);
+    // Face f lies between line cells ng − 1 + f and ng + f: the axis is face 6.
+    let (below, above) = (s.face[5], s.face[7]);
+    let scale = below[0].abs().max(1.0);
+    let mass = (below[0] + above[0]).abs() / scale;
+    let energy = (below[4] + above[4]).abs() / below[4].abs();
+    let momentum = (below[1] - above[1]).abs() / below[1].abs();
+    assert!(
+        mass < 1e-10 && energy < 1e-10 && momentum < 1e-10,
+        "mirror faces differ: mass {mass:e}, normal momentum {momentum:e}, energy {energy:e}"
+    );
+}
