@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use tracing::debug;
+use tracing::{debug, warn};
 
 use crate::transport::{Link, LinkError};
 use crate::wire::{
@@ -41,8 +41,30 @@ pub trait NodeModel {
 /// initial totals, proposes a step, then answers checkpoint requests and restores, and
 /// for each step plan calls `advance` (the node's side of the step, coupling iterations
 /// included), records probes, writes the planned output, sends the totals and the next
-/// proposal. Probe files are written at the end.
+/// proposal. Probe files are written at the end, also when the run fails: they then hold the
+/// steps completed before the failure (what a user debugging it needs first).
 pub fn run_node<N: NodeModel + ?Sized>(
+    kind: NodeKind,
+    node: &mut N,
+    link: &mut Link<'_>,
+    cfg: &LoopConfig,
+    open: impl FnMut(&mut N, &mut Link<'_>) -> Result<(), NodeError>,
+    advance: impl FnMut(&mut N, &mut Link<'_>, &StepPlan) -> Result<(), NodeError>,
+) -> Result<(), NodeError> {
+    let run = node_loop(kind, node, link, cfg, open, advance);
+    let probes = finish(node, cfg);
+    match (run, probes) {
+        (Err(e), Err(lost)) => {
+            warn!("the probe files of the failed run were not written: {lost}");
+            Err(e)
+        }
+        (Err(e), Ok(())) => Err(e),
+        (Ok(()), probes) => probes,
+    }
+}
+
+/// [`run_node`] without the probe files.
+fn node_loop<N: NodeModel + ?Sized>(
     kind: NodeKind,
     node: &mut N,
     link: &mut Link<'_>,
@@ -67,7 +89,7 @@ pub fn run_node<N: NodeModel + ?Sized>(
         match open(node, link) {
             Err(NodeError::Stopped { step }) => {
                 debug!("shut down by the coupler before step {step}");
-                return finish(node, cfg);
+                return Ok(());
             }
             other => other?,
         }
@@ -144,7 +166,7 @@ pub fn run_node<N: NodeModel + ?Sized>(
             }
         }
     }
-    finish(node, cfg)
+    Ok(())
 }
 
 /// The end of a node's run: the probe files.
