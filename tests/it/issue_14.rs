@@ -514,20 +514,18 @@ fn issue_14_a_crack_opens_into_a_near_vacuum() {
 /// fails still writes the history it has (it wrote none before).
 #[test]
 fn issue_14_a_shell_burst_by_a_pressure_ratio_of_1e4_stops_with_a_named_cell_or_runs() {
-    let path = format!(
-        "{}/../scenes/burst-shell-2d.toml",
-        env!("CARGO_MANIFEST_DIR")
+    let mut burst = cosim_tests::scene_with(
+        "burst-shell-2d.toml",
+        "\n[[output.probes]]\nname = \"centre\"\npoint = [1.0, 1.0]\n\
+         \n[[output.probes]]\nname = \"east\"\nparticle_at = [1.34, 1.0]\n",
     );
-    let text = std::fs::read_to_string(&path).expect("burst-shell-2d.toml")
-        + "\n[[output.probes]]\nname = \"centre\"\npoint = [1.0, 1.0]\n"
-        + "\n[[output.probes]]\nname = \"east\"\nparticle_at = [1.34, 1.0]\n";
-    let mut burst = Scene::from_toml_str(&text, &path).expect("burst scene with probes");
     burst.run.threads = 1;
     burst.run.max_steps = Some(40);
     let out = std::env::temp_dir().join(format!("cosim-it-burst-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&out).expect("out dir");
     let run = cosim_tests::run_in_process_to(&burst, Some(&out));
+    let failed = run.error.is_some() || !run.node_errors.is_empty();
     for probe in ["centre", "east"] {
         let file = out.join(format!("probe_{probe}.csv"));
         let text = std::fs::read_to_string(&file)
@@ -535,7 +533,6 @@ fn issue_14_a_shell_burst_by_a_pressure_ratio_of_1e4_stops_with_a_named_cell_or_
         let rows = text.lines().skip(1).count() as u64;
         // A node whose side of the failing step was done (the solid, when the fluid's correct
         // fails) has that step's row too.
-        let failed = run.error.is_some() || !run.node_errors.is_empty();
         let steps = run.summary.steps;
         assert!(
             rows == steps || (failed && rows == steps + 1),

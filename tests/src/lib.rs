@@ -148,7 +148,12 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
 
 /// Reads a scene from the workspace's `scenes/` folder.
 pub fn scene(name: &str) -> Scene {
+    scene_with(name, "")
+}
+
+/// [`scene`] with `extra` TOML (tables such as `[[output.probes]]`) appended to its text.
+pub fn scene_with(name: &str, extra: &str) -> Scene {
     let path = format!("{}/../scenes/{name}", env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("reading {path}: {e}"));
-    Scene::from_toml_str(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+    Scene::from_toml_str(&(text + extra), &path).unwrap_or_else(|e| panic!("{e}"))
 }
