@@ -83,11 +83,30 @@ impl Grid {
         [i, rest % self.cells[1], rest / self.cells[1]]
     }
 
+    /// Coordinate along `axis` at `s` cell widths from the lower corner (`s` in `0..=n`, a
+    /// multiple of 1/2: a grid plane or a cell centre) \[m\].
+    ///
+    /// Measured from the nearer corner (the middle is the corners' mean), so that on a grid
+    /// symmetric about 0 (`lower = -upper`) mirrored positions are exact negatives,
+    /// `coord(n - s) == -coord(s)` bit for bit: a symmetric scene then stays symmetric to the
+    /// last bit instead of being seeded with the round-off of `lower + s dx`.
+    #[inline]
+    pub fn coord(&self, axis: usize, s: f64) -> f64 {
+        let n = self.cells[axis] as f64;
+        if 2.0 * s < n {
+            self.lower[axis] + s * self.dx[axis]
+        } else if 2.0 * s > n {
+            self.upper[axis] - (n - s) * self.dx[axis]
+        } else {
+            0.5 * (self.lower[axis] + self.upper[axis])
+        }
+    }
+
     /// Centre of cell `(i, j, k)`; inactive coordinates are 0.
     pub fn cell_center(&self, ijk: [usize; 3]) -> [f64; 3] {
         let mut x = [0.0; 3];
         for axis in 0..self.dim {
-            x[axis] = self.lower[axis] + (ijk[axis] as f64 + 0.5) * self.dx[axis];
+            x[axis] = self.coord(axis, ijk[axis] as f64 + 0.5);
         }
         x
     }
@@ -108,5 +127,29 @@ impl Grid {
             ijk[axis] = (s.floor() as usize).min(self.cells[axis] - 1);
         }
         Some(ijk)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Grid;
+
+    #[test]
+    fn a_grid_centred_on_zero_has_mirror_exact_coordinates() {
+        let g = Grid::new(&[0.0, -7.5], &[30.0, 7.5], &[800, 400]).unwrap();
+        let n = 400;
+        for half in 0..=2 * n {
+            let s = half as f64 / 2.0;
+            assert_eq!(g.coord(1, n as f64 - s), -g.coord(1, s), "s = {s}");
+        }
+        assert_eq!(g.coord(1, 200.0), 0.0);
+        assert_eq!(g.coord(1, 0.0), -7.5);
+        assert_eq!(g.coord(1, 400.0), 7.5);
+        // `lower + s dx` is not mirror-exact there: the reason for measuring from the nearer end.
+        let plain = |s: f64| g.lower[1] + s * g.dx[1];
+        assert!((0..=2 * n).any(|h| {
+            let s = h as f64 / 2.0;
+            plain(n as f64 - s) != -plain(s)
+        }));
     }
 }

@@ -6,6 +6,7 @@
 //! - [`scene`]: the scene file schema and its validation.
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
+//! - [`sum`]: order-independent, mirror-exact sums (both nodes' numerics).
 //! - [`topics`]: topic names and log-time convention of the MCAP record.
 //! - [`vtk`]: VTK XML files for ParaView (`.vti`, `.vtp`, `.pvd`) built in memory, and read back.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
@@ -26,6 +27,7 @@
 pub mod codec;
 pub mod scene;
 pub mod session;
+pub mod sum;
 pub mod topics;
 pub mod transport;
 pub mod vtk;

@@ -73,7 +73,7 @@ impl<const N: usize> Polygon<N> {
 /// Coordinate of grid plane `i` (0..=n) along `axis` [m]; the one formula used everywhere.
 #[inline]
 pub(crate) fn plane(grid: &Grid, axis: usize, i: i32) -> f64 {
-    grid.lower[axis] + f64::from(i) * grid.dx[axis]
+    grid.coord(axis, f64::from(i))
 }
 
 /// Extended slab (`-1..=n`) holding coordinate `x` along `axis`, with the tie rule of the module.
@@ -102,11 +102,18 @@ pub(crate) fn slab(grid: &Grid, axis: usize, x: f64) -> i32 {
 }
 
 /// Point on segment `p q` where coordinate `axis` equals `value`, interpolated from the endpoint
-/// with the smaller coordinate (canonical); the payload is interpolated alike. Requires `p[axis]`
-/// and `q[axis]` strictly on both sides.
+/// with the smaller coordinate in magnitude, the lower one on a tie (canonical: the same for
+/// `p q` and `q p`, and for the mirror image about `x[axis] = 0`, so that a scene symmetric about
+/// a grid centred on 0 is cut mirror-exactly); the payload is interpolated alike. Requires
+/// `p[axis]` and `q[axis]` strictly on both sides.
 #[inline]
 fn cut_point<const N: usize>(p: &[f64; N], q: &[f64; N], axis: usize, value: f64) -> [f64; N] {
-    let (lo, hi) = if p[axis] < q[axis] { (p, q) } else { (q, p) };
+    let (pa, qa) = (p[axis].abs(), q[axis].abs());
+    let (lo, hi) = if pa < qa || (pa == qa && p[axis] < q[axis]) {
+        (p, q)
+    } else {
+        (q, p)
+    };
     let t = (value - lo[axis]) / (hi[axis] - lo[axis]);
     let mut x = [0.0; N];
     for d in 0..N {
@@ -240,9 +247,12 @@ fn peel_segment<const N: usize>(
         return;
     }
     let (lo, hi) = slab_range(grid, axis, &[a, b]);
-    // Walk from the low end to the high end, then restore the orientation of each piece.
+    // Walk from the low end to the high end, then restore the orientation of each piece. Every
+    // cut point is interpolated between the two ends of the segment (not from the previous cut),
+    // so it does not depend on the direction of the walk.
     let forward = a[axis] <= b[axis];
     let (mut start, end) = if forward { (a, b) } else { (b, a) };
+    let origin = start;
     cell[axis] = lo;
     for s in lo..hi {
         let value = plane(grid, axis, s + 1);
@@ -252,7 +262,7 @@ fn peel_segment<const N: usize>(
             break;
         }
         if start[axis] < value {
-            let x = cut_point(&start, &end, axis, value);
+            let x = cut_point(&origin, &end, axis, value);
             if forward {
                 peel_segment(grid, axis + 1, start, x, cell, emit);
             } else {

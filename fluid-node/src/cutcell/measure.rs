@@ -76,7 +76,9 @@ pub(crate) fn segment_measures(a: [f64; 3], b: [f64; 3]) -> ([f64; 3], f64, [f64
     let d = sub(b, a);
     let area_vector = [d[1], -d[0], 0.0];
     let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
-    let centroid = [a[0] + 0.5 * d[0], a[1] + 0.5 * d[1], 0.0];
+    // NOTE: `(a + b) / 2`, symmetric in the two ends: the reversed segment (the mirror image of
+    // an oriented boundary) has the same midpoint to the bit.
+    let centroid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.0];
     (area_vector, length, centroid)
 }
 

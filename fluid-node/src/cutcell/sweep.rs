@@ -15,6 +15,8 @@
 //!
 //! so Λ, λ and the sub-faces come from the same pieces and agree to round-off.
 
+use protocol::sum::odd_sum;
+
 /// One piece's contribution to one row sweep.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Record {
@@ -110,6 +112,13 @@ pub(crate) trait SweepSink {
 ///
 /// NOTE: snapping stops the round-off of the running sum from drifting along long rows; it moves
 /// λ by at most `snap_tol`, far below any physical scale, and keeps uncovered/covered cells exact.
+///
+/// NOTE (mirror symmetry): a cell's pieces are summed independently of their order, and the
+/// faces inside a run of adjacent cut cells whose exit was snapped take the running sum from the
+/// end of the run on their side of the grid's middle (from below in the lower half, from above
+/// in the upper half, the mean of both on the middle face). A scene symmetric about the middle
+/// plane then gets mirror-exact fractions: its mirror image visits the same pieces from the
+/// other end and in another order.
 pub(crate) fn sweep_rows(
     records: &[Record],
     n: i32,
@@ -119,54 +128,100 @@ pub(crate) fn sweep_rows(
     sink: &mut impl SweepSink,
 ) -> f64 {
     let mut max_defect: f64 = 0.0;
+    // One cluster of adjacent cut cells: (position, summed flux, summed moment), and the running
+    // fraction below each cell's lower face / above each cell's upper face.
+    let mut cluster: Vec<(i32, f64, f64)> = Vec::new();
+    let mut below: Vec<f64> = Vec::new();
+    let mut terms: Vec<f64> = Vec::new();
+    let mut moments: Vec<f64> = Vec::new();
     let mut i = 0;
     while i < records.len() {
         let row = records[i].row;
         let mut lambda = 0.0;
         let mut next = 0; // first face (and cell) of the row not yet reported
         while i < records.len() && records[i].row == row {
-            let pos = records[i].pos;
-            let mut flux = 0.0;
-            let mut moment = 0.0;
-            while i < records.len() && records[i].row == row && records[i].pos == pos {
-                flux += records[i].flux;
-                moment += records[i].moment;
-                i += 1;
-            }
-            if pos >= 0 {
-                if fill_runs && lambda != 0.0 && next < pos {
-                    sink.run(row, next, pos, lambda);
+            // Gather one cluster: cells at consecutive positions.
+            cluster.clear();
+            while i < records.len()
+                && records[i].row == row
+                && cluster.last().is_none_or(|c| records[i].pos == c.0 + 1)
+            {
+                let pos = records[i].pos;
+                terms.clear();
+                moments.clear();
+                while i < records.len() && records[i].row == row && records[i].pos == pos {
+                    terms.push(records[i].flux);
+                    moments.push(records[i].moment);
+                    i += 1;
                 }
-                if lambda != 0.0 {
-                    sink.face(row, pos, lambda);
-                }
+                cluster.push((pos, odd_sum(&mut terms), odd_sum(&mut moments)));
             }
-            lambda -= flux / area;
+            let last = cluster[cluster.len() - 1].0;
             let next_pos = if i < records.len() && records[i].row == row {
                 records[i].pos
             } else {
                 n
             };
+            // Bottom-up running fractions: below[c] on the lower face of cell c, then the exit.
+            below.clear();
+            let entry = lambda;
+            for c in &cluster {
+                below.push(lambda);
+                lambda -= c.1 / area;
+            }
+            let mut snapped = false;
             if let Some(tol) = snap_tol
-                && next_pos > pos + 1
-                && pos + 1 < n
+                && next_pos > last + 1
+                && last + 1 < n
             {
                 let rounded = lambda.round();
                 let defect = (lambda - rounded).abs();
                 if defect <= tol {
                     lambda = rounded;
+                    snapped = true;
                 } else {
                     max_defect = max_defect.max(defect);
                 }
             }
-            if pos >= 0 && pos < n {
-                sink.cell(row, pos, moment, lambda);
-                // Upper face of a cut cell followed by an uncut one (else the next record's).
-                if !fill_runs && next_pos > pos + 1 && lambda != 0.0 {
-                    sink.face(row, pos + 1, lambda);
+            // The faces strictly inside the cluster, from the end on their side of the middle.
+            if snapped && cluster.len() > 1 {
+                let mut above = lambda;
+                for k in (1..cluster.len()).rev() {
+                    above += cluster[k].1 / area;
+                    let face = cluster[k].0;
+                    below[k] = match (2 * face).cmp(&n) {
+                        std::cmp::Ordering::Less => below[k],
+                        std::cmp::Ordering::Greater => above,
+                        std::cmp::Ordering::Equal => 0.5 * (below[k] + above),
+                    };
                 }
             }
-            next = pos + 1;
+            debug_assert_eq!(below[0], entry);
+            for (k, c) in cluster.iter().enumerate() {
+                let pos = c.0;
+                let face_lambda = below[k];
+                let top = if k + 1 < cluster.len() {
+                    below[k + 1]
+                } else {
+                    lambda
+                };
+                if pos >= 0 {
+                    if k == 0 && fill_runs && face_lambda != 0.0 && next < pos {
+                        sink.run(row, next, pos, face_lambda);
+                    }
+                    if face_lambda != 0.0 {
+                        sink.face(row, pos, face_lambda);
+                    }
+                }
+                if pos >= 0 && pos < n {
+                    sink.cell(row, pos, c.2, top);
+                    // Upper face of a cut cell followed by an uncut one (else the next record's).
+                    if !fill_runs && k + 1 == cluster.len() && next_pos > pos + 1 && top != 0.0 {
+                        sink.face(row, pos + 1, top);
+                    }
+                }
+                next = pos + 1;
+            }
         }
         // Tail: cells next..n and faces next..=n.
         if lambda != 0.0 && next <= n {

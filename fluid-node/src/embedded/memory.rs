@@ -14,7 +14,7 @@ pub struct EmbeddedMemory {
     pub slot_of: usize,
     /// Near-surface data: the near cells, their saved `U^n`, `p̄` and wall velocities, the kept
     /// face fluxes with their slots and per-pencil offsets, the ghost fills and the scratch of
-    /// the correct.
+    /// the correct (with the terms of its order-independent sums).
     pub near_surface: usize,
     /// Surface-sized geometry: sub-faces, cut-cell lists, clipping scratch and swept entries of
     /// both geometries, the accepted frame and the last loads.
@@ -43,7 +43,9 @@ impl Embedded {
             + h.taps.iter().map(tap_bytes).sum::<usize>()
             + vec_bytes(&self.near_walls)
             + vec_bytes(&self.content)
-            + vec_bytes(&self.kind);
+            + vec_bytes(&self.kind)
+            + self.odd.capacity_bytes()
+            + self.odd_content.capacity_bytes();
         let sparse_geometry = self.geom.memory_bytes() + self.trial.memory_bytes() - dense_geometry
             + self.swept.memory_bytes()
             + frame_bytes(&self.current)

@@ -48,6 +48,7 @@
 
 mod memory;
 
+use protocol::sum::{OddSum, odd_sum};
 use protocol::wire::{SolidState, n_rot};
 use serde::{Deserialize, Serialize};
 
@@ -303,6 +304,9 @@ pub struct Embedded {
     kind: Vec<CellKind>,
     /// Loads of the accepted surface of the last step (outputs).
     last_loads: Loads,
+    /// Scratch: per-slot sums independent of the sub-faces' order (mirror-exact loads).
+    odd: OddSum,
+    odd_content: OddSum,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -345,7 +349,36 @@ struct Facing {
     normal: [f64; 3],
 }
 
+/// Sums per near cell that make a [`NearWall`].
+const NEAR_WALL_SUMS: usize = 59;
+
 impl NearWall {
+    /// From its sums: `Σ A w` (3), `Σ A |ν_a| ν_b` (9, `a` major), `Σ A`, then per axis `a` and
+    /// side `(2 a + side)` the facing sums `Σ A`, `Σ A w` (3), `Σ A |ν_a| ν` (3), then the wet
+    /// area and `Σ A ν` over the wet sub-faces (3).
+    fn from_sums(v: &[f64]) -> NearWall {
+        let v3 = |i: usize| [v[i], v[i + 1], v[i + 2]];
+        let mut facing = [[Facing::default(); 2]; 3];
+        for (a, sides) in facing.iter_mut().enumerate() {
+            for (side, f) in sides.iter_mut().enumerate() {
+                let base = 13 + 7 * (2 * a + side);
+                *f = Facing {
+                    area: v[base],
+                    velocity: v3(base + 1),
+                    normal: v3(base + 4),
+                };
+            }
+        }
+        NearWall {
+            area: v[12],
+            velocity: v3(0),
+            normal: [v3(3), v3(6), v3(9)],
+            facing,
+            wet_area: v[55],
+            wet_normal: v3(56),
+        }
+    }
+
     /// Whether a covered cell with this wall is a crack (or two bodies touching): wet faces of
     /// opposite normals, so no fluid between them yet. A single wet face on a grid plane, which
     /// the tie rule gives to the covered cell behind it, is not one: its `Σ A ν` is its area.
@@ -422,6 +455,8 @@ impl Embedded {
             content: Vec::new(),
             kind: Vec::new(),
             last_loads: Loads::default(),
+            odd: OddSum::default(),
+            odd_content: OddSum::default(),
         };
         e.set_surface(solid)?;
         Ok(e)
@@ -542,37 +577,52 @@ impl Embedded {
         for (k, &c) in self.near.iter().enumerate() {
             self.slot_of[c as usize] = k as u32 + 1;
         }
-        // The wall of the near cells that hold sub-faces.
+        // The wall of the near cells that hold sub-faces, summed apart from the sub-faces' order
+        // (the sub-faces come in cell order; slots are the fields of `NearWall::from_sums`).
         self.near_walls.clear();
         self.near_walls.resize(self.near.len(), NearWall::default());
-        for s in &self.geom.subfaces {
-            let k = self.slot_of[s.cell as usize] as usize - 1;
-            let w = self.current.point_velocity(s.particle as usize, s.centroid);
-            let nw = &mut self.near_walls[k];
-            for a in 0..3 {
-                nw.velocity[a] += s.area * w[a];
-                for b in 0..3 {
-                    nw.normal[a][b] += s.area * s.normal[a].abs() * s.normal[b];
-                }
-            }
-            nw.area += s.area;
-            for a in 0..dim {
-                if s.normal[a] != 0.0 {
-                    let f = &mut nw.facing[a][usize::from(s.normal[a] < 0.0)];
-                    f.area += s.area;
+        let mut sum = std::mem::take(&mut self.odd);
+        let subfaces = &self.geom.subfaces;
+        let mut first = 0;
+        while first < subfaces.len() {
+            let cell = subfaces[first].cell;
+            let mut end = first;
+            sum.clear();
+            while end < subfaces.len() && subfaces[end].cell == cell {
+                let s = &subfaces[end];
+                let w = self.current.point_velocity(s.particle as usize, s.centroid);
+                for a in 0..3 {
+                    sum.push(a, s.area * w[a]);
                     for b in 0..3 {
-                        f.velocity[b] += s.area * w[b];
-                        f.normal[b] += s.area * s.normal[a].abs() * s.normal[b];
+                        sum.push(3 + 3 * a + b, s.area * s.normal[a].abs() * s.normal[b]);
                     }
                 }
-            }
-            if self.current.wet[s.element as usize] && domain_face(grid, s).is_none() {
-                nw.wet_area += s.area;
-                for a in 0..3 {
-                    nw.wet_normal[a] += s.area * s.normal[a];
+                sum.push(12, s.area);
+                for a in 0..dim {
+                    if s.normal[a] != 0.0 {
+                        let f = 13 + 7 * (2 * a + usize::from(s.normal[a] < 0.0));
+                        sum.push(f, s.area);
+                        for b in 0..3 {
+                            sum.push(f + 1 + b, s.area * w[b]);
+                            sum.push(f + 4 + b, s.area * s.normal[a].abs() * s.normal[b]);
+                        }
+                    }
                 }
+                if self.current.wet[s.element as usize] && domain_face(grid, s).is_none() {
+                    sum.push(55, s.area);
+                    for a in 0..3 {
+                        sum.push(56 + a, s.area * s.normal[a]);
+                    }
+                }
+                end += 1;
             }
+            let mut fields = [0.0; NEAR_WALL_SUMS];
+            sum.add_into(&mut fields);
+            let k = self.slot_of[cell as usize] as usize - 1;
+            self.near_walls[k] = NearWall::from_sums(&fields);
+            first = end;
         }
+        self.odd = sum;
         // Covered cells between the two faces of a crack that has just opened hold no fluid
         // yet: vacuum (paper 000 §3.2), not ghost states.
         self.hooks.vacuum.clear();
@@ -732,8 +782,17 @@ impl Embedded {
                         walls: [wall, wall_seen(far, last, -1)],
                     });
                 }
+                // NOTE: the middle cell of an odd closed run takes the ghost of the side that
+                // faces the grid's middle along the axis (the lower side above the middle), so
+                // that the mirror image of a scene about that middle gets the mirrored fills.
                 let count = if closed {
-                    if dir == 1 { (len + 1) / 2 } else { len / 2 }
+                    let mid = m0 + dir * ((len - 1) / 2);
+                    let lower_side_fills_middle = 2 * mid + 1 > n;
+                    if (dir == 1) == lower_side_fills_middle {
+                        (len + 1) / 2
+                    } else {
+                        len / 2
+                    }
                 } else {
                     len.min(ng)
                 }
@@ -830,6 +889,9 @@ impl Embedded {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],
         };
+        // Forces in slots `0..np d`, torques after them; summed apart from the sub-faces' order.
+        let mut sum = std::mem::take(&mut self.odd);
+        sum.clear();
         for s in &self.trial.subfaces {
             if !trial.wet[s.element as usize]
                 || domain_face(&self.grid, s).is_some()
@@ -846,7 +908,7 @@ impl Embedded {
             }
             let p = s.particle as usize;
             for a in 0..d {
-                loads.force[p * d + a] += f[a];
+                sum.push(p * d + a, f[a]);
             }
             let x = trial.center(p);
             let r = [
@@ -854,8 +916,10 @@ impl Embedded {
                 s.centroid[1] - x[1],
                 s.centroid[2] - x[2],
             ];
-            add_moment(&mut loads.torque, d, p, r, f);
+            push_moment(&mut sum, np * d, d, p, r, f);
         }
+        add_loads(&mut sum, &mut loads, np * d);
+        self.odd = sum;
         Ok(loads)
     }
 
@@ -1094,6 +1158,12 @@ impl Embedded {
         } else {
             (&self.trial, &accepted)
         };
+        let mut sum = std::mem::take(&mut self.odd);
+        sum.clear();
+        // What the solid flux and the swept amounts add to each near cell's content (slots
+        // `k NQ + q`), summed apart from the sub-faces' order.
+        let mut gained = std::mem::take(&mut self.odd_content);
+        gained.clear();
         for s in &flux_geom.subfaces {
             if !flux_frame.wet[s.element as usize]
                 || domain_face(&grid, s).is_some()
@@ -1115,19 +1185,20 @@ impl Embedded {
             ];
             let w = accepted.rigid_velocity(p, r);
             let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
-            let acc = &mut self.content[k];
             for a in 0..dim {
-                acc[1 + a] += dt * pi[a] / volume;
+                gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
                 impulse_received[a] += dt * pi[a];
             }
-            acc[dim + 1] += dt * power / volume;
+            gained.push(k * NQ + dim + 1, dt * power / volume);
             work_received += dt * power;
             let f = [-pi[0], -pi[1], -pi[2]];
             for a in 0..dim {
-                self.last_loads.force[p * dim + a] += f[a];
+                sum.push(p * dim + a, f[a]);
             }
-            add_moment(&mut self.last_loads.torque, dim, p, r, f);
+            push_moment(&mut sum, np * dim, dim, p, r, f);
         }
+        add_loads(&mut sum, &mut self.last_loads, np * dim);
+        self.odd = sum;
         // Swept amounts (paper 000 eq. 12): the prism of every sub-face of F^{n+1}, wet or not
         // (Λ counts every element), gives its cell the content it sweeps at t^n.
         let mut entry = 0;
@@ -1149,11 +1220,13 @@ impl Embedded {
                 let src = (kp as usize - 1) * nvar;
                 let f = e.volume / volume;
                 for q in 0..nvar {
-                    self.content[k][q] += f * self.saved[src + q];
+                    gained.push(k * NQ + q, f * self.saved[src + q]);
                 }
                 entry += 1;
             }
         }
+        gained.add_into(self.content.as_flattened_mut());
+        self.odd_content = gained;
         let (n_mixed, written) = self.mix(solver, &mut report)?;
         report.mixed_cells = n_mixed;
         report.work_received = work_received;
@@ -1303,14 +1376,18 @@ impl Embedded {
                 sources.push(k);
             }
         }
-        // Wall normal of each source (Σ A ν of its sub-faces at t^{n+1}).
+        // Wall normal of each source (Σ A ν of its sub-faces at t^{n+1}), apart from their order.
         let mut normal = vec![[0.0f64; 3]; self.near.len()];
+        let mut terms = std::mem::take(&mut self.odd);
+        terms.clear();
         for s in &self.trial.subfaces {
             let k = self.slot_of[s.cell as usize] as usize - 1;
             for a in 0..3 {
-                normal[k][a] += s.area * s.normal[a];
+                terms.push(3 * k + a, s.area * s.normal[a]);
             }
         }
+        terms.add_into(normal.as_flattened_mut());
+        self.odd = terms;
         let span = offsets(dim, 1);
         let is_source = |c: usize| -> Option<usize> {
             let k = self.slot_of[c];
@@ -1322,6 +1399,7 @@ impl Embedded {
             let ijk = grid.ijk(c);
             let mut best: Option<(f64, usize)> = None;
             for d in &span {
+                let d = &oriented(grid, ijk, *d);
                 let Some(q) = shifted(grid, ijk, *d) else {
                     continue;
                 };
@@ -1361,6 +1439,7 @@ impl Embedded {
             let ijk = grid.ijk(c);
             let mut g = [0.0; 3];
             for d in &span {
+                let d = &oriented(grid, ijk, *d);
                 if let Some(q) = shifted(grid, ijk, *d) {
                     let w = alpha(grid.index(q[0], q[1], q[2]));
                     for a in 0..3 {
@@ -1477,31 +1556,29 @@ impl Embedded {
         while i < groups.len() {
             let root = groups[i].0;
             let mut j = i;
-            let (mut sum, mut vol) = ([0.0; NQ], 0.0);
+            // The members' contents and fluid fractions, summed apart from their order (a
+            // mirror image lists them in another order).
+            let mut parts: Vec<([f64; NQ], f64)> = Vec::new();
             // The root's own content.
             let root_k = self.slot_of[root] as usize;
+            let mut part = [0.0; NQ];
             if root_k > 0 && self.kind[root_k - 1] != CellKind::Predicted {
-                let k = root_k - 1;
-                for q in 0..nvar {
-                    sum[q] += self.content[k][q];
-                }
+                part[..nvar].copy_from_slice(&self.content[root_k - 1][..nvar]);
             } else {
                 let a = alpha(root);
                 for q in 0..nvar {
-                    sum[q] += a * u(root, q);
+                    part[q] = a * u(root, q);
                 }
             }
-            vol += alpha(root);
+            parts.push((part, alpha(root)));
             while j < groups.len() && groups[j].0 == root {
                 let k = groups[j].1;
                 if self.near[k] as usize != root {
-                    for q in 0..nvar {
-                        sum[q] += self.content[k][q];
-                    }
-                    vol += alpha(self.near[k] as usize);
+                    parts.push((self.content[k], alpha(self.near[k] as usize)));
                 }
                 j += 1;
             }
+            let (mut sum, mut vol) = sum_parts(&parts, nvar);
             if vol <= 0.0 || vol.is_nan() {
                 return Err(format!(
                     "no fluid volume to mix cell {:?} into (a closed pocket of covered cells holding {sum:?})",
@@ -1550,18 +1627,18 @@ impl Embedded {
                 }
                 for &q in &ring {
                     let kq = self.slot_of[q] as usize;
+                    let mut part = [0.0; NQ];
                     if kq > 0 && self.kind[kq - 1] != CellKind::Predicted {
-                        for x in 0..nvar {
-                            sum[x] += self.content[kq - 1][x];
-                        }
+                        part[..nvar].copy_from_slice(&self.content[kq - 1][..nvar]);
                     } else {
                         let a = alpha(q);
                         for x in 0..nvar {
-                            sum[x] += a * u(q, x);
+                            part[x] = a * u(q, x);
                         }
                     }
-                    vol += alpha(q);
+                    parts.push((part, alpha(q)));
                 }
+                (sum, vol) = sum_parts(&parts, nvar);
                 extra.extend_from_slice(&ring);
             }
             if !extra.is_empty() {
@@ -1623,16 +1700,25 @@ fn domain_face(grid: &Grid, s: &crate::cutcell::SubFace) -> Option<(usize, usize
     })
 }
 
-/// Adds the moment `r × f` of a force about a particle's centre to `torque` (2-D: the z
-/// component, one per particle; 3-D: three per particle).
-fn add_moment(torque: &mut [f64], dim: usize, p: usize, r: [f64; 3], f: [f64; 3]) {
+/// Pushes the moment `r × f` of a force about particle `p`'s centre into the torque slots, which
+/// start at `base` (2-D: the z component, one per particle; 3-D: three per particle).
+fn push_moment(sum: &mut OddSum, base: usize, dim: usize, p: usize, r: [f64; 3], f: [f64; 3]) {
     if dim == 2 {
-        torque[p] += r[0] * f[1] - r[1] * f[0];
+        sum.push(base + p, r[0] * f[1] - r[1] * f[0]);
     } else {
-        torque[3 * p] += r[1] * f[2] - r[2] * f[1];
-        torque[3 * p + 1] += r[2] * f[0] - r[0] * f[2];
-        torque[3 * p + 2] += r[0] * f[1] - r[1] * f[0];
+        sum.push(base + 3 * p, r[1] * f[2] - r[2] * f[1]);
+        sum.push(base + 3 * p + 1, r[2] * f[0] - r[0] * f[2]);
+        sum.push(base + 3 * p + 2, r[0] * f[1] - r[1] * f[0]);
     }
+}
+
+/// Adds the force slots (`0..n_force`) and torque slots (after them) of `sum` into `loads`.
+fn add_loads(sum: &mut OddSum, loads: &mut Loads, n_force: usize) {
+    let mut all = std::mem::take(&mut loads.force);
+    all.append(&mut loads.torque);
+    sum.add_into(&mut all);
+    loads.torque = all.split_off(n_force);
+    loads.force = all;
 }
 
 /// A storage cell (`dim + 2` values) divided by `scale`, as a 5-component state.
@@ -1663,8 +1749,43 @@ fn face_neighbours(
             q[a] += 1;
             (a, q, q)
         });
-        below.into_iter().chain(above)
+        // The side towards the grid's middle first (see `oriented`).
+        if 2 * ijk[a] + 1 > grid.cells[a] {
+            below.into_iter().chain(above)
+        } else {
+            above.into_iter().chain(below)
+        }
     })
+}
+
+/// Offset `d` from cell `ijk` turned towards the grid's middle: its component along each axis
+/// on which the cell lies in the upper half is negated.
+///
+/// NOTE: searches over neighbours that keep the first of equal candidates, and sums over them,
+/// then visit the mirror image of a cell's neighbours (about the grid's middle along any axis)
+/// in the mirrored order, so that a symmetric scene stays symmetric to the bit.
+fn oriented(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> [isize; 3] {
+    let mut out = d;
+    for a in 0..3 {
+        if 2 * ijk[a] + 1 > grid.cells[a] {
+            out[a] = -d[a];
+        }
+    }
+    out
+}
+
+/// Content and fluid fraction of a mixing group from its members' (order-independent sums).
+fn sum_parts(parts: &[([f64; NQ], f64)], nvar: usize) -> ([f64; NQ], f64) {
+    let mut sum = [0.0; NQ];
+    let mut terms: Vec<f64> = Vec::with_capacity(parts.len());
+    for q in 0..nvar {
+        terms.clear();
+        terms.extend(parts.iter().map(|p| p.0[q]));
+        sum[q] = odd_sum(&mut terms);
+    }
+    terms.clear();
+    terms.extend(parts.iter().map(|p| p.1));
+    (sum, odd_sum(&mut terms))
 }
 
 /// All offsets of the `(2r + 1)^dim − 1` neighbours within Chebyshev distance `r`.

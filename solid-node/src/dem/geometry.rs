@@ -6,6 +6,7 @@
 //! to their vertex mean (paper 003 §2.2 makes the same assumption).
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use protocol::sum::odd_sum;
 
 /// Volume integrals of a polyhedron with unit density.
 #[derive(Clone, Copy, Debug)]
@@ -137,21 +138,41 @@ pub fn polyhedron_mass(vertices: &[Vector3<f64>], faces: &[Vec<u32>]) -> Polyhed
 }
 
 /// Area, centroid and polar moment `∫ |x − c|² dA` of a counter-clockwise polygon.
+///
+/// NOTE: every sum is independent of the order of its terms ([`odd_sum`]), so the result does
+/// not depend on the vertex the loop starts at, and the mirror image of a polygon (its loop
+/// reversed to stay counter-clockwise) gets the mirrored centroid and the same area and moment
+/// to the bit: a symmetric body is built symmetric.
 pub fn polygon_mass(points: &[Vector2<f64>]) -> (f64, Vector2<f64>, f64) {
-    let reference = points.iter().sum::<Vector2<f64>>() / points.len() as f64;
-    let mut area = 0.0;
-    let mut first = Vector2::zeros();
-    let mut polar = 0.0;
-    for k in 0..points.len() {
+    let n = points.len();
+    let mut xs: Vec<f64> = points.iter().map(|p| p.x).collect();
+    let mut ys: Vec<f64> = points.iter().map(|p| p.y).collect();
+    let reference = Vector2::new(odd_sum(&mut xs), odd_sum(&mut ys)) / n as f64;
+    let mut area = Vec::with_capacity(n);
+    let mut first_x = Vec::with_capacity(n);
+    let mut first_y = Vec::with_capacity(n);
+    let mut polar = Vec::with_capacity(n);
+    for k in 0..n {
         let a = points[k] - reference;
-        let b = points[(k + 1) % points.len()] - reference;
+        let b = points[(k + 1) % n] - reference;
         let tri = 0.5 * (a.x * b.y - a.y * b.x);
-        area += tri;
-        first += (a + b) * (tri / 3.0);
+        area.push(tri);
+        first_x.push((a.x + b.x) * (tri / 3.0));
+        first_y.push((a.y + b.y) * (tri / 3.0));
         // ∫_T |x|² dA = A/6 (|a|² + a·b + |b|²) with the third vertex at 0.
-        polar += tri / 6.0 * (a.norm_squared() + a.dot(&b) + b.norm_squared());
+        let mut sq = [
+            a.x * a.x,
+            a.y * a.y,
+            a.x * b.x,
+            a.y * b.y,
+            b.x * b.x,
+            b.y * b.y,
+        ];
+        polar.push(tri / 6.0 * odd_sum(&mut sq));
     }
-    let c_rel = first / area;
+    let area = odd_sum(&mut area);
+    let c_rel = Vector2::new(odd_sum(&mut first_x), odd_sum(&mut first_y)) / area;
+    let polar = odd_sum(&mut polar);
     (area, reference + c_rel, polar - area * c_rel.norm_squared())
 }
 

@@ -63,7 +63,9 @@ fn geometry_3d(
     let arm_j = qj * link.r_j;
     let d = xi - xj;
     let dist = d.norm();
-    let du = d + arm_i - arm_j;
+    // NOTE: `d + (arm_i − arm_j)`: swapping I and J negates it bit for bit (the mirror image of
+    // a symmetric body lists its links the other way round).
+    let du = d + (arm_i - arm_j);
     (du, d / dist, dist, arm_i, arm_j)
 }
 
@@ -134,7 +136,7 @@ fn geometry_2d(
     let arm_j = rotate_2d(tj, &link.r_j);
     let d = xi - xj;
     let dist = d.norm();
-    (d + arm_i - arm_j, d / dist, dist, arm_i, arm_j)
+    (d + (arm_i - arm_j), d / dist, dist, arm_i, arm_j)
 }
 
 /// `Δu·n` of a 2-D link.

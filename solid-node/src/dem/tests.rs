@@ -263,3 +263,61 @@ mod properties {
         }
     }
 }
+
+/// A quadrilateral particle's area, centroid and polar moment do not depend on the vertex its
+/// loop starts at, and its mirror image (y negated, loop reversed to stay counter-clockwise)
+/// has the mirrored centroid and the same area and moment, to the bit; the values match the
+/// exact ones of the trapezoid to round-off.
+#[test]
+fn polygon_mass_is_independent_of_the_start_and_mirror_exact() {
+    use crate::dem::geometry::polygon_mass;
+    use nalgebra::Vector2;
+    // A ring sector like those of `cylinder-explosion` (radii 5 and 5.1 about (20, 0)).
+    let (t0, t1) = (0.3f64, 0.3 + std::f64::consts::TAU / 50.0);
+    let at = |r: f64, t: f64| Vector2::new(20.0 + r * t.cos(), r * t.sin());
+    let quad = [at(5.0, t0), at(5.1, t0), at(5.1, t1), at(5.0, t1)];
+    let reference = polygon_mass(&quad);
+    for start in 1..4 {
+        let rotated: Vec<_> = (0..4).map(|k| quad[(k + start) % 4]).collect();
+        let m = polygon_mass(&rotated);
+        assert_eq!(m.0.to_bits(), reference.0.to_bits(), "area, start {start}");
+        assert_eq!(m.1, reference.1, "centroid, start {start}");
+        assert_eq!(
+            m.2.to_bits(),
+            reference.2.to_bits(),
+            "polar moment, start {start}"
+        );
+    }
+    for start in 0..4 {
+        let mirrored: Vec<_> = (0..4)
+            .map(|k| {
+                let p = quad[(start + 4 - k) % 4];
+                Vector2::new(p.x, -p.y)
+            })
+            .collect();
+        let m = polygon_mass(&mirrored);
+        assert_eq!(m.0.to_bits(), reference.0.to_bits(), "mirrored area");
+        assert_eq!(
+            m.1.x.to_bits(),
+            reference.1.x.to_bits(),
+            "mirrored centroid x"
+        );
+        assert_eq!(
+            m.1.y.to_bits(),
+            (-reference.1.y).to_bits(),
+            "mirrored centroid y"
+        );
+        assert_eq!(
+            m.2.to_bits(),
+            reference.2.to_bits(),
+            "mirrored polar moment"
+        );
+    }
+    // Exact: two isosceles triangles about the centre, area ½ sin(Δt) (R² − r²).
+    let exact = 0.5 * (t1 - t0).sin() * (5.1f64 * 5.1 - 25.0);
+    assert!(
+        (reference.0 - exact).abs() <= 1e-12 * exact,
+        "{} vs {exact}",
+        reference.0
+    );
+}
