@@ -129,7 +129,7 @@ pub(crate) fn sweep_rows(
 ) -> f64 {
     let mut max_defect: f64 = 0.0;
     // One cluster of adjacent cut cells: (position, summed flux, summed moment), and the running
-    // fraction below each cell's lower face / above each cell's upper face.
+    // fraction on each cell's lower face (`below`).
     let mut cluster: Vec<(i32, f64, f64)> = Vec::new();
     let mut below: Vec<f64> = Vec::new();
     let mut terms: Vec<f64> = Vec::new();
