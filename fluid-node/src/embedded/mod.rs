@@ -349,8 +349,16 @@ struct Facing {
     normal: [f64; 3],
 }
 
-/// Sums per near cell that make a [`NearWall`].
-const NEAR_WALL_SUMS: usize = 59;
+/// Slots of the sums per near cell that make a [`NearWall`] (see [`NearWall::from_sums`]).
+const NW_VELOCITY: usize = 0;
+const NW_NORMAL: usize = 3;
+const NW_AREA: usize = 12;
+/// Per axis `a` and side, at `NW_FACING + NW_FACING_LEN (2 a + side)`: area, velocity, normal.
+const NW_FACING: usize = 13;
+const NW_FACING_LEN: usize = 7;
+const NW_WET_AREA: usize = NW_FACING + 6 * NW_FACING_LEN;
+const NW_WET_NORMAL: usize = NW_WET_AREA + 1;
+const NEAR_WALL_SUMS: usize = NW_WET_NORMAL + 3;
 
 impl NearWall {
     /// From its sums: `Σ A w` (3), `Σ A |ν_a| ν_b` (9, `a` major), `Σ A`, then per axis `a` and
@@ -361,7 +369,7 @@ impl NearWall {
         let mut facing = [[Facing::default(); 2]; 3];
         for (a, sides) in facing.iter_mut().enumerate() {
             for (side, f) in sides.iter_mut().enumerate() {
-                let base = 13 + 7 * (2 * a + side);
+                let base = NW_FACING + NW_FACING_LEN * (2 * a + side);
                 *f = Facing {
                     area: v[base],
                     velocity: v3(base + 1),
@@ -370,12 +378,12 @@ impl NearWall {
             }
         }
         NearWall {
-            area: v[12],
-            velocity: v3(0),
-            normal: [v3(3), v3(6), v3(9)],
+            area: v[NW_AREA],
+            velocity: v3(NW_VELOCITY),
+            normal: [v3(NW_NORMAL), v3(NW_NORMAL + 3), v3(NW_NORMAL + 6)],
             facing,
-            wet_area: v[55],
-            wet_normal: v3(56),
+            wet_area: v[NW_WET_AREA],
+            wet_normal: v3(NW_WET_NORMAL),
         }
     }
 
@@ -592,15 +600,17 @@ impl Embedded {
                 let s = &subfaces[end];
                 let w = self.current.point_velocity(s.particle as usize, s.centroid);
                 for a in 0..3 {
-                    sum.push(a, s.area * w[a]);
+                    sum.push(NW_VELOCITY + a, s.area * w[a]);
                     for b in 0..3 {
-                        sum.push(3 + 3 * a + b, s.area * s.normal[a].abs() * s.normal[b]);
+                        let slot = NW_NORMAL + 3 * a + b;
+                        sum.push(slot, s.area * s.normal[a].abs() * s.normal[b]);
                     }
                 }
-                sum.push(12, s.area);
+                sum.push(NW_AREA, s.area);
                 for a in 0..dim {
                     if s.normal[a] != 0.0 {
-                        let f = 13 + 7 * (2 * a + usize::from(s.normal[a] < 0.0));
+                        let side = usize::from(s.normal[a] < 0.0);
+                        let f = NW_FACING + NW_FACING_LEN * (2 * a + side);
                         sum.push(f, s.area);
                         for b in 0..3 {
                             sum.push(f + 1 + b, s.area * w[b]);
@@ -609,9 +619,9 @@ impl Embedded {
                     }
                 }
                 if self.current.wet[s.element as usize] && domain_face(grid, s).is_none() {
-                    sum.push(55, s.area);
+                    sum.push(NW_WET_AREA, s.area);
                     for a in 0..3 {
-                        sum.push(56 + a, s.area * s.normal[a]);
+                        sum.push(NW_WET_NORMAL + a, s.area * s.normal[a]);
                     }
                 }
                 end += 1;
