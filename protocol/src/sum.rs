@@ -2,8 +2,9 @@
 //! every term, bit for bit (pure: used by both nodes).
 //!
 //! A cut cell's or a particle's share of the interface is a sum over sub-faces, which the grid
-//! visits in cell order; a particle's mass and centre are sums over its polygon's edges. The mirror image of a scene visits the mirrored sub-faces in another
-//! order, and a floating-point sum in another order differs in its last bits. In a flow that
+//! visits in cell order; a particle's mass and centre are sums over its polygon's edges. The
+//! mirror image of a scene visits the mirrored sub-faces in another order, and a floating-point
+//! sum in another order differs in its last bits. In a flow that
 //! amplifies perturbations (the shocked contacts of `cylinder-explosion`) such bits grow to
 //! visible asymmetry. [`OddSum`] removes that seed: per slot, the positive terms are added from
 //! the smallest to the largest, the negative ones likewise, and the two partial sums last. The
@@ -18,8 +19,14 @@ pub fn odd_sum(terms: &mut [f64]) -> f64 {
         return terms[0];
     }
     terms.sort_unstable_by(|a, b| a.abs().total_cmp(&b.abs()));
+    signed_halves(terms.iter().copied())
+}
+
+/// `Σ positives + Σ negatives` of terms sorted by magnitude, each half in the given order.
+#[inline]
+fn signed_halves(sorted: impl Iterator<Item = f64>) -> f64 {
     let (mut pos, mut neg) = (0.0, 0.0);
-    for &t in terms.iter() {
+    for t in sorted {
         if t < 0.0 {
             neg += t;
         } else {
@@ -55,20 +62,8 @@ impl OddSum {
     pub fn add_into(&mut self, out: &mut [f64]) {
         self.terms
             .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.abs().total_cmp(&b.1.abs())));
-        let mut i = 0;
-        while i < self.terms.len() {
-            let slot = self.terms[i].0;
-            let (mut pos, mut neg) = (0.0, 0.0);
-            while i < self.terms.len() && self.terms[i].0 == slot {
-                let v = self.terms[i].1;
-                if v < 0.0 {
-                    neg += v;
-                } else {
-                    pos += v;
-                }
-                i += 1;
-            }
-            out[slot as usize] += pos + neg;
+        for run in self.terms.chunk_by(|a, b| a.0 == b.0) {
+            out[run[0].0 as usize] += signed_halves(run.iter().map(|t| t.1));
         }
         self.terms.clear();
     }
