@@ -502,7 +502,11 @@ impl Embedded {
 
     /// Fluid fraction `1 − Λ` of every cell (outputs).
     pub fn fluid_fraction(&self) -> Vec<f64> {
-        self.geom.solid_fraction.iter().map(|l| 1.0 - l).collect()
+        self.geom
+            .solid_fraction
+            .iter()
+            .map(|&l| fluid_part(l))
+            .collect()
     }
 
     /// Geometry of the accepted surface.
@@ -869,8 +873,13 @@ impl Embedded {
             u.swap(1, 1 + axis);
             u
         };
-        let mut f =
-            crate::fv::euler::flux_lax_friedrichs(&state(kl), &state(kr), sigma, self.gamma);
+        let mut f = crate::fv::euler::flux_lax_friedrichs(
+            &state(kl),
+            &state(kr),
+            sigma,
+            self.gamma,
+            self.vacuum.0,
+        );
         f.swap(1, 1 + axis);
         Some(f)
     }
@@ -1014,11 +1023,14 @@ impl Embedded {
         // The fluid at t^n in the volume the solid newly covers (every change of Λ is in a near
         // cell: the prisms were checked to stay there).
         let mut swept_mass = 0.0;
+        let mut source_scale = Vec::with_capacity(self.near.len());
         for (k, &c) in self.near.iter().enumerate() {
-            let gained = new_lambda[c as usize] - old_lambda[c as usize];
+            let (l0, l1) = (old_lambda[c as usize], new_lambda[c as usize]);
+            let gained = l1.min(1.0) - l0.min(1.0);
             if gained > 0.0 {
                 swept_mass += gained * volume * self.saved[k * nvar];
             }
+            source_scale.push(overlap_scale(l0, l1));
         }
         // Content (1 − Λ^{n+1}) U^n + fluid fluxes of every near cell touched by the solid.
         self.content.clear();
@@ -1094,7 +1106,7 @@ impl Embedded {
             }
             self.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
-            let alpha = 1.0 - new_lambda[c];
+            let alpha = fluid_part(new_lambda[c]);
             let u0 = &self.saved[k * nvar..(k + 1) * nvar];
             let acc = &mut self.content[k];
             for q in 0..nvar {
@@ -1143,7 +1155,7 @@ impl Embedded {
                     Some(q) if shut && covered_at_n(q) => [0.0; NQ],
                     _ => fr,
                 };
-                let (wl, wr) = (1.0 - faces[a][0], 1.0 - faces[a][1]);
+                let (wl, wr) = (fluid_part(faces[a][0]), fluid_part(faces[a][1]));
                 let acc = &mut self.content[k];
                 acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
                 for b in 0..dim {
@@ -1228,7 +1240,7 @@ impl Embedded {
                     ));
                 }
                 let src = (kp as usize - 1) * nvar;
-                let f = e.volume / volume;
+                let f = e.volume / volume * source_scale[kp as usize - 1];
                 for q in 0..nvar {
                     gained.push(k * NQ + q, f * self.saved[src + q]);
                 }
@@ -1277,9 +1289,10 @@ impl Embedded {
     }
 
     /// Identity (3) of the sub-face prisms, cell by cell: what they sweep in a near cell is the
-    /// change of its solid volume. It fails where Λ was clamped into `[0, 1]`, i.e. where the
-    /// accepted surface folds over itself (an element turned inside out): the swept amounts
-    /// would then create or destroy fluid.
+    /// change of its solid volume. Λ is the integral of the winding number (overlapping bodies
+    /// count twice, see [`fluid_part`]); where it is negative beyond round-off the accepted
+    /// surface folds over itself (an element turned inside out) and the cell would hold more
+    /// fluid than its volume: that stops the run too.
     fn check_swept(&mut self, step: u64) -> Result<(), String> {
         let volume = self.grid.cell_volume();
         let sums = &mut self.content;
@@ -1300,7 +1313,7 @@ impl Embedded {
         for (k, &c) in self.near.iter().enumerate() {
             let c = c as usize;
             let defect = (new[c] - old[c]) * volume - sums[k][0];
-            if defect.abs() > SWEPT_TOLERANCE * volume {
+            if defect.abs() > SWEPT_TOLERANCE * volume || new[c] < -SWEPT_TOLERANCE {
                 let ijk = self.grid.ijk(c);
                 return Err(format!(
                     "step {step}: the accepted wet surface folds over itself in cell {ijk:?} at {:?}: its solid fraction went from {} to {} but the swept prisms give {:+e} (a defect of {:e} of the cell; an element turned inside out, e.g. particles rotated too far relative to their neighbours)",
@@ -1340,7 +1353,7 @@ impl Embedded {
         let nvar = dim + 2;
         let new_lambda = &self.trial.solid_fraction;
         let old_lambda = &self.geom.solid_fraction;
-        let alpha = |c: usize| 1.0 - new_lambda[c];
+        let alpha = |c: usize| fluid_part(new_lambda[c]);
         let big = |c: usize| alpha(c) >= MIX_BELOW && old_lambda[c] < 1.0 - COVERED_TOLERANCE;
         let near_scale = self.saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         // Sources.
@@ -1433,7 +1446,7 @@ impl Embedded {
                 if alpha(qi) <= COVERED_TOLERANCE {
                     continue;
                 }
-                let aperture = 1.0 - self.trial.face_fraction[a][face_index(grid, a, f)];
+                let aperture = fluid_part(self.trial.face_fraction[a][face_index(grid, a, f)]);
                 if best.is_none_or(|(b, _)| aperture > b) {
                     best = Some((aperture, qi));
                 }
@@ -1697,6 +1710,31 @@ impl Embedded {
 /// of the domain: a solid face flush against the domain boundary, with no fluid beyond it (the
 /// boundary condition acts there instead; the tie rule of [`crate::cutcell`] puts such a face
 /// on the low side into the covered cells above it).
+/// Fluid fraction of a cell of solid fraction `lambda`: `1 − Λ`, and 0 where Λ > 1.
+///
+/// Λ is the integral of the solid's winding number over the cell: where two bodies overlap (a
+/// penalty contact, walls pressed together) it counts the overlap twice and may exceed 1. The
+/// sums of swept prisms and sub-faces stay exact for it (they are linear in the surface); only
+/// the fluid a cell holds is clamped at 0.
+#[inline]
+pub(crate) fn fluid_part(lambda: f64) -> f64 {
+    1.0 - lambda.min(1.0)
+}
+
+/// Factor on the state a near cell's swept prisms carry, so that what they move out of it plus
+/// what it keeps is the fluid it held: `(min(Λ¹, 1) − min(Λ⁰, 1)) / (Λ¹ − Λ⁰)`, exactly 1 unless
+/// Λ exceeds 1 (overlapping bodies, see [`fluid_part`]), 0 for a cell covered at both times.
+#[inline]
+fn overlap_scale(l0: f64, l1: f64) -> f64 {
+    if l0 <= 1.0 && l1 <= 1.0 {
+        1.0
+    } else if l0 >= 1.0 && l1 >= 1.0 {
+        0.0
+    } else {
+        (l1.min(1.0) - l0.min(1.0)) / (l1 - l0)
+    }
+}
+
 fn domain_face(grid: &Grid, s: &crate::cutcell::SubFace) -> Option<(usize, usize)> {
     (0..grid.dim).find_map(|a| {
         let tol = 1e-12 * grid.dx[a];

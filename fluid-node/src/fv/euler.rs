@@ -28,10 +28,24 @@ pub struct Primitive {
 /// Vacuum-safe: with ρ ≤ 0 the velocity is taken as 0, so no division by zero happens.
 #[inline]
 pub fn primitive(u: &State, gamma: f64) -> Primitive {
+    primitive_floored(u, gamma, 0.0)
+}
+
+/// [`primitive`] with the velocity of a cell below the vacuum density `rho_floor` taken as
+/// `ρu / rho_floor`: there ρ and ρu are round-off of the neighbours' content (a crack cell
+/// that a Lax–Friedrichs step emptied keeps ~1e-18 of momentum, and the next step may give it
+/// ρ ~ 1e-32), so `ρu / ρ` would be a velocity of 1e14 m/s and `E − ½ρ|u|²` a pressure of
+/// −1e-4. Identical to [`primitive`] where ρ ≥ `rho_floor`.
+#[inline]
+pub fn primitive_floored(u: &State, gamma: f64, rho_floor: f64) -> Primitive {
     let rho = u[0];
     // NOTE: a vacuum cell (ρ = 0) has no velocity; taking 0 keeps the Lax–Friedrichs flux of
     // paper 000 §3.2 free of divisions by ρ, as the paper requires.
-    let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
+    let inv = if rho > 0.0 {
+        1.0 / rho.max(rho_floor)
+    } else {
+        0.0
+    };
     let vel = [u[1] * inv, u[2] * inv, u[3] * inv];
     let kinetic = 0.5 * (u[1] * vel[0] + u[2] * vel[1] + u[3] * vel[2]);
     Primitive {
@@ -303,11 +317,18 @@ pub fn flux_hllc(ul: &State, ur: &State, gamma: f64) -> State {
 }
 
 /// Lax–Friedrichs flux `½(F_L + F_R) − Δx/(2Δt) (U_R − U_L)` (paper 000 §3.2), used beside
-/// vacuum cells; `sigma = Δt/Δx` [s/m].
+/// vacuum cells; `sigma = Δt/Δx` [s/m], velocities of cells below `rho_floor` as in
+/// [`primitive_floored`].
 #[inline]
-pub fn flux_lax_friedrichs(ul: &State, ur: &State, sigma: f64, gamma: f64) -> State {
-    let fl = physical_flux(ul, &primitive(ul, gamma));
-    let fr = physical_flux(ur, &primitive(ur, gamma));
+pub fn flux_lax_friedrichs(
+    ul: &State,
+    ur: &State,
+    sigma: f64,
+    gamma: f64,
+    rho_floor: f64,
+) -> State {
+    let fl = physical_flux(ul, &primitive_floored(ul, gamma, rho_floor));
+    let fr = physical_flux(ur, &primitive_floored(ur, gamma, rho_floor));
     let k = 0.5 / sigma;
     let mut out = [0.0; NQ];
     for q in 0..NQ {

@@ -18,7 +18,8 @@
 
 use crate::fv::euler::{
     NQ, Primitive, RoeAverage, RoeSide, State, flux_hllc, flux_hlle, flux_lax_friedrichs,
-    physical_flux, primitive, roe_eigenvector, roe_star_states_positive, roe_strengths,
+    physical_flux, primitive, primitive_floored, roe_eigenvector, roe_star_states_positive,
+    roe_strengths,
 };
 use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
 
@@ -189,7 +190,7 @@ impl LineScratch {
 /// numerical trouble (the default thresholds, 1e-10, pass round-off only).
 #[inline]
 pub fn state_ok(u: &State, gamma: f64, vacuum_rho: f64, vacuum_p: f64) -> bool {
-    let w = primitive(u, gamma);
+    let w = primitive_floored(u, gamma, vacuum_rho);
     let finite = u.iter().all(|x| x.is_finite()) && w.p.is_finite();
     let gas = w.rho >= vacuum_rho && w.p >= vacuum_p;
     finite && (gas || (w.rho > -vacuum_rho && w.p > -vacuum_p))
@@ -235,7 +236,7 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
                 let (flux, kind) = match s.kind[f] {
                     FaceFlux::Regular => (flux_hlle(&ul, &ur, gamma), FaceFlux::Hlle),
                     _ => (
-                        flux_lax_friedrichs(&ul, &ur, setup.sigma, gamma),
+                        flux_lax_friedrichs(&ul, &ur, setup.sigma, gamma, setup.vacuum_rho),
                         FaceFlux::LaxFriedrichs,
                     ),
                 };
@@ -310,7 +311,7 @@ fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
     let (prim, roe) = (&mut s.cells.prim[..len], &mut s.cells.roe[..len]);
     let (phys, vacuum) = (&mut s.phys[..len], &mut s.vacuum[..len]);
     for i in 0..len {
-        let w = primitive(&u[i], setup.gamma);
+        let w = primitive_floored(&u[i], setup.gamma, setup.vacuum_rho);
         prim[i] = w;
         // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
         roe[i] = RoeSide::new(&u[i], &w);
@@ -431,7 +432,7 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
         let f = ng - 1 + fi;
         let (ul, ur) = (&s.u[f], &s.u[f + 1]);
         if s.vacuum[f] || s.vacuum[f + 1] {
-            s.face[fi] = flux_lax_friedrichs(ul, ur, sigma, gamma);
+            s.face[fi] = flux_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho);
             s.kind[fi] = FaceFlux::LaxFriedrichs;
         } else if s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius] || !s.star_ok[fi] {
             s.face[fi] = flux_hlle(ul, ur, gamma);
@@ -510,7 +511,7 @@ fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
     for fi in 0..=n {
         let f = ng - 1 + fi;
         if s.vacuum[f] || s.vacuum[f + 1] {
-            s.face[fi] = flux_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma);
+            s.face[fi] = flux_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma, setup.vacuum_rho);
             s.kind[fi] = FaceFlux::LaxFriedrichs;
         } else {
             s.face[fi] = flux_hllc(&s.right[f], &s.left[f + 1], gamma);

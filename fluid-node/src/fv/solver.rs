@@ -430,6 +430,7 @@ impl FluidSolver {
     fn compute_max_dt(&self) -> (f64, usize) {
         let grid = &self.grid;
         let gamma = self.params.gamma;
+        let vacuum_rho = self.params.vacuum_rho;
         let nvar = self.state.nvar;
         let dim = grid.dim;
         let u = &self.state.u;
@@ -440,7 +441,11 @@ impl FluidSolver {
                     let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
                     for (k, cell) in chunk.chunks_exact(nvar).enumerate() {
                         let idx = block * BLOCK_CELLS + k;
-                        let w = cell_primitive(cell, dim, gamma);
+                        let w = crate::fv::euler::primitive_floored(
+                            &to_full(cell, dim),
+                            gamma,
+                            vacuum_rho,
+                        );
                         let c = sound_speed(&w, gamma);
                         for a in 0..dim {
                             let r = (w.vel[a].abs() + c) / grid.dx[a];
