@@ -291,3 +291,50 @@ fn a_ring_symmetric_about_the_middle_is_cut_mirror_exactly() {
         );
     }
 }
+
+/// Two bodies pressed into each other (a penalty contact, walls flush and pushed together):
+/// Λ and λ are integrals of the winding number, so the overlap counts twice: Λ and λ exceed 1
+/// where it lies, Σ Λ A is the sum of the two areas, identity (19)–(20) holds in every cell,
+/// and so does identity (3) when the overlap deepens or opens.
+#[test]
+fn overlapping_bodies_count_the_overlap_twice_and_keep_the_identities() {
+    let g = grid([10, 10]);
+    let a = loop_mesh(&[[0.2, 0.2], [0.53, 0.2], [0.53, 0.8], [0.2, 0.8]]);
+    let b_at = |x0: f64| loop_mesh(&[[x0, 0.3], [0.8, 0.3], [0.8, 0.6], [x0, 0.6]]);
+    let mut mesh = a.clone();
+    mesh.append(&b_at(0.48), 1);
+    let mut geo = CutGeometry::new();
+    compute(&g, &mesh.surface(), &mut geo);
+    let exact = 0.33 * 0.6 + 0.32 * 0.3;
+    let err = (volume_of(&g, &geo) - exact).abs() / exact;
+    let identity = identity_residual(&g, &geo);
+    eprintln!("area err {err:.2e}, identity {identity:.2e}");
+    assert!(err <= TOL, "area error {err}");
+    assert!(identity <= TOL, "identity residual {identity}");
+    assert_eq!(geo.diagnostics.max_uncut_defect, 0.0);
+    // Cell (4, 3), x 0.4..0.5, y 0.3..0.4: A covers it, B its part x > 0.48.
+    let l = geo.solid_fraction[g.index(4, 3, 0)];
+    assert!((l - 1.2).abs() < 1e-14, "{l}");
+    // Cell (5, 4), x 0.5..0.6: B covers it, A its part x < 0.53.
+    let l = geo.solid_fraction[g.index(5, 4, 0)];
+    assert!((l - 1.3).abs() < 1e-14, "{l}");
+    // The face x = 0.5 of row 3 lies inside both.
+    let f = geo.face_fraction[0][face_index(&g, 0, [5, 3, 0])];
+    assert!((f - 2.0).abs() < 1e-14, "{f}");
+    // Outside the overlap the fractions are those of one body.
+    assert_eq!(geo.solid_fraction[g.index(3, 3, 0)], 1.0);
+    assert_eq!(geo.solid_fraction[g.index(6, 3, 0)], 1.0);
+    // Identity (3): B pushed deeper into A, then pulled out of it past a grid line.
+    for (from, to) in [(0.48, 0.47), (0.48, 0.535)] {
+        let (mut before, mut after) = (a.clone(), a.clone());
+        before.append(&b_at(from), 1);
+        after.append(&b_at(to), 1);
+        let (residual, total) = swept_residual(&g, &before, &after);
+        let expected = (from - to) * 0.3;
+        assert!(residual <= 1e-12, "{from} -> {to}: residual {residual}");
+        assert!(
+            (total - expected).abs() <= 1e-14,
+            "{from} -> {to}: {total} vs {expected}"
+        );
+    }
+}

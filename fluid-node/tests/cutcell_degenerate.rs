@@ -13,20 +13,18 @@ use fluid_node::grid::Grid;
 
 const TOL: f64 = 1e-12;
 
+/// How far Λ and λ of one body may leave [0, 1] by round-off.
+const ROUND_OFF: f64 = 1e-14;
+
 fn check(grid: &Grid, mesh: &Mesh, exact_volume: f64, exact_area: Option<f64>) -> CutGeometry {
     let mut geo = CutGeometry::new();
     compute(grid, &mesh.surface(), &mut geo);
-    assert!(
-        geo.solid_fraction
-            .iter()
-            .all(|x| x.is_finite() && (0.0..=1.0).contains(x))
-    );
+    // Λ and λ are not clamped (overlapping bodies count twice): one body leaves [0, 1] by
+    // round-off only.
+    let in_range = |x: &f64| x.is_finite() && (-ROUND_OFF..=1.0 + ROUND_OFF).contains(x);
+    assert!(geo.solid_fraction.iter().all(in_range));
     for axis in 0..3 {
-        assert!(
-            geo.face_fraction[axis]
-                .iter()
-                .all(|x| x.is_finite() && (0.0..=1.0).contains(x))
-        );
+        assert!(geo.face_fraction[axis].iter().all(in_range));
     }
     assert!(
         geo.subfaces

@@ -392,9 +392,9 @@ impl SweepSink for GeometrySink<'_> {
             self.axis,
             row_ijk(self.grid, self.axis, row, pos),
         );
-        // NOTE: clamped to [0, 1]: outside, the value differs from 0 or 1 only by round-off (or
-        // the surface is not closed, which `max_uncut_defect` reports).
-        self.faces[f] = lambda.clamp(0.0, 1.0);
+        // NOTE: not clamped: outside [0, 1] by round-off for one body, by the overlap where two
+        // bodies overlap (an open surface shows in `max_uncut_defect`).
+        self.faces[f] = lambda;
         self.faces_written.push((f as u32, 1));
     }
 
@@ -402,7 +402,7 @@ impl SweepSink for GeometrySink<'_> {
         if self.axis == 0 {
             let ijk = row_ijk(self.grid, 0, row, pos);
             let cell = self.grid.index(ijk[0], ijk[1], ijk[2]);
-            self.cells[cell] = (moment / self.volume + lambda_top).clamp(0.0, 1.0);
+            self.cells[cell] = moment / self.volume + lambda_top;
             self.cells_written.push((cell as u32, 1));
         }
     }
@@ -413,7 +413,7 @@ impl SweepSink for GeometrySink<'_> {
         let cell = self.grid.index(ijk[0], ijk[1], ijk[2]);
         let face = face_index(self.grid, 0, ijk);
         let len = (to - from) as usize;
-        let value = lambda.clamp(0.0, 1.0);
+        let value = lambda;
         self.cells[cell..cell + len].fill(value);
         self.faces[face..face + len].fill(value);
         self.cells_written.push((cell as u32, len as u32));

@@ -42,8 +42,11 @@
 //! - A face lying exactly in a grid plane belongs to the cell above that plane. Hence a grid face
 //!   coinciding with the lower (−e_a) face of a solid has λ = 0 and one coinciding with its upper
 //!   face has λ = 1: a measure-zero choice, applied the same way everywhere.
-//! - Λ and λ are clamped to `[0, 1]` (they leave it only by round-off for valid input), and a
-//!   running λ entering an uncut cell is snapped to 0 or 1 within [`SNAP_TOLERANCE`].
+//! - Λ and λ are integrals of the surface's winding number, not clamped: one body leaves
+//!   `[0, 1]` by round-off only, overlapping bodies (a penalty contact) count the overlap twice,
+//!   so that identities (19)–(21) and (3) hold for them too (the fluid clamps only the fluid it
+//!   keeps, `embedded::fluid_part`). A running λ entering an uncut cell is snapped to the nearest
+//!   integer within [`SNAP_TOLERANCE`].
 //! - 2-D: the grid's z axis is inactive, `face_fraction[2]` is empty, "areas" are lengths and
 //!   "volumes" areas.
 
