@@ -1706,10 +1706,6 @@ impl Embedded {
     }
 }
 
-/// The domain face `(axis, side)` (side 0 low, 1 high) a sub-face lies in with its normal out
-/// of the domain: a solid face flush against the domain boundary, with no fluid beyond it (the
-/// boundary condition acts there instead; the tie rule of [`crate::cutcell`] puts such a face
-/// on the low side into the covered cells above it).
 /// Fluid fraction of a cell of solid fraction `lambda`: `1 − Λ`, and 0 where Λ > 1.
 ///
 /// Λ is the integral of the solid's winding number over the cell: where two bodies overlap (a
@@ -1735,6 +1731,10 @@ fn overlap_scale(l0: f64, l1: f64) -> f64 {
     }
 }
 
+/// The domain face `(axis, side)` (side 0 low, 1 high) a sub-face lies in with its normal out
+/// of the domain: a solid face flush against the domain boundary, with no fluid beyond it (the
+/// boundary condition acts there instead; the tie rule of [`crate::cutcell`] puts such a face
+/// on the low side into the covered cells above it).
 fn domain_face(grid: &Grid, s: &crate::cutcell::SubFace) -> Option<(usize, usize)> {
     (0..grid.dim).find_map(|a| {
         let tol = 1e-12 * grid.dx[a];
