@@ -446,7 +446,17 @@ impl FluidSolver {
                             gamma,
                             vacuum_rho,
                         );
-                        let c = sound_speed(&w, gamma);
+                        // Below the vacuum density ρ, ρu and E are round-off (a covered cell
+                        // beside a crack held ρ = 2e-30 and E = 1e-16, a sound speed of 5e6 m/s
+                        // that collapsed the step): its speeds are taken at the vacuum density,
+                        // as its velocity is (identical where ρ is at least that).
+                        let c = sound_speed(
+                            &crate::fv::euler::Primitive {
+                                rho: w.rho.max(vacuum_rho),
+                                ..w
+                            },
+                            gamma,
+                        );
                         for a in 0..dim {
                             let r = (w.vel[a].abs() + c) / grid.dx[a];
                             if !r.is_finite() {
