@@ -28,7 +28,7 @@ pub struct RealFluid {
     probes: Vec<Probe>,
     /// Whether the scene has a solid (the embedded part is built from the first surface).
     coupled: bool,
-    /// Whether that solid may fracture (`[solid] fracture`).
+    /// Whether cracks may open in that solid (`[solid] fracture`, or several bodies).
     fracture: bool,
     embedded: Option<Embedded>,
     /// Budget restored from a checkpoint before the surface arrived.
@@ -91,7 +91,11 @@ impl RealFluid {
             name: scene.name.clone(),
             probes,
             coupled: scene.solid.is_some(),
-            fracture: scene.solid.as_ref().is_some_and(|s| s.fracture.is_some()),
+            // Cracks open where links break, and between separate bodies that touch and part.
+            fracture: scene
+                .solid
+                .as_ref()
+                .is_some_and(|s| s.fracture.is_some() || s.bodies.len() > 1),
             embedded: None,
             pending_budget: None,
             vtk_series: Series::default(),
