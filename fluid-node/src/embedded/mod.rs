@@ -1575,8 +1575,9 @@ impl Embedded {
         // The nearest target through open faces (breadth first, faces in axis order), for a walk
         // that cycles between small cells: a thin crack, a cell cut on two sides (paper 000
         // §3.3, recursive mixing). `None` for a pocket with no target within `MAX_SEARCH` cells.
+        // `across`: through every face, the solid's too (see `round_off` below).
         const MAX_SEARCH: usize = 1024;
-        let nearest_target = |from: usize| -> Option<usize> {
+        let search = |from: usize, across: bool| -> Option<usize> {
             let mut queue = vec![from];
             let mut seen = std::collections::BTreeSet::from([from]);
             let mut next = 0;
@@ -1584,11 +1585,10 @@ impl Embedded {
                 let ijk = grid.ijk(queue[next]);
                 next += 1;
                 for (a, q, f) in face_neighbours(grid, ijk) {
-                    if self.trial.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
-                        continue;
-                    }
                     let qi = grid.index(q[0], q[1], q[2]);
-                    if alpha(qi) <= COVERED_TOLERANCE || !seen.insert(qi) {
+                    let shut = self.trial.face_fraction[a][face_index(grid, a, f)] >= 1.0
+                        || alpha(qi) <= COVERED_TOLERANCE;
+                    if (shut && !across) || !seen.insert(qi) {
                         continue;
                     }
                     if target(qi) {
@@ -1599,33 +1599,15 @@ impl Embedded {
             }
             None
         };
+        let nearest_target = |from: usize| search(from, false);
         // NOTE: a crack thinner than round-off (two bodies pressed together, then parted by
         // less than `COVERED_TOLERANCE` of a cell) leaves covered cells joined by faces whose
         // open parts are of that size; the sweeps' fluxes through them leave round-off in cells
         // with no open face (3e-13 of the mass per unit volume, the flush cube at 100^3). Such
         // a closed pocket holding round-off only (at most `POCKET_ROUND_OFF` of the state's
-        // scale) goes to the nearest target across the solid (breadth first, faces in axis
-        // order): conservative. A pocket holding more stops the run (see below).
-        let nearest_across = |from: usize| -> Option<usize> {
-            let mut queue = vec![from];
-            let mut seen = std::collections::BTreeSet::from([from]);
-            let mut next = 0;
-            while next < queue.len() && queue.len() < MAX_SEARCH {
-                let ijk = grid.ijk(queue[next]);
-                next += 1;
-                for (_, q, _) in face_neighbours(grid, ijk) {
-                    let qi = grid.index(q[0], q[1], q[2]);
-                    if !seen.insert(qi) {
-                        continue;
-                    }
-                    if target(qi) {
-                        return Some(qi);
-                    }
-                    queue.push(qi);
-                }
-            }
-            None
-        };
+        // scale) goes to the nearest target across the solid: conservative. A pocket holding
+        // more stops the run (see below).
+        let nearest_across = |from: usize| search(from, true);
         let round_off = |p: usize| -> bool {
             let kp = self.slot_of[p] as usize;
             if kp == 0 || alpha(p) > COVERED_TOLERANCE {
