@@ -431,6 +431,7 @@ impl FluidSolver {
         let grid = &self.grid;
         let gamma = self.params.gamma;
         let vacuum_rho = self.params.vacuum_rho;
+        let vacuum_p = self.params.vacuum_p;
         let nvar = self.state.nvar;
         let dim = grid.dim;
         let u = &self.state.u;
@@ -446,13 +447,16 @@ impl FluidSolver {
                             gamma,
                             vacuum_rho,
                         );
-                        // Below the vacuum density ρ, ρu and E are round-off (a covered cell
-                        // beside a crack held ρ = 2e-30 and E = 1e-16, a sound speed of 5e6 m/s
-                        // that collapsed the step): its speeds are taken at the vacuum density,
-                        // as its velocity is (identical where ρ is at least that).
+                        // Below the vacuum density and pressure, ρ, ρu and E are round-off (a
+                        // covered cell beside a crack held ρ = 2e-30 and E = 1e-16, a sound
+                        // speed of 5e6 m/s that collapsed the step): its speeds are taken at the
+                        // vacuum density, as its velocity is. A gas of real pressure at such a
+                        // density keeps its sound speed, so that its collapsing step stops the
+                        // run (issue 11).
+                        let floor = w.rho < vacuum_rho && w.p < vacuum_p;
                         let c = sound_speed(
                             &crate::fv::euler::Primitive {
-                                rho: w.rho.max(vacuum_rho),
+                                rho: if floor { vacuum_rho } else { w.rho },
                                 ..w
                             },
                             gamma,
