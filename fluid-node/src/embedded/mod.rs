@@ -1211,9 +1211,10 @@ impl Embedded {
                 // Beside a crack that can be the gas outside the particle's far side (seen in
                 // `opening-fracture-3d`: a cell opening into the crack took the z flux of the gas
                 // mirrored through the particle's bottom face, and went negative). No fluid was
-                // there at t^n, so where cracks may open (fracture, or separate bodies) such faces
-                // carry nothing. Otherwise they keep the sweeps' flux, which keeps a uniform flow past a moving body uniform
-                // to round-off (zero there moved the swept mass of a carried box by 2e-8).
+                // there at t^n, so where cracks may open (fracture, or separate bodies) such
+                // faces carry nothing. Otherwise they keep the sweeps' flux, which keeps a
+                // uniform flow past a moving body uniform to round-off (zero there moved the
+                // swept mass of a carried box by 2e-8).
                 let covered_at_n = |q: usize| old_lambda[q] >= 1.0 - COVERED_TOLERANCE;
                 let shut = self.fracture && covered_at_n(c);
                 let fl = match (ijk[a] > 0).then(|| c - stride[a]) {
