@@ -1083,7 +1083,7 @@ impl Embedded {
                 self.swept.n_skipped_subfaces
             ));
         }
-        self.check_swept(step)?;
+        self.check_swept(step, &accepted.vertices)?;
         // Cells covered at t^n in which a crack opens in this step (a link broke): no fluid was
         // there, so their `U^n` is vacuum, and the faces between them and the fluid take the
         // Lax–Friedrichs flux of that fluid against vacuum (paper 000 §3.2), not the sweeps'
@@ -1411,7 +1411,7 @@ impl Embedded {
     /// count twice, see [`fluid_part`]); where it is negative beyond round-off the accepted
     /// surface folds over itself (an element turned inside out) and the cell would hold more
     /// fluid than its volume: that stops the run too.
-    fn check_swept(&mut self, step: u64) -> Result<(), String> {
+    fn check_swept(&mut self, step: u64, accepted: &[f64]) -> Result<(), String> {
         let volume = self.grid.cell_volume();
         let sums = &mut self.content;
         sums.clear();
@@ -1433,8 +1433,14 @@ impl Embedded {
             let defect = (new[c] - old[c]) * volume - sums[k][0];
             if defect.abs() > SWEPT_TOLERANCE * volume || new[c] < -SWEPT_TOLERANCE {
                 let ijk = self.grid.ijk(c);
+                let why = match leaves_domain_at(&self.grid, &self.current.vertices, ijk, accepted) {
+                    Some(a) => format!(
+                        "the wet surface crosses the domain's boundary beside this cell (axis {a}), and a swept prism counts only the part of an element inside the domain, so prisms of parts that move across the boundary are missed; keep the wet faces that move inside the domain"
+                    ),
+                    None => "an element turned inside out, e.g. particles rotated too far relative to their neighbours".to_string(),
+                };
                 return Err(format!(
-                    "step {step}: the accepted wet surface folds over itself in cell {ijk:?} at {:?}: its solid fraction went from {} to {} but the swept prisms give {:+e} (a defect of {:e} of the cell; an element turned inside out, e.g. particles rotated too far relative to their neighbours)",
+                    "step {step}: the accepted wet surface folds over itself in cell {ijk:?} at {:?}: its solid fraction went from {} to {} but the swept prisms give {:+e} (a defect of {:e} of the cell; {why})",
                     self.grid.cell_center(ijk),
                     old[c],
                     new[c],
@@ -2184,6 +2190,26 @@ fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
         out[a] = v as usize;
     }
     Some(out)
+}
+
+/// The axis along which cell `ijk` lies on the domain's boundary while a vertex of the wet
+/// surface, at `t^n` (`current`) or at `t^{n+1}` (`accepted`), lies beyond that side.
+fn leaves_domain_at(
+    grid: &Grid,
+    current: &[f64],
+    ijk: [usize; 3],
+    accepted: &[f64],
+) -> Option<usize> {
+    let dim = grid.dim;
+    (0..dim).find(|&a| {
+        let beyond = |v: &[f64]| {
+            v.chunks_exact(dim).any(|x| {
+                (ijk[a] == 0 && x[a] < grid.lower[a])
+                    || (ijk[a] + 1 == grid.cells[a] && x[a] > grid.upper[a])
+            })
+        };
+        beyond(current) || beyond(accepted)
+    })
 }
 
 #[cfg(test)]
