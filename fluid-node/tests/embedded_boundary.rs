@@ -108,7 +108,7 @@ rho = 1.0
 p = 1.0
 "#;
 
-/// The same in 3-D: a cube of side 0.25 centred on (0.5, 0.5, 0.02), most of it below the wall
+/// The same in 3-D: a cube of side 0.25 centred on (0.5, 0.5, 0.02), 0.105 m of it below the wall
 /// z = 0, turning about y.
 #[test]
 fn a_box_turning_across_a_wall_conserves_mass() {
