@@ -2226,11 +2226,11 @@ fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
 /// element moves across the domain's boundary (a beam whose clamped particle lies beyond a
 /// wall, the mean vertices it shares moving) the prisms of the domain's sub-faces alone do
 /// not add up to the change of Λ in the boundary cells (1.3e-10 of a cell in the 3-D beam
-/// centred on y = 0, issue 13, and mass lost when let through). The elements with a vertex
-/// beyond the domain, at `t^n` or `t^{n+1}`, are clipped again on the grid grown by
-/// `NEAR_RADIUS + 1` cells on every side; the pieces, in domain cells, of the prisms of their
-/// sub-faces beyond the domain go into `beyond`, by cell. Nothing is done (and nothing changes) while
-/// the surface stays inside the domain.
+/// centred on y = 0, issue 13, and mass lost when let through). The elements that move and
+/// have a vertex beyond the domain, at `t^n` or `t^{n+1}`, are clipped again on the grid grown
+/// by `NEAR_RADIUS + 1` cells on every side; the pieces, in domain cells, of the prisms of
+/// their sub-faces beyond the domain go into `beyond`, by cell. Nothing is done (and nothing
+/// changes) while the surface stays inside the domain.
 fn sweep_beyond(
     grid: &Grid,
     before: &Surface,
