@@ -1751,20 +1751,9 @@ impl Embedded {
                 .expect("a mixing group reads only cells of its read set");
             predicted[k * nvar + q]
         };
-        // A cell's content as a part of a mixture: what the correct left in it, or its
-        // predicted state times its fluid fraction.
-        let part_of = |c: usize| -> [f64; NQ] {
-            let kc = self.slot_of[c] as usize;
-            let mut part = [0.0; NQ];
-            if kc > 0 && self.kind[kc - 1] != CellKind::Predicted {
-                part[..nvar].copy_from_slice(&self.content[kc - 1][..nvar]);
-            } else {
-                let a = alpha(c);
-                for q in 0..nvar {
-                    part[q] = a * u(c, q);
-                }
-            }
-            part
+        // A cell's content as a part of a mixture (see [`part_of`]), read as the cell is now.
+        let part = |content: &[[f64; NQ]], kind: &[CellKind], c: usize| {
+            part_of(&self.slot_of, content, kind, c, alpha(c), |q| u(c, q), nvar)
         };
         // NOTE: groups whose mixture is not physical take in the groups beside them (through
         // open faces), all at once, round by round, before widening into free cells. A crack
@@ -1801,7 +1790,7 @@ impl Embedded {
             // The parts of each merged group, by its representative.
             let mut parts: Vec<Vec<([f64; NQ], f64)>> = vec![Vec::new(); roots.len()];
             for &(c, r) in &group_of {
-                parts[find(&parent, r)].push((part_of(c), alpha(c)));
+                parts[find(&parent, r)].push((part(&self.content, &self.kind, c), alpha(c)));
             }
             let bad: Vec<bool> = parts
                 .iter()
@@ -1851,7 +1840,10 @@ impl Embedded {
             }
         }
         merged.sort_unstable();
-        let merged_parts: Vec<[f64; NQ]> = merged.iter().map(|m| part_of(m.1)).collect();
+        let merged_parts: Vec<[f64; NQ]> = merged
+            .iter()
+            .map(|m| part(&self.content, &self.kind, m.1))
+            .collect();
         for g in groups.iter_mut() {
             let r = roots.binary_search(&g.0).expect("a group's root is a root");
             g.0 = roots[find(&parent, r)];
@@ -1886,17 +1878,7 @@ impl Embedded {
             // mirror image lists them in another order).
             let mut parts: Vec<([f64; NQ], f64)> = Vec::new();
             // The root's own content.
-            let root_k = self.slot_of[root] as usize;
-            let mut part = [0.0; NQ];
-            if root_k > 0 && self.kind[root_k - 1] != CellKind::Predicted {
-                part[..nvar].copy_from_slice(&self.content[root_k - 1][..nvar]);
-            } else {
-                let a = alpha(root);
-                for q in 0..nvar {
-                    part[q] = a * u(root, q);
-                }
-            }
-            parts.push((part, alpha(root)));
+            parts.push((part(&self.content, &self.kind, root), alpha(root)));
             let first_merged = merged.partition_point(|m| m.0 < root);
             let n_merged = merged[first_merged..].partition_point(|m| m.0 == root);
             let merged_roots: Vec<usize> = merged[first_merged..first_merged + n_merged]
@@ -1962,17 +1944,7 @@ impl Embedded {
                     break;
                 }
                 for &q in &ring {
-                    let kq = self.slot_of[q] as usize;
-                    let mut part = [0.0; NQ];
-                    if kq > 0 && self.kind[kq - 1] != CellKind::Predicted {
-                        part[..nvar].copy_from_slice(&self.content[kq - 1][..nvar]);
-                    } else {
-                        let a = alpha(q);
-                        for x in 0..nvar {
-                            part[x] = a * u(q, x);
-                        }
-                    }
-                    parts.push((part, alpha(q)));
+                    parts.push((part(&self.content, &self.kind, q), alpha(q)));
                 }
                 (sum, vol) = sum_parts(&parts, nvar);
                 extra.extend_from_slice(&ring);
@@ -2222,6 +2194,30 @@ fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
     Some(out)
 }
 
+/// Cell `c`'s content as a part of a mixture: what the correct left in it (`content`, by slot
+/// `slot_of[c] - 1`, unless its `kind` is still `Predicted`), or else its predicted state
+/// `u(q)` times its fluid fraction `alpha`.
+fn part_of(
+    slot_of: &[u32],
+    content: &[[f64; NQ]],
+    kind: &[CellKind],
+    c: usize,
+    alpha: f64,
+    u: impl Fn(usize) -> f64,
+    nvar: usize,
+) -> [f64; NQ] {
+    let kc = slot_of[c] as usize;
+    let mut part = [0.0; NQ];
+    if kc > 0 && kind[kc - 1] != CellKind::Predicted {
+        part[..nvar].copy_from_slice(&content[kc - 1][..nvar]);
+    } else {
+        for q in 0..nvar {
+            part[q] = alpha * u(q);
+        }
+    }
+    part
+}
+
 /// NOTE: sub-faces, and so swept prisms, exist only inside the domain, so where part of an
 /// element moves across the domain's boundary (a beam whose clamped particle lies beyond a
 /// wall, the mean vertices it shares moving) the prisms of the domain's sub-faces alone do
@@ -2247,11 +2243,11 @@ fn sweep_beyond(
     };
     let mut elements = Vec::new();
     let mut particles = Vec::new();
+    let moved = |i: u32| {
+        let r = i as usize * dim..(i as usize + 1) * dim;
+        before.vertices[r.clone()] != after.vertices[r]
+    };
     for (e, nodes) in after.elements.chunks_exact(dim).enumerate() {
-        let moved = |i: u32| {
-            let r = i as usize * dim..(i as usize + 1) * dim;
-            before.vertices[r.clone()] != after.vertices[r]
-        };
         // (An element that does not move has empty prisms: fixed clamps beyond a wall cost
         // nothing.)
         if nodes
