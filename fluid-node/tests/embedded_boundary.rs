@@ -5,24 +5,8 @@
 
 mod embedded_support;
 
-use embedded_support::{box_3d, polygon_2d, rotation, solver};
+use embedded_support::{at_rest_in_unit_box, box_3d, polygon_2d, rotation, solver};
 use fluid_node::embedded::{Embedded, SolidFrame};
-
-const SCENE: &str = r#"
-name = "boundary"
-[fluid]
-gamma = 1.4
-cfl = 0.5
-flux = { scheme = "osmp", order = 3 }
-lower = [0.0, 0.0]
-upper = [1.0, 1.0]
-cells = [20, 20]
-boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
-[[fluid.init]]
-region = "all"
-rho = 1.0
-p = 1.0
-"#;
 
 /// A square of side 0.2 centred on (0.5, 0.0125), half below the wall y = 0, turned by `theta`.
 fn square(theta: f64, omega: f64) -> SolidFrame {
@@ -62,12 +46,16 @@ fn turn(scene: &str, at: impl Fn(f64) -> SolidFrame, steps: u64) {
 
 #[test]
 fn a_body_turning_across_a_wall_conserves_mass() {
-    turn(SCENE, |theta| square(theta, 1.0), 40);
+    turn(
+        &at_rest_in_unit_box("boundary", &[20, 20]),
+        |theta| square(theta, 1.0),
+        40,
+    );
 }
 
 #[test]
 fn a_fold_inside_the_domain_is_not_blamed_on_the_boundary() {
-    let mut solver = solver(SCENE);
+    let mut solver = solver(&at_rest_in_unit_box("boundary", &[20, 20]));
     let inside = [[0.4, 0.48], [0.6, 0.48], [0.6, 0.52], [0.4, 0.52]];
     let mut embedded =
         Embedded::new(&solver, polygon_2d(&inside, [0.0, 0.0], 0.0)).expect("embedded");
@@ -92,22 +80,6 @@ fn a_fold_inside_the_domain_is_not_blamed_on_the_boundary() {
     );
 }
 
-const SCENE_3D: &str = r#"
-name = "boundary-3d"
-[fluid]
-gamma = 1.4
-cfl = 0.5
-flux = { scheme = "osmp", order = 3 }
-lower = [0.0, 0.0, 0.0]
-upper = [1.0, 1.0, 1.0]
-cells = [16, 16, 16]
-boundary = { x = ["wall", "wall"], y = ["wall", "wall"], z = ["wall", "wall"] }
-[[fluid.init]]
-region = "all"
-rho = 1.0
-p = 1.0
-"#;
-
 /// The same in 3-D: a cube of side 0.25 centred on (0.5, 0.5, 0.02), 0.105 m of it below the wall
 /// z = 0, turning about y.
 #[test]
@@ -122,5 +94,5 @@ fn a_box_turning_across_a_wall_conserves_mass() {
         f.angular_velocity = vec![0.0, 1.0, 0.0];
         f
     };
-    turn(SCENE_3D, cube, 15);
+    turn(&at_rest_in_unit_box("boundary-3d", &[16, 16, 16]), cube, 15);
 }

@@ -6,25 +6,9 @@
 
 mod embedded_support;
 
-use embedded_support::solver;
+use embedded_support::{at_rest_in_unit_box, solver};
 use fluid_node::embedded::{Embedded, SolidFrame};
 use fluid_node::fv::FluidSolver;
-
-const SCENE: &str = r#"
-name = "crack"
-[fluid]
-gamma = 1.4
-cfl = 0.5
-flux = { scheme = "osmp", order = 3 }
-lower = [0.0, 0.0]
-upper = [1.0, 1.0]
-cells = [40, 40]
-boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
-[[fluid.init]]
-region = "all"
-rho = 1.0
-p = 1.0
-"#;
 
 /// Off the grid lines by 0.3 of a cell, so no face lies on a grid plane.
 const X0: f64 = 0.3075;
@@ -69,7 +53,7 @@ fn vacuum_cells(solver: &FluidSolver, embedded: &Embedded) -> usize {
 
 #[test]
 fn issue_14_a_crack_opens_as_vacuum_and_fills_conserving_mass() {
-    let mut solver = solver(SCENE);
+    let mut solver = solver(&at_rest_in_unit_box("crack", &[40, 40]));
     let u = 0.2;
     let mut embedded = Embedded::new(&solver, pair(0.0, u)).expect("embedded");
     embedded.set_fracture(true);

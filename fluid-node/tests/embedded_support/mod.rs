@@ -13,6 +13,39 @@ pub fn solver(toml: &str) -> FluidSolver {
     FluidSolver::from_scene(scene.fluid.as_ref().expect("[fluid]"), 1).expect("solver")
 }
 
+/// The scene text of gas at rest (ρ = 1, p = 1, γ = 1.4) in the unit square or cube with walls
+/// on every side, `cells` cells (2 or 3 of them), OSMP of order 3, CFL 0.5.
+pub fn at_rest_in_unit_box(name: &str, cells: &[usize]) -> String {
+    let dim = cells.len();
+    let list = |v: &str| vec![v; dim].join(", ");
+    let cells: Vec<String> = cells.iter().map(usize::to_string).collect();
+    let walls: Vec<String> = ["x", "y", "z"][..dim]
+        .iter()
+        .map(|a| format!(r#"{a} = ["wall", "wall"]"#))
+        .collect();
+    format!(
+        r#"
+name = "{name}"
+[fluid]
+gamma = 1.4
+cfl = 0.5
+flux = {{ scheme = "osmp", order = 3 }}
+lower = [{}]
+upper = [{}]
+cells = [{}]
+boundary = {{ {} }}
+[[fluid.init]]
+region = "all"
+rho = 1.0
+p = 1.0
+"#,
+        list("0.0"),
+        list("1.0"),
+        cells.join(", "),
+        walls.join(", ")
+    )
+}
+
 /// A rigid 2-D polygon (counter-clockwise vertices) as one particle with its wet loop.
 pub fn polygon_2d(vertices: &[[f64; 2]], velocity: [f64; 2], omega: f64) -> SolidFrame {
     let n = vertices.len();
