@@ -135,6 +135,7 @@ fn scenes() -> Vec<Scene> {
         density: Some(1.0),
         young: Some(1.0),
         poisson: Some(0.3),
+        face_inertia: Some(FaceInertia::Exact),
         fracture: Some(FractureConfig {
             elongation_at_break: 0.1,
         }),

@@ -25,6 +25,7 @@ fn config(shape: Shape, divisions: Vec<u32>, steel: bool, contact: bool) -> Soli
         density: Some(if steel { 7860.0 } else { 1000.0 }),
         young: Some(if steel { 2.1e11 } else { 1e6 }),
         poisson: Some(if steel { 0.0 } else { 0.25 }),
+        face_inertia: None,
         fracture: Some(FractureConfig {
             elongation_at_break: if steel { 0.01 } else { 0.002 },
         }),

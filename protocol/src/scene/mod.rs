@@ -32,8 +32,8 @@ pub use run::{
     RunConfig, SchemeName,
 };
 pub use solid::{
-    BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FractureConfig, LinksConfig, Motion,
-    ParticleSpec, PrescribedConfig, PrescribedMotion, Shape, SolidConfig, SolidInit,
+    BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FaceInertia, FractureConfig, LinksConfig,
+    Motion, ParticleSpec, PrescribedConfig, PrescribedMotion, Shape, SolidConfig, SolidInit,
 };
 
 use error::{Check, shorten_lines};

@@ -24,6 +24,13 @@ pub struct SolidConfig {
     /// Poisson's ratio [-] (required by the real node).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub poisson: Option<f64>,
+    /// Second moments of the link faces in the flexion and torsion torques (default `"exact"`).
+    /// `"unweighted"` sums each fan triangle's term without its area, as the authors' code did
+    /// when papers 003 and 000 were computed (fixed upstream in 2017): a dimensionally wrong,
+    /// mesh-dependent stiffening kept only to reproduce their figures. 3-D scenes only. Left out
+    /// of the resolved scene when absent, so a scene without it hashes as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face_inertia: Option<FaceInertia>,
     /// Fracture criterion; absent: no fracture, no internal faces carried.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fracture: Option<FractureConfig>,
@@ -113,6 +120,20 @@ impl ContactConfig {
         }
         Ok(())
     }
+}
+
+/// `solid.face_inertia`: how the second moments `I^s, I^t` of a link's face are integrated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FaceInertia {
+    /// `∫ ((x − G)·s)² dA`, exact for a planar face (paper 003 App. A).
+    #[default]
+    Exact,
+    /// `Σ_T (a² + ab + b²)/12` over the triangles `(G, a, b)` fanned from the centroid, without
+    /// the factor `2|T|` of the exact integral: the formula of the authors' code before its
+    /// 2017 fix ("surface area missing"). In m², not m⁴: it stiffens flexion and torsion by
+    /// about `1/(2|T|)` per face.
+    Unweighted,
 }
 
 /// `solid.fracture`.
@@ -350,6 +371,13 @@ impl SolidConfig {
                     "none".into(),
                 ));
             }
+        }
+        if solid.face_inertia == Some(FaceInertia::Unweighted) && dim != 3 {
+            return Err(c.invalid(
+                "solid.face_inertia",
+                "\"exact\" in a 2-D scene (\"unweighted\" is defined for 3-D faces only)",
+                "\"unweighted\"".into(),
+            ));
         }
         if let Some(f) = &solid.fracture {
             c.positive("solid.fracture.elongation_at_break", f.elongation_at_break)?;

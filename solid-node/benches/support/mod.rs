@@ -11,6 +11,7 @@ pub(crate) fn lattice(threads: usize) -> Solid {
         density: Some(1000.0),
         young: Some(1e8),
         poisson: Some(0.3),
+        face_inertia: None,
         fracture: None,
         gravity: None,
         bodies: vec![BodyConfig {

@@ -6,6 +6,7 @@
 //! to their vertex mean (paper 003 §2.2 makes the same assumption).
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use protocol::scene::FaceInertia;
 use protocol::sum::odd_sum;
 
 /// Volume integrals of a polyhedron with unit density.
@@ -32,7 +33,7 @@ pub struct FaceMoments {
     pub s: Vector3<f64>,
     /// In-plane principal direction `t = n × s`.
     pub t: Vector3<f64>,
-    /// `∫ ((x − G)·s)² dA` \[m⁴\].
+    /// `∫ ((x − G)·s)² dA` \[m⁴\] (see [`FaceInertia`] for the other reading).
     pub i_s: f64,
     /// `∫ ((x − G)·t)² dA` \[m⁴\].
     pub i_t: f64,
@@ -58,7 +59,13 @@ fn polygon_area_centroid(points: &[Vector3<f64>]) -> (Vector3<f64>, f64, Vector3
 
 /// Moments of a planar face given by its vertex loop.
 pub fn face_moments(points: &[Vector3<f64>]) -> FaceMoments {
-    // NOTE: triangles fanned from the vertex mean; exact for planar faces star-shaped with
+    face_moments_with(points, FaceInertia::Exact)
+}
+
+/// Moments of a planar face, its second moments integrated as `inertia` says. Area, centroid
+/// and normal are exact either way.
+pub fn face_moments_with(points: &[Vector3<f64>], inertia: FaceInertia) -> FaceMoments {
+    // NOTE: triangles fanned from the centroid; exact for planar faces star-shaped with
     // respect to that point (the papers assume star-shaped faces).
     let (centroid, area, vector_area) = polygon_area_centroid(points);
     let normal = vector_area.normalize();
@@ -67,10 +74,14 @@ pub fn face_moments(points: &[Vector3<f64>]) -> FaceMoments {
         let p1 = points[k] - centroid;
         let p2 = points[(k + 1) % points.len()] - centroid;
         let tri_area = p1.cross(&p2).dot(&normal) * 0.5;
-        // ∫_T x xᵀ dA = A/12 (Σ pᵢpᵢᵀ + (Σ pᵢ)(Σ pᵢ)ᵀ), here with p0 = 0.
+        // ∫_T x xᵀ dA = A/12 (Σ pᵢpᵢᵀ + (Σ pᵢ)(Σ pᵢ)ᵀ), here with p0 = 0; its ss entry is
+        // A/6 (a² + ab + b²). The unweighted sum keeps (a² + ab + b²)/12, i.e. A = 1/2.
+        let weight = match inertia {
+            FaceInertia::Exact => tri_area / 12.0,
+            FaceInertia::Unweighted => 1.0 / 24.0,
+        };
         let sum = p1 + p2;
-        second +=
-            (p1 * p1.transpose() + p2 * p2.transpose() + sum * sum.transpose()) * (tri_area / 12.0);
+        second += (p1 * p1.transpose() + p2 * p2.transpose() + sum * sum.transpose()) * weight;
     }
     // In-plane basis, then the 2×2 principal directions.
     let seed = if normal.x.abs() < 0.9 {

@@ -9,10 +9,10 @@
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use protocol::scene::Motion;
+use protocol::scene::{FaceInertia, Motion};
 
 use crate::dem::geometry::{
-    face_moments, inertia_from_second_moment, polygon_mass, polyhedron_mass,
+    face_moments_with, inertia_from_second_moment, polygon_mass, polyhedron_mass,
 };
 use crate::dem::lattice::Lattice;
 
@@ -33,6 +33,8 @@ pub struct Material {
     pub young: f64,
     /// Poisson's ratio ν \[-\], in [0, 0.5).
     pub poisson: f64,
+    /// How the link faces' second moments are integrated (3-D).
+    pub face_inertia: FaceInertia,
 }
 
 impl Material {
@@ -319,7 +321,7 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
             let loop_pts: Vec<Vector3<f64>> =
                 f.iter().map(|&v| lattice.vertices[v as usize]).collect();
             let geo = if dim == 3 {
-                face_moments(&loop_pts)
+                face_moments_with(&loop_pts, material.face_inertia)
             } else {
                 segment_moments(loop_pts[0], loop_pts[1])
             };

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 
-use crate::dem::geometry::{face_moments, polyhedron_mass};
+use crate::dem::geometry::{face_moments, face_moments_with, polyhedron_mass};
 
 #[test]
 fn unit_cube_mass_properties() {
@@ -28,7 +28,82 @@ fn unit_cube_mass_properties() {
     assert!((f.i_s - 1.0 / 12.0).abs() < 1e-14 && (f.i_t - 1.0 / 12.0).abs() < 1e-14);
 }
 
-use protocol::scene::{BodyConfig, Motion, Shape, SolidConfig};
+/// The unweighted reading of a square of side a: each fan triangle (G, a, b) adds
+/// (a_s² + a_s b_s + b_s²)/12, so I^s = 2·(3a²/4)/12 + 2·(a²/4)/12 = a²/6 against the exact
+/// a⁴/12: a ratio 2/a² [m⁻²]. Area, centroid and normal are the exact ones.
+#[test]
+fn unweighted_face_moments_of_a_square_and_a_triangle() {
+    let a = 0.2857;
+    let square = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(a, 0.0, 0.0),
+        Vector3::new(a, 0.0, a),
+        Vector3::new(0.0, 0.0, a),
+    ];
+    let exact = face_moments(&square);
+    let legacy = face_moments_with(&square, FaceInertia::Unweighted);
+    assert!((exact.i_s - a.powi(4) / 12.0).abs() < 1e-15);
+    assert!((legacy.i_s - a * a / 6.0).abs() < 1e-15 && (legacy.i_t - a * a / 6.0).abs() < 1e-15);
+    assert!((legacy.i_s / exact.i_s - 2.0 / (a * a)).abs() < 1e-12);
+    assert_eq!(legacy.area, exact.area);
+    assert_eq!(legacy.centroid, exact.centroid);
+    assert_eq!(legacy.normal, exact.normal);
+    // A right isosceles triangle: about each principal axis u, the sum over its three fan
+    // triangles of (p² + pq + q²)/12, p and q the edge ends' coordinates along u from G.
+    let l = 0.5;
+    let tri = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(l, 0.0, 0.0),
+        Vector3::new(0.0, l, 0.0),
+    ];
+    let g = (tri[0] + tri[1] + tri[2]) / 3.0;
+    let along = |axis: &Vector3<f64>| {
+        (0..3)
+            .map(|k| {
+                let (p, q) = ((tri[k] - g).dot(axis), (tri[(k + 1) % 3] - g).dot(axis));
+                (p * p + p * q + q * q) / 12.0
+            })
+            .sum::<f64>()
+    };
+    let legacy = face_moments_with(&tri, FaceInertia::Unweighted);
+    assert!((legacy.i_s - along(&legacy.s)).abs() < 1e-15);
+    assert!((legacy.i_t - along(&legacy.t)).abs() < 1e-15);
+    // Its principal axes are those of the exact moments (the triangle's symmetry axes).
+    let exact = face_moments(&tri);
+    assert!(legacy.s.cross(&exact.s).norm() < 1e-12 || legacy.s.cross(&exact.t).norm() < 1e-12);
+}
+
+/// A column of two cubes of side a: the unweighted face inertia multiplies the flexion and
+/// torsion stiffness of their link by exactly 2/a², and leaves the traction one alone.
+#[test]
+fn unweighted_face_inertia_scales_only_the_link_torques() {
+    let a = 0.2857;
+    let column = |inertia: Option<FaceInertia>| {
+        let mut cfg = box_config(3, vec![1, 2, 1], 0.0);
+        cfg.bodies[0].shape = Shape::Box {
+            center: vec![0.0, 0.0, 0.0],
+            size: vec![a, 2.0 * a, a],
+        };
+        cfg.face_inertia = inertia;
+        let solid = Solid::from_scene(&cfg, 3, 1).unwrap();
+        solid.model().links[0].clone()
+    };
+    let (exact, legacy) = (column(None), column(Some(FaceInertia::Unweighted)));
+    assert_eq!(legacy.k_shear, exact.k_shear);
+    for k in 0..3 {
+        let ratio = legacy.flex[k] / exact.flex[k];
+        assert!(
+            (ratio - 2.0 / (a * a)).abs() < 1e-10,
+            "flex[{k}] ratio {ratio}"
+        );
+    }
+    let mut cfg = box_config(2, vec![2, 1], 0.0);
+    cfg.face_inertia = Some(FaceInertia::Unweighted);
+    let err = Solid::from_scene(&cfg, 2, 1).err().unwrap();
+    assert!(err.contains("solid.face_inertia"), "{err}");
+}
+
+use protocol::scene::{BodyConfig, FaceInertia, Motion, Shape, SolidConfig};
 
 use crate::dem::rattle::dmv_drift;
 use crate::dem::{ParticleId, Solid};
@@ -44,6 +119,7 @@ fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
         density: Some(1000.0),
         young: Some(1e6),
         poisson: Some(poisson),
+        face_inertia: None,
         fracture: None,
         gravity: None,
         bodies: vec![BodyConfig {

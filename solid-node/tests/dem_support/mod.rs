@@ -26,6 +26,7 @@ pub fn box_config(
         density: Some(density),
         young: Some(young),
         poisson: Some(poisson),
+        face_inertia: None,
         fracture: None,
         gravity: None,
         bodies: vec![BodyConfig {

@@ -9,7 +9,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use protocol::scene::{Motion, SolidConfig, SolidInit};
+use protocol::scene::{FaceInertia, Motion, SolidConfig, SolidInit};
 
 use crate::dem::contact::{Contact, ContactParams};
 use crate::dem::lattice::build_lattice;
@@ -209,7 +209,13 @@ impl Solid {
             density: cfg.density.ok_or("solid.density is required")?,
             young: cfg.young.ok_or("solid.young is required")?,
             poisson: cfg.poisson.ok_or("solid.poisson is required")?,
+            face_inertia: cfg.face_inertia.unwrap_or_default(),
         };
+        if material.face_inertia == FaceInertia::Unweighted && dim != 3 {
+            return Err(
+                "solid.face_inertia = \"unweighted\" is defined for 3-D scenes only".into(),
+            );
+        }
         if !(material.density > 0.0 && material.young > 0.0) {
             return Err(format!(
                 "solid: expected density > 0 and young > 0, found {} and {}",
