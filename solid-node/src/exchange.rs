@@ -47,6 +47,13 @@ impl RealSolid {
             .ok_or("the scene has no [solid] section")?;
         let dim = scene.dim();
         let solid = Solid::from_scene(cfg, dim, scene.run.threads as usize)?;
+        if cfg.face_inertia == Some(protocol::scene::FaceInertia::Unweighted) {
+            tracing::warn!(
+                "solid.face_inertia = \"unweighted\": the link faces' second moments are the \
+                 authors' pre-2017 sum (m^2, not m^4), which stiffens flexion and torsion; for \
+                 reproducing papers 003 and 000 only"
+            );
+        }
         let displacement_cap = scene.fluid.as_ref().map_or(f64::INFINITY, |f| {
             (0..dim)
                 .map(|a| (f.upper[a] - f.lower[a]) / f64::from(f.cells[a]))
