@@ -397,3 +397,86 @@ fn polygon_mass_is_independent_of_the_start_and_mirror_exact() {
         reference.0
     );
 }
+
+/// The steel ring of `fragmenting-cylinder` (paper 000 §4.2: 50 particles, radii 5 and 5.2,
+/// E = 210 GPa, ρs = 7860) under a uniform pressure p on its inner faces, applied as a step
+/// at t = 0. Each particle takes p times its inner chord, radially; the links' tension that
+/// balances it is T = p R_i, so the static hoop strain of every link (centre distance) is
+/// ε = p R_i/(E t). Undamped and symmetric, the ring breathes: ε(t) = ε (1 − cos ωt), with
+/// ω² = 2 E t sin(π/N)/(R_c m) (R_c the centres' radius, m a particle's mass per unit
+/// depth), so the strain peaks at 2ε at t = π/ω. At 1 % elongation at break this is the
+/// pressure that would break every link at once: p = 0.01 E t/(2 R_i) = 42 MPa.
+#[test]
+fn a_ring_under_a_step_internal_pressure_breathes_at_twice_the_static_hoop_strain() {
+    let (n, r_in, r_out, young, rho) = (50usize, 5.0, 5.2, 2.1e11, 7860.0);
+    let thickness = r_out - r_in;
+    let mut cfg = box_config(2, vec![n as u32], 0.0);
+    cfg.density = Some(rho);
+    cfg.young = Some(young);
+    cfg.bodies[0].shape = Shape::Ring {
+        center: vec![0.0, 0.0],
+        inner_radius: r_in,
+        outer_radius: r_out,
+    };
+    let mut solid = Solid::from_scene(&cfg, 2, 1).unwrap();
+    assert_eq!(solid.n_particles(), n);
+    let p = 1e7;
+    let half = std::f64::consts::PI / n as f64;
+    let chord = 2.0 * r_in * half.sin();
+    let x0: Vec<Vector3<f64>> = (0..n)
+        .map(|k| Vector3::from(solid.position(ParticleId(k as u32))))
+        .collect();
+    let mut force = vec![0.0; 2 * n];
+    for (k, x) in x0.iter().enumerate() {
+        let radial = x.normalize();
+        force[2 * k] = p * chord * radial.x;
+        force[2 * k + 1] = p * chord * radial.y;
+    }
+    let torque = vec![0.0; n];
+    let strain = |solid: &Solid| {
+        (0..n)
+            .map(|k| {
+                let (a, b) = (k as u32, ((k + 1) % n) as u32);
+                let d = (Vector3::from(solid.position(ParticleId(a)))
+                    - Vector3::from(solid.position(ParticleId(b))))
+                .norm();
+                let d0 = (x0[k] - x0[(k + 1) % n]).norm();
+                (d - d0) / d0
+            })
+            .collect::<Vec<f64>>()
+    };
+    let static_strain = p * r_in / (young * thickness);
+    let r_c = x0[0].norm();
+    let mass = solid.model().particles[0].mass;
+    let omega = (2.0 * young * thickness * half.sin() / (r_c * mass)).sqrt();
+    let dt = 1e-6;
+    assert!(dt < 0.1 * solid.elastic_dt_limit().0);
+    let (mut peak, mut t_peak, mut spread) = (0.0f64, 0.0, 0.0f64);
+    let steps = (1.2 * std::f64::consts::PI / omega / dt) as usize;
+    for s in 1..=steps {
+        solid.step(dt, &force, &torque);
+        let e = strain(&solid);
+        let (lo, hi) = e
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        spread = spread.max(hi - lo);
+        if hi > peak {
+            peak = hi;
+            t_peak = s as f64 * dt;
+        }
+    }
+    // Breathing scales the ring about its centre, so links and loads keep their directions
+    // and the response is linear; what is left is Verlet's O((ω dt)²) = 1e-6 (measured 1e-8).
+    assert!(
+        (peak / (2.0 * static_strain) - 1.0).abs() < 1e-6,
+        "peak strain {peak:e} vs 2 p R_i/(E t) = {:e}",
+        2.0 * static_strain
+    );
+    assert!(
+        (t_peak * omega / std::f64::consts::PI - 1.0).abs() < 1e-3,
+        "peak at {t_peak:e} s vs π/ω = {:e} s",
+        std::f64::consts::PI / omega
+    );
+    // Every link alike: the breathing is the only mode a symmetric step load excites.
+    assert!(spread < 1e-9 * peak, "links differ by {spread:e}");
+}
