@@ -433,6 +433,7 @@ fn a_ring_under_a_step_internal_pressure_breathes_at_twice_the_static_hoop_strai
         force[2 * k + 1] = p * chord * radial.y;
     }
     let torque = vec![0.0; n];
+    let d0: Vec<f64> = (0..n).map(|k| (x0[k] - x0[(k + 1) % n]).norm()).collect();
     let strain = |solid: &Solid| {
         (0..n)
             .map(|k| {
@@ -440,8 +441,7 @@ fn a_ring_under_a_step_internal_pressure_breathes_at_twice_the_static_hoop_strai
                 let d = (Vector3::from(solid.position(ParticleId(a)))
                     - Vector3::from(solid.position(ParticleId(b))))
                 .norm();
-                let d0 = (x0[k] - x0[(k + 1) % n]).norm();
-                (d - d0) / d0
+                (d - d0[k]) / d0[k]
             })
             .collect::<Vec<f64>>()
     };
