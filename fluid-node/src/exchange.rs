@@ -12,7 +12,9 @@ use std::path::Path;
 use protocol::scene::{OutputFormat, Scene};
 use protocol::session::NodeModel;
 use protocol::vtk::Series;
-use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
+use protocol::wire::{
+    ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, n_rot,
+};
 
 use crate::embedded::{COVERED_TOLERANCE, Embedded, InterfaceBudget, SolidFrame};
 use crate::fv::comm::{Comm, Serial};
@@ -357,11 +359,11 @@ impl FluidModel for RealFluid {
         if !self.coupled {
             return Ok(());
         }
-        let frame = SolidFrame::from_state(state)?;
+        let frame = solid_frame(state)?;
         match &mut self.embedded {
-            Some(e) => e.set_surface(frame)?,
+            Some(e) => e.set_surface(frame).map_err(|e| e.to_string())?,
             None => {
-                let mut e = Embedded::new(&self.solver, frame)?;
+                let mut e = Embedded::new(&self.solver, frame).map_err(|e| e.to_string())?;
                 e.set_fracture(self.fracture);
                 self.embedded = Some(e);
             }
@@ -393,11 +395,11 @@ impl FluidModel for RealFluid {
 
     fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
         let step = plan.stamp.step;
-        let frame = SolidFrame::from_state(state)?;
+        let frame = solid_frame(state)?;
         let loads = self
             .embedded(step)?
             .loads(&frame)
-            .map_err(|e| format!("step {step}: {e}"))?;
+            .map_err(|e| e.at_step(step).to_string())?;
         Ok(InterfaceLoads {
             stamp: plan.stamp,
             dim: state.dim,
@@ -409,13 +411,15 @@ impl FluidModel for RealFluid {
     fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
         let step = plan.stamp.step;
         if let Some(state) = state {
-            let frame = SolidFrame::from_state(state)?;
+            let frame = solid_frame(state)?;
             let solver = &mut self.solver;
             let embedded = self.embedded.as_mut().ok_or_else(|| {
                 format!("step {step}: a coupled step before the initial wet surface")
             })?;
             let explicit = plan.scheme == protocol::wire::Scheme::Explicit;
-            embedded.correct(solver, plan.dt, frame, step, explicit)?;
+            embedded
+                .correct(solver, plan.dt, frame, step, explicit)
+                .map_err(|e| e.to_string())?;
             return Ok(());
         }
         self.check_dt(plan)?;
@@ -426,4 +430,57 @@ impl FluidModel for RealFluid {
             Err(describe(&report.troubles, step))
         }
     }
+}
+
+/// Copies the parts of a wire [`SolidState`] the fluid uses, checking their lengths.
+fn solid_frame(s: &SolidState) -> Result<SolidFrame, String> {
+    let dim = s.dim as usize;
+    let n = s.n_particles();
+    let surface = &s.surface;
+    let ne = surface.n_elements();
+    if !(dim == 2 || dim == 3)
+        || surface.dim != s.dim
+        || s.velocity.len() != n * dim
+        || s.angular_velocity.len() != n * n_rot(s.dim)
+        || !surface.vertices.len().is_multiple_of(dim)
+        || surface.elements.len() != ne * dim
+        || surface.wet.len() != ne
+    {
+        return Err(format!(
+            "solid state of step {} is malformed: dim {} (surface {}), {} positions, {} velocities, {} angular velocities, {} vertex values, {} element indices for {} elements, {} wet flags",
+            s.stamp.step,
+            s.dim,
+            surface.dim,
+            s.position.len(),
+            s.velocity.len(),
+            s.angular_velocity.len(),
+            surface.vertices.len(),
+            surface.elements.len(),
+            ne,
+            surface.wet.len()
+        ));
+    }
+    if let Some(&p) = surface.element_particle.iter().find(|&&p| p as usize >= n) {
+        return Err(format!(
+            "solid state of step {}: an element belongs to particle {p}, there are {n}",
+            s.stamp.step
+        ));
+    }
+    let nv = (surface.vertices.len() / dim) as u32;
+    if let Some(&v) = surface.elements.iter().find(|&&v| v >= nv) {
+        return Err(format!(
+            "solid state of step {}: an element uses vertex {v}, there are {nv}",
+            s.stamp.step
+        ));
+    }
+    Ok(SolidFrame {
+        dim,
+        position: s.position.clone(),
+        velocity: s.velocity.clone(),
+        angular_velocity: s.angular_velocity.clone(),
+        vertices: surface.vertices.clone(),
+        elements: surface.elements.clone(),
+        element_particle: surface.element_particle.clone(),
+        wet: surface.wet.clone(),
+    })
 }

@@ -72,7 +72,8 @@ fn a_fold_inside_the_domain_is_not_blamed_on_the_boundary() {
             0,
             false,
         )
-        .expect_err("a loop crossing itself is refused");
+        .expect_err("a loop crossing itself is refused")
+        .to_string();
     println!("{err}");
     assert!(
         err.contains("folds over itself") && err.contains("an element turned inside out"),

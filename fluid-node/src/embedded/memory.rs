@@ -31,28 +31,30 @@ impl EmbeddedMemory {
 impl Embedded {
     /// Heap bytes held, by part (see [`EmbeddedMemory`]).
     pub fn memory(&self) -> EmbeddedMemory {
-        let dense_geometry = self.geom.dense_bytes() + self.trial.dense_bytes();
-        let h = &self.hooks;
-        let near_surface = vec_bytes(&self.near)
-            + vec_bytes(&self.saved)
-            + self.face_slots.iter().map(vec_bytes).sum::<usize>()
+        let (state, near, scratch) = (&self.state, &self.near, &self.scratch);
+        let dense_geometry = state.geom.dense_bytes() + scratch.trial.dense_bytes();
+        let h = &near.hooks;
+        let near_surface = vec_bytes(&near.cells)
+            + vec_bytes(&near.saved)
+            + near.face_slots.iter().map(vec_bytes).sum::<usize>()
             + h.ghosts.iter().map(vec_bytes).sum::<usize>()
             + h.walls.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&h.pressure_cells)
             + h.pressures.iter().map(vec_bytes).sum::<usize>()
             + h.taps.iter().map(tap_bytes).sum::<usize>()
-            + vec_bytes(&self.near_walls)
-            + vec_bytes(&self.content)
-            + vec_bytes(&self.kind)
-            + self.odd.capacity_bytes()
-            + self.odd_content.capacity_bytes();
-        let sparse_geometry = self.geom.memory_bytes() + self.trial.memory_bytes() - dense_geometry
-            + self.swept.memory_bytes()
-            + frame_bytes(&self.current)
-            + loads_bytes(&self.last_loads);
+            + vec_bytes(&near.walls)
+            + vec_bytes(&scratch.content)
+            + vec_bytes(&scratch.kind)
+            + scratch.odd.capacity_bytes()
+            + scratch.odd_content.capacity_bytes();
+        let sparse_geometry = state.geom.memory_bytes() + scratch.trial.memory_bytes()
+            - dense_geometry
+            + scratch.swept.memory_bytes()
+            + frame_bytes(&state.current)
+            + loads_bytes(&state.last_loads);
         EmbeddedMemory {
             dense_geometry,
-            slot_of: vec_bytes(&self.slot_of),
+            slot_of: vec_bytes(&near.slot_of),
             near_surface,
             sparse_geometry,
         }
@@ -61,7 +63,7 @@ impl Embedded {
     /// Cells near the wet surface of the last predict (cut cells of `F^n` dilated by
     /// [`NEAR_RADIUS`](crate::embedded::NEAR_RADIUS) cells), ascending.
     pub fn near_cells(&self) -> &[u32] {
-        &self.near
+        &self.near.cells
     }
 }
 

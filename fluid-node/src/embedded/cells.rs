@@ -1,0 +1,220 @@
+//! Per-cell helpers of every stage: fractions, neighbours, the order-independent sums of a
+//! mixture. They sit below the stages (no stage file is imported here).
+
+use protocol::sum::odd_sum;
+
+use super::COVERED_TOLERANCE;
+use crate::cutcell::SubFace;
+use crate::fv::euler::NQ;
+use crate::grid::Grid;
+
+/// What the correct did to a near cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum CellKind {
+    /// Not touched by the solid: the predicted state stands.
+    Predicted,
+    /// Updated by eq. (12) and large enough.
+    Updated,
+    /// Updated by eq. (12), then mixed into a neighbour.
+    Mixed,
+}
+
+/// Fluid fraction of a cell of solid fraction `lambda`: `1 − Λ`, and 0 where Λ > 1.
+///
+/// Λ is the integral of the solid's winding number over the cell: where two bodies overlap (a
+/// penalty contact, walls pressed together) it counts the overlap twice and may exceed 1. The
+/// sums of swept prisms and sub-faces stay exact for it (they are linear in the surface); only
+/// the fluid a cell holds is clamped at 0.
+#[inline]
+pub(crate) fn fluid_part(lambda: f64) -> f64 {
+    1.0 - lambda.min(1.0)
+}
+
+/// Factor on the state a near cell's swept prisms carry, so that what they move out of it plus
+/// what it keeps is the fluid it held: `(min(Λ¹, 1) − min(Λ⁰, 1)) / (Λ¹ − Λ⁰)`, exactly 1 unless
+/// Λ exceeds 1 (overlapping bodies, see [`fluid_part`]), 0 for a cell covered at both times.
+#[inline]
+pub(super) fn overlap_scale(l0: f64, l1: f64) -> f64 {
+    if l0 <= 1.0 && l1 <= 1.0 {
+        1.0
+    } else if l0 >= 1.0 && l1 >= 1.0 {
+        0.0
+    } else {
+        (l1.min(1.0) - l0.min(1.0)) / (l1 - l0)
+    }
+}
+
+/// The domain face `(axis, side)` (side 0 low, 1 high) a sub-face lies in with its normal out
+/// of the domain: a solid face flush against the domain boundary, with no fluid beyond it (the
+/// boundary condition acts there instead; the tie rule of [`crate::cutcell`] puts such a face
+/// on the low side into the covered cells above it).
+pub(super) fn domain_face(grid: &Grid, s: &SubFace) -> Option<(usize, usize)> {
+    (0..grid.dim).find_map(|a| {
+        let tol = 1e-12 * grid.dx[a];
+        if s.normal[a] < 0.0 && (s.centroid[a] - grid.lower[a]).abs() <= tol {
+            Some((a, 0))
+        } else if s.normal[a] > 0.0 && (s.centroid[a] - grid.upper[a]).abs() <= tol {
+            Some((a, 1))
+        } else {
+            None
+        }
+    })
+}
+
+/// A storage cell (`dim + 2` values) divided by `scale`, as a 5-component state.
+pub(super) fn full_state(cell: &[f64], dim: usize, scale: f64) -> [f64; NQ] {
+    let mut full = [0.0; NQ];
+    full[0] = cell[0] / scale;
+    for a in 0..dim {
+        full[1 + a] = cell[1 + a] / scale;
+    }
+    full[4] = cell[dim + 1] / scale;
+    full
+}
+
+/// The face neighbours of cell `ijk` inside the grid, axis by axis, lower side first: `(axis,
+/// neighbour, the face's index triple)` (a face is indexed by the cell above it).
+pub(super) fn face_neighbours(
+    grid: &Grid,
+    ijk: [usize; 3],
+) -> impl Iterator<Item = (usize, [usize; 3], [usize; 3])> + '_ {
+    (0..grid.dim).flat_map(move |a| {
+        let below = (ijk[a] > 0).then(|| {
+            let mut q = ijk;
+            q[a] -= 1;
+            (a, q, ijk)
+        });
+        let above = (ijk[a] + 1 < grid.cells[a]).then(|| {
+            let mut q = ijk;
+            q[a] += 1;
+            (a, q, q)
+        });
+        // The side towards the grid's middle first (see `oriented`).
+        if 2 * ijk[a] + 1 > grid.cells[a] {
+            below.into_iter().chain(above)
+        } else {
+            above.into_iter().chain(below)
+        }
+    })
+}
+
+/// Offset `d` from cell `ijk` turned towards the grid's middle: its component along each axis
+/// on which the cell lies in the upper half is negated.
+///
+/// NOTE: searches over neighbours that keep the first of equal candidates, and sums over them,
+/// then visit the mirror image of a cell's neighbours (about the grid's middle along any axis)
+/// in the mirrored order, so that a symmetric scene stays symmetric to the bit.
+pub(super) fn oriented(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> [isize; 3] {
+    let mut out = d;
+    for a in 0..3 {
+        if 2 * ijk[a] + 1 > grid.cells[a] {
+            out[a] = -d[a];
+        }
+    }
+    out
+}
+
+/// Whether gas touches wet sub-face `s` in the geometry of solid fractions `lambda`: its cell
+/// holds fluid, or the face neighbour it faces along its normal's largest component does (a
+/// face on a grid plane, which the tie rule of [`crate::cutcell`] gives to the covered cell
+/// behind it, faces the fluid in front).
+///
+/// NOTE: two bodies pressed together (flush walls, a penalty contact) or a crack thinner than
+/// round-off put wet faces in covered cells with covered cells in front: no gas is there. Under
+/// the covered cell's `p̄` the two faces' terms cancel only while their normals stay opposite;
+/// tilted by one step's rotation they left a momentum of 1.8e-10 of `p̄ Δt / Δx` in a covered
+/// cell with no fluid to mix it into (the flush cube at 100^3), and once the faces fell on two
+/// sides of a grid plane, all of it. Such faces take no gas pressure, on either side of the
+/// exchange; the contact carries the bodies' push.
+pub(super) fn touches_gas(grid: &Grid, lambda: &[f64], s: &SubFace) -> bool {
+    let c = s.cell as usize;
+    if fluid_part(lambda[c]) > COVERED_TOLERANCE {
+        return true;
+    }
+    let axis = dominant_axis(grid.dim, s.normal);
+    let mut d = [0isize; 3];
+    d[axis] = if s.normal[axis] < 0.0 { -1 } else { 1 };
+    match shifted(grid, grid.ijk(c), d) {
+        Some(q) => fluid_part(lambda[grid.index(q[0], q[1], q[2])]) > COVERED_TOLERANCE,
+        // Beyond the grid: the boundary condition is there; keep the face's pressure.
+        None => true,
+    }
+}
+
+/// The axis of the largest component of `normal` (the first of equal ones).
+pub(super) fn dominant_axis(dim: usize, normal: [f64; 3]) -> usize {
+    let mut axis = 0;
+    for a in 1..dim {
+        if normal[a].abs() > normal[axis].abs() {
+            axis = a;
+        }
+    }
+    axis
+}
+
+/// Content and fluid fraction of a mixing group from its members' (order-independent sums).
+pub(super) fn sum_parts(parts: &[([f64; NQ], f64)], nvar: usize) -> ([f64; NQ], f64) {
+    let mut sum = [0.0; NQ];
+    let mut terms: Vec<f64> = Vec::with_capacity(parts.len());
+    for q in 0..nvar {
+        terms.clear();
+        terms.extend(parts.iter().map(|p| p.0[q]));
+        sum[q] = odd_sum(&mut terms);
+    }
+    terms.clear();
+    terms.extend(parts.iter().map(|p| p.1));
+    (sum, odd_sum(&mut terms))
+}
+
+/// All offsets of the `(2r + 1)^dim − 1` neighbours within Chebyshev distance `r`.
+pub(super) fn offsets(dim: usize, r: isize) -> Vec<[isize; 3]> {
+    let range = |a: usize| if a < dim { -r..=r } else { 0..=0 };
+    let mut out = Vec::new();
+    for k in range(2) {
+        for j in range(1) {
+            for i in range(0) {
+                if (i, j, k) != (0, 0, 0) {
+                    out.push([i, j, k]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `ijk + d` if inside the grid.
+pub(super) fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[usize; 3]> {
+    let mut out = [0; 3];
+    for a in 0..3 {
+        let v = ijk[a] as isize + d[a];
+        if v < 0 || v >= grid.cells[a] as isize {
+            return None;
+        }
+        out[a] = v as usize;
+    }
+    Some(out)
+}
+
+/// Cell `c`'s content as a part of a mixture: what the correct left in it (`content`, by slot
+/// `slot_of[c] - 1`, unless its `kind` is still `Predicted`), or else its predicted state
+/// `u(q)` times its fluid fraction `alpha`.
+pub(super) fn part_of(
+    slot_of: &[u32],
+    content: &[[f64; NQ]],
+    kind: &[CellKind],
+    c: usize,
+    alpha: f64,
+    u: impl Fn(usize) -> f64,
+    nvar: usize,
+) -> [f64; NQ] {
+    let kc = slot_of[c] as usize;
+    let mut part = [0.0; NQ];
+    if kc > 0 && kind[kc - 1] != CellKind::Predicted {
+        part[..nvar].copy_from_slice(&content[kc - 1][..nvar]);
+    } else {
+        for q in 0..nvar {
+            part[q] = alpha * u(q);
+        }
+    }
+    part
+}

@@ -1,0 +1,143 @@
+//! Cracks (paper 000 §3.2): the cells a crack opens in a step hold vacuum, and the faces
+//! between them and the fluid take the Lax–Friedrichs flux of that fluid against vacuum.
+
+use super::cells::{domain_face, dominant_axis, fluid_part, full_state, shifted};
+use super::{COVERED_TOLERANCE, Embedded, SolidFrame};
+use crate::cutcell::{CutGeometry, SubFace};
+use crate::fv::euler::NQ;
+
+impl Embedded {
+    /// Whether a sub-face of `frame` belongs to a face that becomes wet in this step (a link
+    /// broke) and lies in a cell covered at `t^n`: the crack behind it is vacuum, and the state
+    /// the sweeps left in that cell is not the fluid's, so it carries no pressure.
+    pub(super) fn opening(&self, s: &SubFace, frame: &SolidFrame) -> bool {
+        let e = s.element as usize;
+        frame.wet[e]
+            && !self.state.current.wet.get(e).copied().unwrap_or(true)
+            && self.state.geom.solid_fraction[s.cell as usize] >= 1.0 - COVERED_TOLERANCE
+    }
+
+    /// The near cells (by slot) in which a crack opens in this step, with the accepted surface
+    /// `accepted` in the trial geometry; their `U^n` becomes vacuum.
+    ///
+    /// Cells covered at t^n in which a crack opens in this step (a link broke): no fluid was
+    /// there, so their `U^n` is vacuum, and the faces between them and the fluid take the
+    /// Lax–Friedrichs flux of that fluid against vacuum (paper 000 §3.2), not the sweeps' flux
+    /// against a ghost state.
+    pub(super) fn opening_cells(&mut self, accepted: &SolidFrame) -> Vec<bool> {
+        let nvar = self.config.grid.dim + 2;
+        let mut opening = vec![false; self.near.cells.len()];
+        for s in &self.scratch.trial.subfaces {
+            if self.opening(s, accepted)
+                && let Some(k) = self.near.slot(s.cell as usize)
+            {
+                opening[k] = true;
+            }
+        }
+        // NOTE: where cracks may open, a cell covered at t^n that a crack between two bodies
+        // uncovers in this step (walls pressed together, then parted) is opening too: the
+        // sweeps gave it a ghost state, the mirror of the gas beyond the wall, and its faces
+        // to the crack carried that state's pressure into a cell with no mass (-5e-6 of y
+        // momentum per unit volume in a cell 8e-5 open, the flush cube at 100^3).
+        if self.config.fracture {
+            let crack = self.crack_cells(&self.scratch.trial, accepted);
+            for (k, &c) in self.near.cells.iter().enumerate() {
+                let c = c as usize;
+                if crack[k]
+                    && self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+                    && fluid_part(self.scratch.trial.solid_fraction[c]) > COVERED_TOLERANCE
+                {
+                    opening[k] = true;
+                }
+            }
+        }
+        for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {
+            self.near.saved[k * nvar..(k + 1) * nvar].fill(0.0);
+        }
+        opening
+    }
+
+    /// Near cells (by slot) between two faces of a crack in `geom`: a wet sub-face of one
+    /// particle and, in the same cell or in the cell it faces along its normal's largest
+    /// component, a wet sub-face of another particle facing back along that axis (the tie rule
+    /// puts the two faces of a crack on a grid plane into two cells).
+    fn crack_cells(&self, geom: &CutGeometry, frame: &SolidFrame) -> Vec<bool> {
+        let grid = &self.config.grid;
+        let near = &self.near;
+        // Per near slot: (particle, 2 axis + side) of its wet sub-faces, side 1 for ν_a < 0.
+        let mut faces: Vec<Vec<(u32, usize)>> = vec![Vec::new(); near.cells.len()];
+        for s in &geom.subfaces {
+            let k = near.slot_of[s.cell as usize] as usize;
+            if k == 0 || !frame.wet[s.element as usize] || domain_face(grid, s).is_some() {
+                continue;
+            }
+            let a = dominant_axis(grid.dim, s.normal);
+            let key = (s.particle, 2 * a + usize::from(s.normal[a] < 0.0));
+            if !faces[k - 1].contains(&key) {
+                faces[k - 1].push(key);
+            }
+        }
+        let mut crack = vec![false; near.cells.len()];
+        for (k, &c) in near.cells.iter().enumerate() {
+            let ijk = grid.ijk(c as usize);
+            crack[k] = faces[k].iter().any(|&(p, f)| {
+                let (a, back) = (f / 2, f ^ 1);
+                let faces_back =
+                    |slot: usize| faces[slot].iter().any(|&(q, g)| q != p && g == back);
+                let mut d = [0isize; 3];
+                d[a] = if f % 2 == 1 { -1 } else { 1 };
+                faces_back(k)
+                    || shifted(grid, ijk, d).is_some_and(|q| {
+                        let kq = near.slot_of[grid.index(q[0], q[1], q[2])] as usize;
+                        kq > 0 && faces_back(kq - 1)
+                    })
+            });
+        }
+        crack
+    }
+
+    /// The flux along `axis` through the face between cells `left` and `right` when a crack
+    /// opens on either side of it (`opening`, by near slot): the Lax–Friedrichs flux of the
+    /// fluid on the other side against vacuum, with the sweeps' `sigma = Δt/Δx`, or zero if
+    /// the other side held no fluid at `t^n` either (the sweeps' flux there came from ghost or
+    /// stale states, not from the fluid).
+    pub(super) fn crack_flux(
+        &self,
+        axis: usize,
+        left: usize,
+        right: usize,
+        opening: &[bool],
+        sigma: f64,
+    ) -> Option<[f64; NQ]> {
+        let dim = self.config.grid.dim;
+        let nvar = dim + 2;
+        let slot_of = &self.near.slot_of;
+        let (kl, kr) = (slot_of[left] as usize, slot_of[right] as usize);
+        if kl == 0 || kr == 0 || !(opening[kl - 1] || opening[kr - 1]) {
+            return None;
+        }
+        let empty = |c: usize, k: usize| {
+            opening[k - 1] || self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+        };
+        if empty(left, kl) && empty(right, kr) {
+            return Some([0.0; NQ]);
+        }
+        let state = |k: usize| -> [f64; NQ] {
+            if opening[k - 1] {
+                return [0.0; NQ];
+            }
+            let mut u = full_state(&self.near.saved[(k - 1) * nvar..k * nvar], dim, 1.0);
+            u.swap(1, 1 + axis);
+            u
+        };
+        let mut f = crate::fv::euler::flux_lax_friedrichs(
+            &state(kl),
+            &state(kr),
+            sigma,
+            self.config.gamma,
+            self.config.vacuum.0,
+        );
+        f.swap(1, 1 + axis);
+        Some(f)
+    }
+}

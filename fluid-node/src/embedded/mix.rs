@@ -1,0 +1,720 @@
+//! The conservative mixing of paper 000 §3.3 (recursive): small cells (`Λ > 1/2`), cells the
+//! solid uncovers, covered cells left with content and cut cells whose update is not physical
+//! are mixed into a large neighbour, their targets found by walking along the wall normal.
+//! Groups whose mixture is not physical merge with the groups beside them, then widen into
+//! rings of free cells. Every sum over a group's members is independent of their order.
+
+use super::cells::{
+    CellKind, face_neighbours, fluid_part, offsets, oriented, part_of, shifted, sum_parts,
+};
+use super::state::Config;
+use super::{
+    COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, POCKET_ROUND_OFF,
+    WIDEN_RINGS,
+};
+use crate::cutcell::face_index;
+use crate::fv::FluidSolver;
+use crate::fv::euler::NQ;
+use crate::grid::Grid;
+
+use super::CorrectReport;
+
+/// What [`Embedded::mix`] wrote.
+pub(super) struct Mixed {
+    /// Cells mixed into a neighbour.
+    pub(super) cells: usize,
+    /// The values written, one per cell (the last), by cell.
+    pub(super) written: Vec<(u32, [f64; NQ])>,
+}
+
+/// Where the walk to a target looks without a large neighbour, within this many cells.
+const MAX_SEARCH: usize = 1024;
+
+/// What the mixing reads: the geometry of both surfaces and the near cells' contents after
+/// eq. (12) (none of it changes while groups form).
+struct Mixing<'a> {
+    config: &'a Config,
+    grid: &'a Grid,
+    slot_of: &'a [u32],
+    near: &'a [u32],
+    saved: &'a [f64],
+    new_lambda: &'a [f64],
+    old_lambda: &'a [f64],
+    face_fraction: &'a [Vec<f64>; 3],
+    content: &'a [[f64; NQ]],
+    /// Near slots to mix, ascending.
+    sources: &'a [usize],
+    /// Wall normal `Σ A ν` of each near cell's sub-faces at t^{n+1}.
+    normal: Vec<[f64; 3]>,
+    /// Offsets of the neighbours within one cell.
+    span: Vec<[isize; 3]>,
+    /// Largest `|U^n|` of the near cells.
+    near_scale: f64,
+    nvar: usize,
+}
+
+/// The predicted states the groups read: none of these cells is written before it is read
+/// (roots, sources and claimed cells are never taken into another group).
+struct Predicted {
+    reads: Vec<u32>,
+    values: Vec<f64>,
+    nvar: usize,
+}
+
+impl Predicted {
+    fn u(&self, c: usize, q: usize) -> f64 {
+        let k = self
+            .reads
+            .binary_search(&(c as u32))
+            .expect("a mixing group reads only cells of its read set");
+        self.values[k * self.nvar + q]
+    }
+}
+
+/// The groups: `(root, source slot)` by root, the roots, and the roots of merged groups that
+/// joined another group as members, `(new root, old root)`, with their parts.
+struct Groups {
+    groups: Vec<(usize, usize)>,
+    roots: Vec<usize>,
+    merged: Vec<(usize, usize)>,
+    merged_parts: Vec<[f64; NQ]>,
+}
+
+/// What the groups write, and the cells they took in.
+#[derive(Default)]
+struct Writes {
+    writes: Vec<(u32, [f64; NQ])>,
+    /// Cells taken into a widened group (ascending).
+    claimed: Vec<usize>,
+    /// Source cells mixed.
+    mixed: usize,
+}
+
+impl Embedded {
+    /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
+    /// and covered-with-content cells into their targets.
+    ///
+    /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
+    /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
+    /// group's members) are gathered first, and every rank computes every group; the solver
+    /// keeps the writes of its own cells.
+    pub(super) fn mix(
+        &mut self,
+        solver: &mut FluidSolver,
+        report: &mut CorrectReport,
+    ) -> Result<Mixed, EmbeddedError> {
+        let sources = self.mix_sources(report);
+        let normal = self.wall_normals();
+        let grid = &self.config.grid;
+        let nvar = grid.dim + 2;
+        let m = Mixing {
+            config: &self.config,
+            grid,
+            slot_of: &self.near.slot_of,
+            near: &self.near.cells,
+            saved: &self.near.saved,
+            new_lambda: &self.scratch.trial.solid_fraction,
+            old_lambda: &self.state.geom.solid_fraction,
+            face_fraction: &self.scratch.trial.face_fraction,
+            content: &self.scratch.content,
+            sources: &sources,
+            normal,
+            span: offsets(grid.dim, 1),
+            near_scale: self.near.saved.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+            nvar,
+        };
+        let kind = &mut self.scratch.kind;
+        let mut groups: Vec<(usize, usize)> = sources.iter().map(|&k| (m.root(k), k)).collect();
+        groups.sort_unstable();
+        let predicted = m.predicted(solver, &groups);
+        let groups = m.merge(groups, kind, &predicted, report);
+        let mut out = Writes::default();
+        // Updated, unmixed cells: U = content / α.
+        for (k, &c) in m.near.iter().enumerate() {
+            if kind[k] != CellKind::Updated || sources.binary_search(&k).is_ok() {
+                continue;
+            }
+            let a = m.alpha(c as usize);
+            if a <= COVERED_TOLERANCE {
+                // Covered, nothing to keep: the cell holds a ghost state.
+                continue;
+            }
+            let mut v = [0.0; NQ];
+            for q in 0..nvar {
+                v[q] = m.content[k][q] / a;
+            }
+            out.writes.push((c, v));
+        }
+        let mut i = 0;
+        while i < groups.groups.len() {
+            let root = groups.groups[i].0;
+            let j = i + groups.groups[i..].partition_point(|g| g.0 == root);
+            m.mix_group(&groups, i..j, kind, &predicted, &mut out, report)?;
+            i = j;
+        }
+        let mut writes = out.writes;
+        solver.set_cells(&writes);
+        // The last value written of each cell, by cell.
+        writes.reverse();
+        writes.sort_by_key(|w| w.0);
+        writes.dedup_by_key(|w| w.0);
+        Ok(Mixed {
+            cells: out.mixed,
+            written: writes,
+        })
+    }
+
+    /// The near slots to mix, ascending: covered cells left with content, cells the solid
+    /// uncovers, small cells and cells whose update is not physical. A cell of a crack that
+    /// nothing has reached yet is left vacuum.
+    fn mix_sources(&mut self, report: &mut CorrectReport) -> Vec<usize> {
+        let nvar = self.config.grid.dim + 2;
+        let new_lambda = &self.scratch.trial.solid_fraction;
+        let old_lambda = &self.state.geom.solid_fraction;
+        let alpha = |c: usize| fluid_part(new_lambda[c]);
+        let saved = &self.near.saved;
+        let near_scale = saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let content = &mut self.scratch.content;
+        let mut sources: Vec<usize> = Vec::new();
+        for (k, &c) in self.near.cells.iter().enumerate() {
+            let c = c as usize;
+            if self.scratch.kind[k] != CellKind::Updated {
+                continue;
+            }
+            let a = alpha(c);
+            let uncovered = old_lambda[c] >= 1.0 - COVERED_TOLERANCE && a > COVERED_TOLERANCE;
+            if uncovered {
+                report.uncovered_cells += 1;
+            }
+            let covered = a <= COVERED_TOLERANCE;
+            if covered {
+                // NOTE: a covered cell keeps only round-off from fluxes of (nearly) covered faces;
+                // below 1e-13 of its state's scale (or of the near cells', for a cell whose
+                // `U^n` is vacuum) it is dropped (a covered cell beside a wall may have no fluid
+                // to mix into). What is dropped is reported.
+                let scale = saved[k * nvar..(k + 1) * nvar]
+                    .iter()
+                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                let scale = if scale > 0.0 { scale } else { near_scale };
+                let residue = content[k][..nvar]
+                    .iter()
+                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                if residue <= 1e-13 * scale {
+                    report.dropped = report.dropped.max(residue);
+                    continue;
+                }
+            }
+            // A cell of a crack that nothing has reached yet holds vacuum (000 §3.2): nothing
+            // to stabilise, and mixing it would spread the gas of the crack's mouth through the
+            // whole crack at once (the nearest target through open faces is at the mouth).
+            // NOTE: the swept prisms of a crack between two pressed walls reach 1e-12 of a cell
+            // into the gas beside it, and bring it round-off of either sign (-1e-12 of mass per
+            // unit volume in a cell 9e-5 open: rho = -7e-9, the flush cube at 100^3). A cell
+            // that held vacuum at t^n and holds at most 1e-13 of the near cells' scale is still
+            // vacuum; what is dropped is reported, as for the covered cells.
+            if !covered {
+                let was_vacuum = saved[k * nvar..(k + 1) * nvar].iter().all(|&x| x == 0.0);
+                let residue = content[k][..nvar]
+                    .iter()
+                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                if residue == 0.0 || (was_vacuum && residue <= 1e-13 * near_scale) {
+                    report.dropped = report.dropped.max(residue);
+                    content[k] = [0.0; NQ];
+                    continue;
+                }
+            }
+            // NOTE: a large cut cell whose update is not physical is mixed too: eq. (12) sums
+            // the split sweeps' fluxes unsplit, so a cell of fluid fraction near 1/2 at a corner
+            // sees up to twice the Courant number of the sweeps. Mixing keeps conservation.
+            if covered || a < MIX_BELOW || uncovered || !self.config.physical(&content[k], a) {
+                sources.push(k);
+            }
+        }
+        sources
+    }
+
+    /// Wall normal of each near cell (`Σ A ν` of its sub-faces at t^{n+1}), apart from their
+    /// order.
+    fn wall_normals(&mut self) -> Vec<[f64; 3]> {
+        let mut normal = vec![[0.0f64; 3]; self.near.cells.len()];
+        let mut terms = std::mem::take(&mut self.scratch.odd);
+        terms.clear();
+        for s in &self.scratch.trial.subfaces {
+            let k = self.near.slot_of[s.cell as usize] as usize - 1;
+            for a in 0..3 {
+                terms.push(3 * k + a, s.area * s.normal[a]);
+            }
+        }
+        terms.add_into(normal.as_flattened_mut());
+        self.scratch.odd = terms;
+        normal
+    }
+}
+
+impl Mixing<'_> {
+    fn alpha(&self, c: usize) -> f64 {
+        fluid_part(self.new_lambda[c])
+    }
+
+    /// Large enough to take others in, and holding fluid at t^n.
+    fn big(&self, c: usize) -> bool {
+        self.alpha(c) >= MIX_BELOW && self.old_lambda[c] < 1.0 - COVERED_TOLERANCE
+    }
+
+    /// The near slot of `c` if it is a source.
+    fn is_source(&self, c: usize) -> Option<usize> {
+        let k = self.slot_of[c];
+        (k > 0 && self.sources.binary_search(&(k as usize - 1)).is_ok()).then(|| k as usize - 1)
+    }
+
+    /// A target takes the content of the cells mixed into it, so it must not be mixed itself.
+    fn target(&self, c: usize) -> bool {
+        self.big(c) && self.is_source(c).is_none()
+    }
+
+    /// One step of the walk from `c` along `g`: the best aligned large neighbour (final), else
+    /// the face neighbour with the largest aperture, else `c` itself.
+    fn hop(&self, c: usize, g: [f64; 3]) -> (usize, bool) {
+        let grid = self.grid;
+        let ijk = grid.ijk(c);
+        let mut best: Option<(f64, usize)> = None;
+        for d in &self.span {
+            let d = &oriented(grid, ijk, *d);
+            let Some(q) = shifted(grid, ijk, *d) else {
+                continue;
+            };
+            let q = grid.index(q[0], q[1], q[2]);
+            if !self.target(q) {
+                continue;
+            }
+            let len = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) as f64).sqrt();
+            let score = (d[0] as f64 * g[0] + d[1] as f64 * g[1] + d[2] as f64 * g[2]) / len;
+            if best.is_none_or(|(b, _)| score > b) {
+                best = Some((score, q));
+            }
+        }
+        if let Some((_, q)) = best {
+            return (q, true);
+        }
+        // No large neighbour: the face neighbour with the largest aperture.
+        let mut best: Option<(f64, usize)> = None;
+        for (a, q, f) in face_neighbours(grid, ijk) {
+            let qi = grid.index(q[0], q[1], q[2]);
+            if self.alpha(qi) <= COVERED_TOLERANCE {
+                continue;
+            }
+            let aperture = fluid_part(self.face_fraction[a][face_index(grid, a, f)]);
+            if best.is_none_or(|(b, _)| aperture > b) {
+                best = Some((aperture, qi));
+            }
+        }
+        best.map_or((c, false), |(_, q)| (q, false))
+    }
+
+    /// The direction of the walk from near slot `k`: its wall normal, else the fluid fractions
+    /// of its neighbours, weighted.
+    fn direction(&self, k: usize) -> [f64; 3] {
+        let g = self.normal[k];
+        if g != [0.0; 3] {
+            return g;
+        }
+        let grid = self.grid;
+        let c = self.near[k] as usize;
+        let ijk = grid.ijk(c);
+        let mut g = [0.0; 3];
+        for d in &self.span {
+            let d = &oriented(grid, ijk, *d);
+            if let Some(q) = shifted(grid, ijk, *d) {
+                let w = self.alpha(grid.index(q[0], q[1], q[2]));
+                for a in 0..3 {
+                    g[a] += w * d[a] as f64;
+                }
+            }
+        }
+        g
+    }
+
+    /// The nearest target through open faces (breadth first, faces in axis order), for a walk
+    /// that cycles between small cells: a thin crack, a cell cut on two sides (paper 000 §3.3,
+    /// recursive mixing). `None` for a pocket with no target within [`MAX_SEARCH`] cells.
+    /// `across`: through every face, the solid's too (see [`Mixing::round_off`]).
+    fn search(&self, from: usize, across: bool) -> Option<usize> {
+        let grid = self.grid;
+        let mut queue = vec![from];
+        let mut seen = std::collections::BTreeSet::from([from]);
+        let mut next = 0;
+        while next < queue.len() && queue.len() < MAX_SEARCH {
+            let ijk = grid.ijk(queue[next]);
+            next += 1;
+            for (a, q, f) in face_neighbours(grid, ijk) {
+                let qi = grid.index(q[0], q[1], q[2]);
+                let shut = self.face_fraction[a][face_index(grid, a, f)] >= 1.0
+                    || self.alpha(qi) <= COVERED_TOLERANCE;
+                if (shut && !across) || !seen.insert(qi) {
+                    continue;
+                }
+                if self.target(qi) {
+                    return Some(qi);
+                }
+                queue.push(qi);
+            }
+        }
+        None
+    }
+
+    /// NOTE: a crack thinner than round-off (two bodies pressed together, then parted by less
+    /// than `COVERED_TOLERANCE` of a cell) leaves covered cells joined by faces whose open
+    /// parts are of that size; the sweeps' fluxes through them leave round-off in cells with no
+    /// open face (3e-13 of the mass per unit volume, the flush cube at 100^3). Such a closed
+    /// pocket holding round-off only (at most `POCKET_ROUND_OFF` of the state's scale) goes to
+    /// the nearest target across the solid: conservative. A pocket holding more stops the run
+    /// (see [`Mixing::mix_group`]).
+    fn round_off(&self, p: usize) -> bool {
+        let kp = self.slot_of[p] as usize;
+        if kp == 0 || self.alpha(p) > COVERED_TOLERANCE {
+            return false;
+        }
+        let nvar = self.nvar;
+        let saved = &self.saved[(kp - 1) * nvar..kp * nvar];
+        let scale = saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let scale = if scale > 0.0 { scale } else { self.near_scale };
+        self.content[kp - 1][..nvar]
+            .iter()
+            .all(|x| x.abs() <= POCKET_ROUND_OFF * scale)
+    }
+
+    /// Root of source `k`: follow hops to a large cell; a walk that cycles goes to the nearest
+    /// target through open faces, or, in a closed pocket, to the cycle's smallest cell (across
+    /// the solid for a pocket of round-off).
+    fn root(&self, k: usize) -> usize {
+        let mut path = vec![self.near[k] as usize];
+        let mut g = self.direction(k);
+        loop {
+            let here = *path.last().expect("non-empty");
+            let (next, final_) = self.hop(here, g);
+            if final_ {
+                return next;
+            }
+            if let Some(pos) = path.iter().position(|&p| p == next) {
+                // From the walk's first cell with an open way out (a covered source has
+                // none: searching only from it put a 2e-12 cell of a thin gap at the root).
+                let open = path.iter().find_map(|&p| self.search(p, false));
+                let across = || {
+                    path.iter()
+                        .all(|&p| self.round_off(p))
+                        .then(|| self.search(path[0], true))
+                        .flatten()
+                };
+                return open
+                    .or_else(across)
+                    .unwrap_or_else(|| *path[pos..].iter().min().expect("non-empty cycle"));
+            }
+            if self.is_source(next).is_none() || path.len() > 64 {
+                return next;
+            }
+            path.push(next);
+            g = self.direction(self.is_source(next).expect("checked"));
+        }
+    }
+
+    /// The predicted states the groups can read: each root and source and the cells within
+    /// [`WIDEN_RINGS`] of them (collective).
+    fn predicted(&self, solver: &mut FluidSolver, groups: &[(usize, usize)]) -> Predicted {
+        let grid = self.grid;
+        let wide = offsets(grid.dim, WIDEN_RINGS as isize);
+        let mut reads: Vec<u32> = Vec::new();
+        for &(root, k) in groups {
+            for c in [root, self.near[k] as usize] {
+                reads.push(c as u32);
+                let ijk = grid.ijk(c);
+                for d in &wide {
+                    if let Some(q) = shifted(grid, ijk, *d) {
+                        reads.push(grid.index(q[0], q[1], q[2]) as u32);
+                    }
+                }
+            }
+        }
+        reads.sort_unstable();
+        reads.dedup();
+        let values = solver.cells_at(&reads);
+        Predicted {
+            reads,
+            values,
+            nvar: self.nvar,
+        }
+    }
+
+    /// A cell's content as a part of a mixture (see [`part_of`]), read as the cell is now.
+    fn part(&self, kind: &[CellKind], predicted: &Predicted, c: usize) -> [f64; NQ] {
+        part_of(
+            self.slot_of,
+            self.content,
+            kind,
+            c,
+            self.alpha(c),
+            |q| predicted.u(c, q),
+            self.nvar,
+        )
+    }
+}
+
+impl Mixing<'_> {
+    /// NOTE: groups whose mixture is not physical take in the groups beside them (through open
+    /// faces), all at once, round by round, before widening into free cells. A crack opening
+    /// across a grid plane puts the gas of a thin gap in one row of small cells and the sliver
+    /// it expands into in the row across the plane; the Lax–Friedrichs flux of paper 000 §3.2
+    /// moves half a full cell's content per step through each whole face of that plane, ten
+    /// times what a gap cell 4.6 % open holds, and the two rows had their targets on opposite
+    /// sides (rho = -8.1 in a mixture, the flush cube at 100^3, step 148). Merging keeps
+    /// conservation, and the partition does not depend on the order of the groups (the
+    /// smallest root names a merged group).
+    fn merge(
+        &self,
+        mut groups: Vec<(usize, usize)>,
+        kind: &[CellKind],
+        predicted: &Predicted,
+        report: &mut CorrectReport,
+    ) -> Groups {
+        let grid = self.grid;
+        let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
+        roots.dedup();
+        // (cell, group) of every root and member, by cell.
+        let group_of = {
+            let mut owner: Vec<(usize, usize)> = Vec::with_capacity(groups.len() + roots.len());
+            for (r, &root) in roots.iter().enumerate() {
+                owner.push((root, r));
+            }
+            for &(root, k) in &groups {
+                let r = roots
+                    .binary_search(&root)
+                    .expect("a group's root is a root");
+                owner.push((self.near[k] as usize, r));
+            }
+            owner.sort_unstable();
+            owner.dedup();
+            owner
+        };
+        let mut parent: Vec<usize> = (0..roots.len()).collect();
+        fn find(parent: &[usize], mut r: usize) -> usize {
+            while parent[r] != r {
+                r = parent[r];
+            }
+            r
+        }
+        for _ in 0..MERGE_ROUNDS {
+            // The parts of each merged group, by its representative.
+            let mut parts: Vec<Vec<([f64; NQ], f64)>> = vec![Vec::new(); roots.len()];
+            for &(c, r) in &group_of {
+                parts[find(&parent, r)].push((self.part(kind, predicted, c), self.alpha(c)));
+            }
+            let bad: Vec<bool> = parts
+                .iter()
+                .map(|p| {
+                    !p.is_empty() && {
+                        let (sum, vol) = sum_parts(p, self.nvar);
+                        !(vol > 0.0 && self.config.physical(&sum, vol))
+                    }
+                })
+                .collect();
+            let mut joins: Vec<(usize, usize)> = Vec::new();
+            for &(c, r) in &group_of {
+                let r = find(&parent, r);
+                if !bad[r] {
+                    continue;
+                }
+                for (a, q, f) in face_neighbours(grid, grid.ijk(c)) {
+                    let qi = grid.index(q[0], q[1], q[2]);
+                    if self.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
+                        continue;
+                    }
+                    if let Ok(i) = group_of.binary_search_by_key(&qi, |o| o.0) {
+                        let h = find(&parent, group_of[i].1);
+                        if h != r {
+                            joins.push((r.min(h), r.max(h)));
+                        }
+                    }
+                }
+            }
+            if joins.is_empty() {
+                break;
+            }
+            for (a, b) in joins {
+                let (a, b) = (find(&parent, a), find(&parent, b));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+        // Re-root the sources of merged groups; their old roots join as members.
+        let mut merged: Vec<(usize, usize)> = Vec::new();
+        for (r, &root) in roots.iter().enumerate() {
+            let to = find(&parent, r);
+            if to != r {
+                report.merged_groups += 1;
+                if self.is_source(root).is_none() {
+                    merged.push((roots[to], root));
+                }
+            }
+        }
+        merged.sort_unstable();
+        let merged_parts: Vec<[f64; NQ]> = merged
+            .iter()
+            .map(|m| self.part(kind, predicted, m.1))
+            .collect();
+        for g in groups.iter_mut() {
+            let r = roots.binary_search(&g.0).expect("a group's root is a root");
+            g.0 = roots[find(&parent, r)];
+        }
+        groups.sort_unstable();
+        Groups {
+            groups,
+            roots,
+            merged,
+            merged_parts,
+        }
+    }
+
+    /// Mixes the group of `groups.groups[range]` (one root): sums its members' contents and
+    /// fluid fractions, widens it into rings of free cells while the mixture is not physical,
+    /// and writes the mixture into every member.
+    fn mix_group(
+        &self,
+        groups: &Groups,
+        range: std::ops::Range<usize>,
+        kind: &mut [CellKind],
+        predicted: &Predicted,
+        out: &mut Writes,
+        report: &mut CorrectReport,
+    ) -> Result<(), EmbeddedError> {
+        let grid = self.grid;
+        let members_of = &groups.groups[range];
+        let root = members_of[0].0;
+        // The members' contents and fluid fractions, summed apart from their order (a mirror
+        // image lists them in another order).
+        let mut parts: Vec<([f64; NQ], f64)> = Vec::new();
+        // The root's own content.
+        parts.push((self.part(kind, predicted, root), self.alpha(root)));
+        let merged = &groups.merged;
+        let first_merged = merged.partition_point(|m| m.0 < root);
+        let n_merged = merged[first_merged..].partition_point(|m| m.0 == root);
+        let merged_roots: Vec<usize> = merged[first_merged..first_merged + n_merged]
+            .iter()
+            .map(|m| m.1)
+            .collect();
+        for (&m, part) in merged_roots
+            .iter()
+            .zip(&groups.merged_parts[first_merged..])
+        {
+            parts.push((*part, self.alpha(m)));
+        }
+        for &(_, k) in members_of {
+            if self.near[k] as usize != root {
+                parts.push((self.content[k], self.alpha(self.near[k] as usize)));
+            }
+        }
+        let (mut sum, mut vol) = sum_parts(&parts, self.nvar);
+        if vol <= 0.0 || vol.is_nan() {
+            return Err(EmbeddedError::ClosedPocket {
+                cell: grid.ijk(root),
+                content: sum,
+            });
+        }
+        // NOTE: at high Mach numbers the internal energy is a small part of the total, and a
+        // small cell's content can hold less of it than its kinetic energy (a deficit the one
+        // target cannot cover). The group then takes in rings of free neighbours until the
+        // mixture is physical: conservative, and the mixture's internal energy is at least the
+        // sum of its members' (the kinetic energy of a sum of momenta is at most the sum of
+        // their kinetic energies), so each physical member helps.
+        let mut members: Vec<usize> = std::iter::once(root)
+            .chain(merged_roots.iter().copied())
+            .chain(members_of.iter().map(|g| self.near[g.1] as usize))
+            .collect();
+        members.sort_unstable();
+        members.dedup();
+        let mut extra: Vec<usize> = Vec::new();
+        let mut rings = 0;
+        while !self.config.physical(&sum, vol) && rings < WIDEN_RINGS {
+            rings += 1;
+            let ring = self.ring(&members, &extra, &groups.roots, &out.claimed);
+            if ring.is_empty() {
+                break;
+            }
+            for &q in &ring {
+                parts.push((self.part(kind, predicted, q), self.alpha(q)));
+            }
+            (sum, vol) = sum_parts(&parts, self.nvar);
+            extra.extend_from_slice(&ring);
+        }
+        if !extra.is_empty() {
+            report.widened_groups += 1;
+            report.widened_cells += extra.len();
+            for &q in &extra {
+                let pos = out.claimed.partition_point(|&x| x < q);
+                out.claimed.insert(pos, q);
+            }
+        }
+        let mut mixture = [0.0; NQ];
+        for q in 0..self.nvar {
+            mixture[q] = sum[q] / vol;
+        }
+        out.writes.push((root as u32, mixture));
+        for g in members_of {
+            let c = self.near[g.1] as usize;
+            if c != root && self.alpha(c) > COVERED_TOLERANCE {
+                out.writes.push((c as u32, mixture));
+            }
+            kind[g.1] = CellKind::Mixed;
+            out.mixed += 1;
+        }
+        for &c in &extra {
+            out.writes.push((c as u32, mixture));
+            let k = self.slot_of[c] as usize;
+            if k > 0 {
+                kind[k - 1] = CellKind::Mixed;
+            }
+        }
+        for &m in std::iter::once(&root).chain(&merged_roots) {
+            if m != root {
+                out.writes.push((m as u32, mixture));
+            }
+            let km = self.slot_of[m] as usize;
+            if km > 0 {
+                kind[km - 1] = CellKind::Updated;
+            }
+        }
+        Ok(())
+    }
+
+    /// The next ring of free cells around a group's `members` and the `extra` cells it took
+    /// in: holding fluid at both times, and no source, root or cell another group claimed.
+    fn ring(
+        &self,
+        members: &[usize],
+        extra: &[usize],
+        roots: &[usize],
+        claimed: &[usize],
+    ) -> Vec<usize> {
+        let grid = self.grid;
+        let mut ring: Vec<usize> = Vec::new();
+        for &c in members.iter().chain(extra) {
+            let ijk = grid.ijk(c);
+            for d in &self.span {
+                let Some(q) = shifted(grid, ijk, *d) else {
+                    continue;
+                };
+                let q = grid.index(q[0], q[1], q[2]);
+                if self.alpha(q) > COVERED_TOLERANCE
+                    && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
+                    && self.is_source(q).is_none()
+                    && roots.binary_search(&q).is_err()
+                    && claimed.binary_search(&q).is_err()
+                    && members.binary_search(&q).is_err()
+                    && !extra.contains(&q)
+                {
+                    ring.push(q);
+                }
+            }
+        }
+        ring.sort_unstable();
+        ring.dedup();
+        ring
+    }
+}

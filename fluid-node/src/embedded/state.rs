@@ -1,0 +1,272 @@
+//! [`Embedded`]: the fluid's side of the coupling, held as its four parts apart: the
+//! configuration (fixed for a run), the state that persists between steps, the near-surface
+//! data one step's predict leaves for its loads and correct, and the scratch of the stages.
+
+use serde::{Deserialize, Serialize};
+
+use super::cells::{CellKind, fluid_part, full_state};
+use super::near_wall::NearWall;
+use super::{EmbeddedError, Loads, SolidFrame};
+use crate::cutcell::{CutGeometry, SubfaceSwept, compute};
+use crate::fv::euler::NQ;
+use crate::fv::line::state_ok;
+use crate::fv::{FluidSolver, SplitHooks};
+use crate::grid::Grid;
+use protocol::sum::OddSum;
+
+/// What the interface gave the fluid since the start (node-private checkpoint part).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InterfaceBudget {
+    /// Work the fluid gave the solid \[J\] (positive when the fluid lost energy).
+    pub work_given: f64,
+    /// Momentum the fluid gave the solid [kg m/s].
+    pub impulse_given: [f64; 3],
+    /// Fluid mass the solid displaced \[kg\]: `Σ_n Σ_cells ρⁿ max(0, Λ^{n+1} − Λⁿ) V`
+    /// (`summary.json`'s `swept_mass`, the measure of paper 000's mass errors).
+    pub swept_mass: f64,
+}
+
+/// The fluid's side of the coupling, beside a [`FluidSolver`] on the same grid.
+pub struct Embedded {
+    pub(super) config: Config,
+    pub(super) state: State,
+    pub(super) near: NearCells,
+    pub(super) scratch: Scratch,
+}
+
+/// What a run fixes: the grid, the gas and whether cracks may open.
+pub(super) struct Config {
+    /// Whether cracks may open in the solid (`[solid] fracture`, or separate bodies that touch
+    /// and part): faces between two cells covered at t^n then carry no flux in the correct.
+    pub(super) fracture: bool,
+    pub(super) grid: Grid,
+    /// Ghost cells of the sweeps' stencil.
+    pub(super) ng: usize,
+    pub(super) gamma: f64,
+    /// The vacuum thresholds `(ρ, p)` of `fluid.vacuum`.
+    pub(super) vacuum: (f64, f64),
+}
+
+/// What persists from one step to the next (and what a checkpoint restores).
+pub(super) struct State {
+    /// The accepted surface and kinematics `F^n`.
+    pub(super) current: SolidFrame,
+    /// Its geometry.
+    pub(super) geom: CutGeometry,
+    pub(super) budget: InterfaceBudget,
+    /// Loads of the accepted surface of the last step (outputs).
+    pub(super) last_loads: Loads,
+}
+
+/// The near-surface data one predict leaves for the loads and the correct of its step.
+pub(super) struct NearCells {
+    /// Cells near the wet surface of `F^n`, ascending.
+    pub(super) cells: Vec<u32>,
+    /// `slot + 1` of each cell in `cells`, 0 elsewhere (reset sparsely).
+    pub(super) slot_of: Vec<u32>,
+    /// `U^n` of the near cells, `nvar` each.
+    pub(super) saved: Vec<f64>,
+    /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces, by face index.
+    pub(super) face_slots: [Vec<(u32, u32)>; 3],
+    /// What the sweeps take in (ghost fills, vacuum cells) and give back (`p̄`, face fluxes).
+    pub(super) hooks: SplitHooks,
+    /// The wall in each near cell (sub-faces of `F^n`), for the ghost states.
+    pub(super) walls: Vec<NearWall>,
+}
+
+/// Buffers of the stages, kept between steps only to reuse their allocations.
+pub(super) struct Scratch {
+    /// Geometry of the trial (loads) or accepted (correct) surface.
+    pub(super) trial: CutGeometry,
+    pub(super) swept: SubfaceSwept,
+    /// Pieces `(cell, volume)` of the prisms of the parts of elements beyond the domain that
+    /// lie in domain cells (see [`super::beyond`]); empty while the surface stays in.
+    pub(super) beyond: Vec<(u32, f64)>,
+    pub(super) beyond_geom: CutGeometry,
+    pub(super) beyond_swept: SubfaceSwept,
+    /// Content `(1 − Λ) U` per near cell, and what the correct did to it.
+    pub(super) content: Vec<[f64; NQ]>,
+    pub(super) kind: Vec<CellKind>,
+    /// Per-slot sums independent of the sub-faces' order (mirror-exact loads).
+    pub(super) odd: OddSum,
+    pub(super) odd_content: OddSum,
+}
+
+impl Config {
+    /// Whether the state `content / alpha` is acceptable (see [`state_ok`]).
+    pub(super) fn physical(&self, content: &[f64; NQ], alpha: f64) -> bool {
+        let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
+        state_ok(&full, self.gamma, self.vacuum.0, self.vacuum.1)
+    }
+}
+
+impl NearCells {
+    /// The slot of cell `c` among the near cells.
+    pub(super) fn slot(&self, c: usize) -> Option<usize> {
+        match self.slot_of[c] {
+            0 => None,
+            k => Some(k as usize - 1),
+        }
+    }
+
+    /// `U^n` of the near cell in slot `k`.
+    pub(super) fn saved(&self, k: usize, nvar: usize) -> &[f64] {
+        &self.saved[k * nvar..(k + 1) * nvar]
+    }
+
+    /// The sweeps' flux through face `face` along `axis`, if kept.
+    pub(super) fn face_flux(&self, axis: usize, face: usize) -> Option<&[f64; NQ]> {
+        let slots = &self.face_slots[axis];
+        let k = slots.binary_search_by_key(&(face as u32), |e| e.0).ok()?;
+        Some(&self.hooks.taps[axis].flux[slots[k].1 as usize])
+    }
+
+    /// `p̄` along `axis` of a near cell.
+    pub(super) fn pressure_of(&self, cell: u32, axis: usize) -> Option<f64> {
+        self.slot(cell as usize)
+            .map(|k| self.hooks.pressures[axis][k])
+    }
+}
+
+impl Embedded {
+    /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
+    pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
+        // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
+        // geometry and the correct on the whole grid (replicated, issue 16): the cut-cell data
+        // are surface-sized, and the same inputs give every rank the bits of one rank. Only the
+        // states of cells near the surface cross ranks (`FluidSolver::cells_at`).
+        let grid = solver.global_grid().clone();
+        if grid.dim != solid.dim {
+            return Err(EmbeddedError::Dimensions {
+                fluid: grid.dim,
+                solid: solid.dim,
+            });
+        }
+        let params = solver.params();
+        let mut e = Embedded {
+            near: NearCells {
+                cells: Vec::new(),
+                slot_of: vec![0; grid.n_cells()],
+                saved: Vec::new(),
+                face_slots: Default::default(),
+                hooks: SplitHooks::default(),
+                walls: Vec::new(),
+            },
+            config: Config {
+                fracture: false,
+                ng: params.ghost_cells(),
+                gamma: params.gamma,
+                vacuum: (params.vacuum_rho, params.vacuum_p),
+                grid,
+            },
+            state: State {
+                current: SolidFrame::default(),
+                geom: CutGeometry::new(),
+                budget: InterfaceBudget::default(),
+                last_loads: Loads::default(),
+            },
+            scratch: Scratch {
+                trial: CutGeometry::new(),
+                swept: SubfaceSwept::new(),
+                beyond: Vec::new(),
+                beyond_geom: CutGeometry::new(),
+                beyond_swept: SubfaceSwept::new(),
+                content: Vec::new(),
+                kind: Vec::new(),
+                odd: OddSum::default(),
+                odd_content: OddSum::default(),
+            },
+        };
+        e.set_surface(solid)?;
+        Ok(e)
+    }
+
+    /// Declares that cracks may open in the solid: links break, or separate bodies touch and
+    /// part (flush walls). Faces between two cells covered at t^n then carry no flux in the
+    /// correct: beside a crack the sweeps' ghost states there can mirror the gas outside the
+    /// particle's far side (a gap opening between two pressed walls took 10 kg/m^2/s through a
+    /// face 2.6e-5 open, the mirror of the gas beyond the wall, and went negative).
+    pub fn set_fracture(&mut self, fracture: bool) {
+        self.config.fracture = fracture;
+    }
+
+    /// Replaces the accepted surface and kinematics (start of a run, or after a restore).
+    pub fn set_surface(&mut self, solid: SolidFrame) -> Result<(), EmbeddedError> {
+        let grid = &self.config.grid;
+        if solid.dim != grid.dim {
+            return Err(EmbeddedError::SurfaceDimension {
+                surface: solid.dim,
+                fluid: grid.dim,
+            });
+        }
+        compute(grid, &solid.surface(), &mut self.state.geom);
+        self.state.current = solid;
+        Ok(())
+    }
+
+    /// The accepted surface `F^n`.
+    pub fn surface(&self) -> &SolidFrame {
+        &self.state.current
+    }
+
+    /// Solid fraction Λ of every cell for the accepted surface.
+    pub fn solid_fraction(&self) -> &[f64] {
+        &self.state.geom.solid_fraction
+    }
+
+    /// Fluid fraction `1 − Λ` of every cell (outputs).
+    pub fn fluid_fraction(&self) -> Vec<f64> {
+        self.state
+            .geom
+            .solid_fraction
+            .iter()
+            .map(|&l| fluid_part(l))
+            .collect()
+    }
+
+    /// Geometry of the accepted surface.
+    pub fn geometry(&self) -> &CutGeometry {
+        &self.state.geom
+    }
+
+    /// Force and torque per particle that the fluid applied over the last step (on the
+    /// accepted surface `F^{n+1}`; zero before the first step).
+    pub fn last_loads(&self) -> &Loads {
+        &self.state.last_loads
+    }
+
+    /// What crossed the interface since the start.
+    pub fn budget(&self) -> InterfaceBudget {
+        self.state.budget
+    }
+
+    /// Restores the budget (checkpoint).
+    pub fn set_budget(&mut self, budget: InterfaceBudget) {
+        self.state.budget = budget;
+    }
+
+    /// Largest step that keeps every surface vertex from crossing more than one cell, at the
+    /// velocities of the accepted frame (DESIGN §3 step 1) \[s\]; infinite for a solid at rest.
+    pub fn one_cell_dt(&self) -> f64 {
+        let s = &self.state.current;
+        let d = s.dim;
+        let mut rate: f64 = 0.0;
+        for (e, nodes) in s.elements.chunks_exact(d).enumerate() {
+            let p = s.element_particle[e] as usize;
+            for &v in nodes {
+                let mut x = [0.0; 3];
+                x[..d].copy_from_slice(&s.vertices[v as usize * d..(v as usize + 1) * d]);
+                let w = s.point_velocity(p, x);
+                for a in 0..d {
+                    rate = rate.max(w[a].abs() / self.config.grid.dx[a]);
+                }
+            }
+        }
+        1.0 / rate
+    }
+
+    /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
+    pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
+        solver.totals_with_solid(&self.state.geom.solid_fraction[solver.slab().global_range()])
+    }
+}
