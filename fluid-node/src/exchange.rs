@@ -135,7 +135,6 @@ impl RealFluid {
             })
             .count() as u64
     }
-
 }
 
 impl NodeModel for RealFluid {

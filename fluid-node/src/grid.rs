@@ -35,7 +35,9 @@ pub enum GridError {
         cells: Vec<usize>,
     },
     /// An axis with `upper <= lower` (or NaN) or no cells.
-    #[error("axis {axis}: need upper > lower and cells > 0, got {lower} .. {upper} with {cells} cells")]
+    #[error(
+        "axis {axis}: need upper > lower and cells > 0, got {lower} .. {upper} with {cells} cells"
+    )]
     Axis {
         /// The axis (0, 1, 2).
         axis: usize,

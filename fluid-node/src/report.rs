@@ -83,12 +83,9 @@ pub fn work_precision(
     orders: &[u32],
     out_dir: &Path,
 ) -> Result<Vec<Row>, ReportError> {
-    let cfg = scene
-        .fluid
-        .as_ref()
-        .ok_or_else(|| ReportError::NoFluid {
-            scene: scene.name.clone(),
-        })?;
+    let cfg = scene.fluid.as_ref().ok_or_else(|| ReportError::NoFluid {
+        scene: scene.name.clone(),
+    })?;
     let reference = RiemannReference::from_config(cfg)?;
     let t_end = scene.run.t_end;
     let mut schemes: Vec<(String, u32, FluxKind)> = Vec::new();
@@ -141,11 +138,9 @@ pub fn work_precision(
     std::fs::create_dir_all(out_dir).map_err(io("creating", out_dir))?;
     let base = out_dir.join(format!("work_precision_{}", scene.name));
     let csv_path = base.with_extension("csv");
-    std::fs::write(&csv_path, to_csv(&rows))
-        .map_err(io("writing", &csv_path))?;
+    std::fs::write(&csv_path, to_csv(&rows)).map_err(io("writing", &csv_path))?;
     let svg_path = base.with_extension("svg");
-    std::fs::write(&svg_path, to_svg(&rows, &scene.name))
-        .map_err(io("writing", &svg_path))?;
+    std::fs::write(&svg_path, to_svg(&rows, &scene.name)).map_err(io("writing", &svg_path))?;
     Ok(rows)
 }
 

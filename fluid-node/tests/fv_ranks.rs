@@ -6,9 +6,7 @@
 //! `tests/it/issue_16_mpi.rs` runs the same through MPI processes.
 
 use fluid_node::embedded::{Embedded, SolidFrame};
-use fluid_node::fv::{
-    BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind, StepReport,
-};
+use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind, StepReport};
 use fluid_node::grid::Grid;
 use fluid_node::ranks::threads::ThreadRanks;
 

@@ -119,9 +119,8 @@ pub fn parse_stl(bytes: &[u8]) -> Result<SurfaceMesh, SurfaceFileError> {
             return Ok(parse_binary(bytes, count));
         }
     }
-    let text = std::str::from_utf8(bytes).map_err(|_| {
-        SurfaceFileError::NotStl { size: bytes.len() }
-    })?;
+    let text =
+        std::str::from_utf8(bytes).map_err(|_| SurfaceFileError::NotStl { size: bytes.len() })?;
     if !text.trim_start().starts_with("solid") {
         return Err(SurfaceFileError::NoSolidHeader);
     }
@@ -162,11 +161,9 @@ fn parse_ascii(text: &str) -> Result<SurfaceMesh, SurfaceFileError> {
                 let mut x = [0.0; 3];
                 for value in &mut x {
                     let token = tokens.next().unwrap_or("");
-                    *value = token.parse().map_err(|_| {
-                        SurfaceFileError::BadCoordinate {
-                            line: line_no + 1,
-                            token: token.to_string(),
-                        }
+                    *value = token.parse().map_err(|_| SurfaceFileError::BadCoordinate {
+                        line: line_no + 1,
+                        token: token.to_string(),
                     })?;
                 }
                 facet.push(x);
@@ -321,7 +318,7 @@ mod tests {
     fn bad_stl_is_refused() {
         assert!(parse_stl(b"hello").is_err());
         let err = parse_stl(b"solid x\nfacet\nouter loop\nvertex 0 0 zz\n").unwrap_err();
-        assert!(err.0.contains("line 4"), "{err}");
+        assert!(err.to_string().contains("line 4"), "{err}");
     }
 
     #[test]

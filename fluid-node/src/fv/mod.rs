@@ -82,12 +82,12 @@ mod tests;
 
 pub use comm::{Comm, Serial};
 pub use line::FluxKind;
-pub use slab::Slab;
 pub use scene::{ConfigError, from_scene};
+pub use slab::Slab;
 pub use slab::SlabError;
 pub use solver::{
-    CheckpointError, FluidSolver, GhostFill, RefusedTimeStep, SplitHooks, StepError, StepReport, Totals, Trouble,
-    SolverError, TroubleKind, sweep_order,
+    CheckpointError, FluidSolver, GhostFill, RefusedTimeStep, SolverError, SplitHooks, StepError,
+    StepReport, Totals, Trouble, TroubleKind, sweep_order,
 };
 pub use state::{BoundaryKind, CHARACTERISTIC_SIGMA, FluidParams, FluidState};
 pub use sweep::{FaceTap, Wall, WallRun, mirror};

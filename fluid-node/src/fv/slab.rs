@@ -16,7 +16,6 @@ use crate::fv::line::MAX_FIXES;
 use crate::fv::state::BoundaryKind;
 use crate::grid::Grid;
 
-
 /// Why a grid cannot be decomposed over the ranks.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SlabError {

@@ -4,8 +4,8 @@
 
 use protocol::scene::FluidConfig;
 
-use crate::fv::exact_riemann::{ExactRiemann, Prim1};
 use crate::fv::exact_riemann::RiemannError;
+use crate::fv::exact_riemann::{ExactRiemann, Prim1};
 use crate::fv::scene::from_scene;
 use crate::fv::{FluidSolver, FluxKind, SolverError};
 

@@ -6,6 +6,7 @@ use std::sync::{Mutex, OnceLock};
 use protocol::scene::FluidConfig;
 
 use crate::fv::comm::{Comm, Serial};
+use crate::fv::euler::NQ;
 use crate::fv::line::{FluxKind, LineScratch};
 use crate::fv::scene::{ConfigError, from_scene};
 use crate::fv::slab::{Slab, SlabError};
@@ -64,8 +65,8 @@ pub struct FluidSolver {
     pub(super) comm: Box<dyn Comm>,
     /// Halo planes of the neighbours below and above (empty without neighbours).
     pub(super) halo: [Vec<f64>; 2],
-    /// The [`SplitHooks`] of a coupled step on this rank's slab (scratch).
-    pub(super) local: hooks::LocalHooks,
+    /// The [`SplitHooks`](crate::fv::SplitHooks) of a coupled step on this rank's slab (scratch).
+    pub(super) local: LocalHooks,
     pub(super) params: FluidParams,
     pub(super) state: FluidState,
     pub(super) buffer: Vec<f64>,
@@ -293,5 +294,4 @@ impl FluidSolver {
             + vec_bytes(&self.scratch)
             + self.halo.iter().map(vec_bytes).sum::<usize>()
     }
-
 }

@@ -3,8 +3,8 @@
 
 use std::sync::OnceLock;
 
-use crate::fv::solver::FluidSolver;
 use crate::fv::euler::NQ;
+use crate::fv::solver::FluidSolver;
 
 /// Checkpoint layout (node-private bytes, see [`FluidSolver::to_checkpoint`]).
 #[derive(serde::Serialize, serde::Deserialize)]

@@ -4,9 +4,9 @@
 
 use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
+use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::cell_primitive;
 use crate::fv::solver::hooks::{GhostFill, SplitHooks};
-use crate::fv::solver::FluidSolver;
 use crate::fv::sweep::{frame, from_local, mirror, to_local};
 
 /// What one rank sends of the hooks' outputs: the pressures of its slots (one list per axis)
