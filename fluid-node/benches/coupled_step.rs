@@ -432,14 +432,22 @@ fn main() {
             rows.push(row);
         }
     }
+    print_times(&rows, steps, warmup);
+    print_geometry(&rows);
+    print_exponents(&rows);
+    print_memory(&rows);
+    print_rss(&rows, warmup);
+}
 
+/// The table of step times, coupled against fluid-only.
+fn print_times(rows: &[Row], steps: usize, warmup: usize) {
     println!(
         "\ncoupled step vs fluid-only step (OSMP 5, 1 thread; medians of {steps} steps after {warmup}; times in ms; ratio, overhead and interface paired per step)"
     );
     println!(
         "dim     n         N  cut cells  covered  near cells   advance  (totals)   predict     loads   correct  ratio P+3L+C/A  pred.overhead  interface  interface/A"
     );
-    for r in &rows {
+    for r in rows {
         let t = &r.t;
         println!(
             "{:3} {:5} {:9} {:10} {:8} {:11} {:9.2} {:9.2} {:9.2} {:9.3} {:9.3} {:15.3} {:14.3} {:10.3} {:12.4}",
@@ -460,14 +468,17 @@ fn main() {
             t.interface / t.advance
         );
     }
+}
 
+/// The table of the geometry's share of loads and correct.
+fn print_geometry(rows: &[Row]) {
     println!(
         "\ngeometry inside loads and correct (ms; geometry = cutcell::compute of the trial surface)"
     );
     println!(
         "dim     n  geometry  loads-geometry  swept  correct-geometry-swept  geometry share of loads, correct"
     );
-    for r in &rows {
+    for r in rows {
         let t = &r.t;
         println!(
             "{:3} {:5} {:9.3} {:15.3} {:6.3} {:23.3} {:12.2} {:8.2}",
@@ -481,7 +492,10 @@ fn main() {
             (t.geometry + t.swept) / t.correct
         );
     }
+}
 
+/// The exponents of counts and times against the cell count.
+fn print_exponents(rows: &[Row]) {
     println!("\nfitted exponents against N (least squares over the grids)");
     for dim in [2, 3] {
         let of = |f: &dyn Fn(&Row) -> f64| -> Vec<(f64, f64)> {
@@ -506,12 +520,15 @@ fn main() {
             if dim == 2 { "1/2" } else { "2/3" }
         );
     }
+}
 
+/// The table of heap bytes held.
+fn print_memory(rows: &[Row]) {
     println!("\nheap bytes held (capacities; MiB)");
     println!(
         "dim     n   fluid-only  (state)  coupled solver  dense geometry  slot_of  near-surface  sparse geometry  coupled total  coupled/fluid"
     );
-    for r in &rows {
+    for r in rows {
         let e = &r.embedded;
         let coupled = r.coupled_solver_bytes + e.total();
         println!(
@@ -529,7 +546,10 @@ fn main() {
             coupled as f64 / r.fluid_bytes as f64
         );
     }
+}
 
+/// The peak resident set of child processes on the largest 3-D grid.
+fn print_rss(rows: &[Row], warmup: usize) {
     if let Some(r) = rows.iter().filter(|r| r.dim == 3).max_by_key(|r| r.n) {
         let n_steps = warmup + 1;
         match (

@@ -122,8 +122,7 @@ fn run(args: Args) -> anyhow::Result<()> {
                 let text = std::fs::read_to_string(&scene)
                     .with_context(|| format!("reading scene {}", scene.display()))?;
                 let scene = Scene::from_toml_str(&text, &scene.display().to_string())?;
-                let rows = crate::report::work_precision(&scene, &cells, &orders, &out)
-                    .map_err(anyhow::Error::msg)?;
+                let rows = crate::report::work_precision(&scene, &cells, &orders, &out)?;
                 print!("{}", crate::report::to_csv(&rows));
                 tracing::info!(
                     "wrote {0}/work_precision_{1}.csv and {0}/work_precision_{1}.svg",
@@ -160,8 +159,32 @@ fn run(args: Args) -> anyhow::Result<()> {
     serve(
         NodeKind::Fluid,
         &opts,
-        node::model_from_scene,
+        |scene, implementation| {
+            // The wire boundary: `serve` reports the text to the coupler.
+            model_from_scene(scene, implementation).map_err(|e| e.to_string())
+        },
         |mut model, link, cfg| node::run(model.as_mut(), link, cfg),
     )?;
     Ok(())
+}
+
+/// Builds the fluid implementation named `implementation` (`real` or `pressure`) for a scene.
+pub fn model_from_scene(
+    scene: &protocol::scene::Scene,
+    implementation: &str,
+) -> Result<Box<dyn crate::model::FluidModel + Send>, crate::Error> {
+    let fluid = scene.fluid.as_ref().ok_or(crate::Error::NoFluid)?;
+    match implementation {
+        "pressure" => Ok(Box::new(crate::double::PressureDouble::new(
+            scene.dim(),
+            fluid
+                .pressure
+                .clone()
+                .ok_or(crate::Error::NoPressureField)?,
+        ))),
+        "real" => Ok(Box::new(crate::exchange::RealFluid::from_scene(scene)?)),
+        other => Err(crate::Error::UnknownImplementation {
+            implementation: other.to_string(),
+        }),
+    }
 }

@@ -203,6 +203,9 @@ fn create(dir: &Path, name: &str) -> anyhow::Result<std::io::BufWriter<std::fs::
     Ok(std::io::BufWriter::new(file))
 }
 
+/// Writes every output of the command into `dir`: the cells, the faces with λ > 0 and the
+/// sub-faces as legacy VTK and CSV, the same as VTK XML for ParaView, and (with `moved`) the
+/// swept volumes.
 fn write_outputs(
     dir: &Path,
     grid: &Grid,
@@ -211,9 +214,32 @@ fn write_outputs(
     moved: Option<&(CutGeometry, SweptVolumes)>,
     per_cell_swept: &[f64],
 ) -> anyhow::Result<()> {
-    let io = |err: std::io::Error| anyhow::anyhow!("writing outputs in {}: {err}", dir.display());
+    let mut scalars = vec![("solid_fraction", &geometry.solid_fraction[..])];
+    if let Some((geometry_to, _)) = moved {
+        scalars.push(("solid_fraction_to", &geometry_to.solid_fraction[..]));
+        scalars.push(("swept_volume", per_cell_swept));
+    }
+    write_cells(dir, grid, &scalars)?;
+    write_faces(dir, grid, geometry)?;
+    write_subfaces(dir, grid, geometry)?;
+    write_xml(dir, grid, geometry, &scalars)?;
+    if let Some((_, swept)) = moved {
+        write_swept(dir, grid, mesh, swept)?;
+    }
+    Ok(())
+}
 
-    // Cells: VTK structured points with cell data, and a CSV of the non-empty cells.
+/// The error of a failed write into `dir`.
+fn io_error(dir: &Path) -> impl Fn(std::io::Error) -> anyhow::Error + Copy + '_ {
+    move |err| anyhow::anyhow!("writing outputs in {}: {err}", dir.display())
+}
+
+/// Per-cell values by name (Λ, and with a motion Λ after it and the swept volume).
+type Scalars<'a> = [(&'a str, &'a [f64])];
+
+/// Cells: VTK structured points with cell data, and a CSV of the non-empty cells.
+fn write_cells(dir: &Path, grid: &Grid, scalars: &Scalars<'_>) -> anyhow::Result<()> {
+    let io = io_error(dir);
     let mut w = create(dir, "solid_fraction.vtk")?;
     let dims: Vec<usize> = (0..3)
         .map(|a| if a < grid.dim { grid.cells[a] + 1 } else { 1 })
@@ -237,12 +263,7 @@ fn write_outputs(
     .map_err(io)?;
     writeln!(w, "SPACING {} {} {}", spacing[0], spacing[1], spacing[2]).map_err(io)?;
     writeln!(w, "CELL_DATA {}", grid.n_cells()).map_err(io)?;
-    let mut scalars = vec![("solid_fraction", &geometry.solid_fraction[..])];
-    if let Some((geometry_to, _)) = moved {
-        scalars.push(("solid_fraction_to", &geometry_to.solid_fraction[..]));
-        scalars.push(("swept_volume", per_cell_swept));
-    }
-    for (name, values) in &scalars {
+    for (name, values) in scalars {
         writeln!(w, "SCALARS {name} double 1\nLOOKUP_TABLE default").map_err(io)?;
         for v in values.iter() {
             writeln!(w, "{v}").map_err(io)?;
@@ -263,14 +284,18 @@ fn write_outputs(
         }
         let [i, j, k] = grid.ijk(c);
         write!(w, "{c},{i},{j},{k}").map_err(io)?;
-        for (_, v) in &scalars {
+        for (_, v) in scalars {
             write!(w, ",{}", v[c]).map_err(io)?;
         }
         writeln!(w).map_err(io)?;
     }
     w.flush().map_err(io)?;
+    Ok(())
+}
 
-    // Faces with λ > 0: CSV and VTK points at the face centres.
+/// Faces with λ > 0: CSV and VTK points at the face centres.
+fn write_faces(dir: &Path, grid: &Grid, geometry: &CutGeometry) -> anyhow::Result<()> {
+    let io = io_error(dir);
     let mut faces = Vec::new();
     for axis in 0..grid.dim {
         let mut n = grid.cells;
@@ -326,8 +351,12 @@ fn write_outputs(
         writeln!(w, "{axis}").map_err(io)?;
     }
     w.flush().map_err(io)?;
+    Ok(())
+}
 
-    // Sub-faces.
+/// Sub-faces: CSV and VTK polygons (3-D) or lines (2-D).
+fn write_subfaces(dir: &Path, grid: &Grid, geometry: &CutGeometry) -> anyhow::Result<()> {
+    let io = io_error(dir);
     let mut w = create(dir, "subfaces.csv")?;
     writeln!(w, "cell,i,j,k,element,particle,area,nx,ny,nz,cx,cy,cz").map_err(io)?;
     for s in &geometry.subfaces {
@@ -399,8 +428,17 @@ fn write_outputs(
         writeln!(w, "{} {} {}", s.normal[0], s.normal[1], s.normal[2]).map_err(io)?;
     }
     w.flush().map_err(io)?;
+    Ok(())
+}
 
-    // The same cell data and sub-faces as VTK XML (compressed binary) for ParaView.
+/// The same cell data and sub-faces as VTK XML (compressed binary) for ParaView.
+fn write_xml(
+    dir: &Path,
+    grid: &Grid,
+    geometry: &CutGeometry,
+    scalars: &Scalars<'_>,
+) -> anyhow::Result<()> {
+    let io = io_error(dir);
     let image = ImageData {
         cells: grid.cells,
         origin: grid.lower,
@@ -454,25 +492,33 @@ fn write_outputs(
         poly_data(&poly, "cut-cell sub-faces"),
     )
     .map_err(io)?;
+    Ok(())
+}
 
-    if let Some((_, swept)) = moved {
-        let mut w = create(dir, "swept.csv")?;
-        writeln!(w, "element,particle,cell,i,j,k,volume").map_err(io)?;
-        for e in &swept.entries {
-            let [i, j, k] = grid.ijk(e.cell as usize);
-            let particle = mesh
-                .element_particle
-                .get(e.element as usize)
-                .copied()
-                .unwrap_or(0);
-            writeln!(
-                w,
-                "{},{particle},{},{i},{j},{k},{}",
-                e.element, e.cell, e.volume
-            )
-            .map_err(io)?;
-        }
-        w.flush().map_err(io)?;
+/// The swept volume of each element in each cell it crosses (CSV).
+fn write_swept(
+    dir: &Path,
+    grid: &Grid,
+    mesh: &SurfaceMesh,
+    swept: &SweptVolumes,
+) -> anyhow::Result<()> {
+    let io = io_error(dir);
+    let mut w = create(dir, "swept.csv")?;
+    writeln!(w, "element,particle,cell,i,j,k,volume").map_err(io)?;
+    for e in &swept.entries {
+        let [i, j, k] = grid.ijk(e.cell as usize);
+        let particle = mesh
+            .element_particle
+            .get(e.element as usize)
+            .copied()
+            .unwrap_or(0);
+        writeln!(
+            w,
+            "{},{particle},{},{i},{j},{k},{}",
+            e.element, e.cell, e.volume
+        )
+        .map_err(io)?;
     }
+    w.flush().map_err(io)?;
     Ok(())
 }

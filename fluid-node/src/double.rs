@@ -12,7 +12,8 @@ use protocol::scene::PressureField;
 use protocol::session::NodeModel;
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
-use crate::node::FluidModel;
+use crate::Error;
+use crate::model::FluidModel;
 
 /// The pressure double's state.
 #[derive(Clone, Debug)]
@@ -207,16 +208,16 @@ impl FluidModel for PressureDouble {
         self.dim
     }
 
-    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), Error> {
         self.previous = Some(state.clone());
         Ok(())
     }
 
-    fn predict(&mut self, _plan: &StepPlan) -> Result<(), String> {
+    fn predict(&mut self, _plan: &StepPlan) -> Result<(), Error> {
         Ok(())
     }
 
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, Error> {
         let mut loads = InterfaceLoads {
             stamp: plan.stamp,
             dim: state.dim,
@@ -233,7 +234,7 @@ impl FluidModel for PressureDouble {
         Ok(loads)
     }
 
-    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), Error> {
         let (Some(state), Some(loads)) = (state, &self.last_loads) else {
             return Ok(());
         };

@@ -16,10 +16,11 @@ use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, n_rot,
 };
 
+use crate::Error;
 use crate::embedded::{COVERED_TOLERANCE, Embedded, InterfaceBudget, SolidFrame};
+use crate::fv::FluidSolver;
 use crate::fv::comm::{Comm, Serial};
-use crate::fv::{FluidSolver, Trouble};
-use crate::node::FluidModel;
+use crate::model::FluidModel;
 
 /// The real fluid.
 pub struct RealFluid {
@@ -50,34 +51,26 @@ struct Probe {
 
 impl RealFluid {
     /// Builds the solver of a scene on one rank.
-    pub fn from_scene(scene: &Scene) -> Result<RealFluid, String> {
+    pub fn from_scene(scene: &Scene) -> Result<RealFluid, Error> {
         RealFluid::from_scene_on(scene, Box::new(Serial))
     }
 
     /// Builds this rank's part of the fluid of a scene on the ranks of `comm` (issue 16). With
     /// several ranks every [`NodeModel`] and [`FluidModel`] method is collective (all ranks call
     /// it in the same order, `crate::ranks::node`) and only rank 0 writes files.
-    pub fn from_scene_on(scene: &Scene, comm: Box<dyn Comm>) -> Result<RealFluid, String> {
-        let cfg = scene
-            .fluid
-            .as_ref()
-            .ok_or("the scene has no [fluid] section")?;
+    pub fn from_scene_on(scene: &Scene, comm: Box<dyn Comm>) -> Result<RealFluid, Error> {
+        let cfg = scene.fluid.as_ref().ok_or(Error::NoFluid)?;
         if scene.solid.is_some() && scene.dim() == 1 {
-            return Err(
-                "a coupled scene needs a 2-D or 3-D fluid (the embedded solid has no 1-D form)"
-                    .into(),
-            );
+            return Err(Error::CoupledOneD);
         }
         let solver = FluidSolver::from_scene_on(cfg, scene.run.threads as usize, comm)?;
         let mut probes = Vec::new();
         for probe in &scene.output.probes {
             if let Some(point) = &probe.point {
                 let global = solver.global_grid();
-                let ijk = global.locate(point).ok_or_else(|| {
-                    format!(
-                        "probe {:?}: point {point:?} is outside the grid",
-                        probe.name
-                    )
+                let ijk = global.locate(point).ok_or_else(|| Error::ProbeOutside {
+                    name: probe.name.clone(),
+                    point: point.clone(),
                 })?;
                 probes.push(Probe {
                     name: probe.name.clone(),
@@ -104,10 +97,8 @@ impl RealFluid {
         })
     }
 
-    fn embedded(&mut self, step: u64) -> Result<&mut Embedded, String> {
-        self.embedded
-            .as_mut()
-            .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))
+    fn embedded(&mut self, step: u64) -> Result<&mut Embedded, Error> {
+        self.embedded.as_mut().ok_or(Error::NoSurface { step })
     }
 
     /// Whether this rank writes the files (rank 0).
@@ -146,32 +137,6 @@ impl RealFluid {
             })
             .count() as u64
     }
-
-    fn check_dt(&self, plan: &StepPlan) -> Result<(), String> {
-        let allowed = self.solver.max_dt();
-        // NOTE: the coupler's step is the minimum of the proposals, so it can only exceed the
-        // CFL step through a bug or a tampered message; refuse rather than run unstable.
-        if plan.dt > allowed * (1.0 + 1e-12) {
-            return Err(format!(
-                "step {}: CFL violated: dt = {:e} exceeds the CFL step {:e}",
-                plan.stamp.step, plan.dt, allowed
-            ));
-        }
-        Ok(())
-    }
-}
-
-fn describe(troubles: &[Trouble], step: u64) -> String {
-    let list: Vec<String> = troubles
-        .iter()
-        .map(|t| {
-            format!(
-                "{:?} in cell {:?} at {:?} after the sweep along axis {}: rho = {:e}, p = {:e}, velocity = {:?}",
-                t.kind, t.cell, t.position, t.axis, t.rho, t.p, t.velocity
-            )
-        })
-        .collect();
-    format!("step {step}: {}", list.join("; "))
 }
 
 impl NodeModel for RealFluid {
@@ -236,7 +201,10 @@ impl NodeModel for RealFluid {
     fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
         let (solver, budget): (Vec<u8>, Option<InterfaceBudget>) =
             protocol::codec::decode_blob(bytes)?;
-        self.solver.restore_checkpoint(&solver)?;
+        // The wire boundary: `NodeModel` is the protocol's trait and takes the text.
+        self.solver
+            .restore_checkpoint(&solver)
+            .map_err(|e| e.to_string())?;
         // The surface comes next (`set_initial_surface`), which rebuilds the geometry.
         self.pending_budget = budget;
         if let (Some(e), Some(b)) = (&mut self.embedded, budget) {
@@ -355,15 +323,15 @@ impl FluidModel for RealFluid {
         self.solver.grid().dim
     }
 
-    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), Error> {
         if !self.coupled {
             return Ok(());
         }
         let frame = solid_frame(state)?;
         match &mut self.embedded {
-            Some(e) => e.set_surface(frame).map_err(|e| e.to_string())?,
+            Some(e) => e.set_surface(frame)?,
             None => {
-                let mut e = Embedded::new(&self.solver, frame).map_err(|e| e.to_string())?;
+                let mut e = Embedded::new(&self.solver, frame)?;
                 e.set_fracture(self.fracture);
                 self.embedded = Some(e);
             }
@@ -374,32 +342,25 @@ impl FluidModel for RealFluid {
         Ok(())
     }
 
-    fn predict(&mut self, plan: &StepPlan) -> Result<(), String> {
+    fn predict(&mut self, plan: &StepPlan) -> Result<(), Error> {
         if !self.coupled {
             return Ok(());
         }
-        self.check_dt(plan)?;
         let step = plan.stamp.step;
         let solver = &mut self.solver;
-        let embedded = self
-            .embedded
-            .as_mut()
-            .ok_or_else(|| format!("step {step}: a coupled step before the initial wet surface"))?;
-        let report = embedded.predict(solver, plan.dt);
-        if report.ok() {
-            Ok(())
-        } else {
-            Err(describe(&report.troubles, step))
-        }
+        let embedded = self.embedded.as_mut().ok_or(Error::NoSurface { step })?;
+        // The solver checks the time step (the one CFL check, `FluidSolver::predict`).
+        embedded.predict(solver, plan.dt).check(step)?;
+        Ok(())
     }
 
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, Error> {
         let step = plan.stamp.step;
         let frame = solid_frame(state)?;
         let loads = self
             .embedded(step)?
             .loads(&frame)
-            .map_err(|e| e.at_step(step).to_string())?;
+            .map_err(|e| e.at_step(step))?;
         Ok(InterfaceLoads {
             stamp: plan.stamp,
             dim: state.dim,
@@ -408,36 +369,29 @@ impl FluidModel for RealFluid {
         })
     }
 
-    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), Error> {
         let step = plan.stamp.step;
         if let Some(state) = state {
             let frame = solid_frame(state)?;
             let solver = &mut self.solver;
-            let embedded = self.embedded.as_mut().ok_or_else(|| {
-                format!("step {step}: a coupled step before the initial wet surface")
-            })?;
+            let embedded = self.embedded.as_mut().ok_or(Error::NoSurface { step })?;
             let explicit = plan.scheme == protocol::wire::Scheme::Explicit;
-            embedded
-                .correct(solver, plan.dt, frame, step, explicit)
-                .map_err(|e| e.to_string())?;
+            embedded.correct(solver, plan.dt, frame, step, explicit)?;
             return Ok(());
         }
-        self.check_dt(plan)?;
-        let report = self.solver.advance(plan.dt);
-        if report.ok() {
-            Ok(())
-        } else {
-            Err(describe(&report.troubles, step))
-        }
+        // The solver checks the time step (the one CFL check, `FluidSolver::advance`).
+        self.solver.advance(plan.dt).check(step)?;
+        Ok(())
     }
 }
 
 /// Copies the parts of a wire [`SolidState`] the fluid uses, checking their lengths.
-fn solid_frame(s: &SolidState) -> Result<SolidFrame, String> {
+fn solid_frame(s: &SolidState) -> Result<SolidFrame, Error> {
     let dim = s.dim as usize;
     let n = s.n_particles();
     let surface = &s.surface;
     let ne = surface.n_elements();
+    let step = s.stamp.step;
     if !(dim == 2 || dim == 3)
         || surface.dim != s.dim
         || s.velocity.len() != n * dim
@@ -446,32 +400,33 @@ fn solid_frame(s: &SolidState) -> Result<SolidFrame, String> {
         || surface.elements.len() != ne * dim
         || surface.wet.len() != ne
     {
-        return Err(format!(
-            "solid state of step {} is malformed: dim {} (surface {}), {} positions, {} velocities, {} angular velocities, {} vertex values, {} element indices for {} elements, {} wet flags",
-            s.stamp.step,
-            s.dim,
-            surface.dim,
-            s.position.len(),
-            s.velocity.len(),
-            s.angular_velocity.len(),
-            surface.vertices.len(),
-            surface.elements.len(),
-            ne,
-            surface.wet.len()
-        ));
+        return Err(Error::MalformedSolid {
+            step,
+            dim: s.dim,
+            surface_dim: surface.dim,
+            positions: s.position.len(),
+            velocities: s.velocity.len(),
+            angular_velocities: s.angular_velocity.len(),
+            vertex_values: surface.vertices.len(),
+            element_indices: surface.elements.len(),
+            elements: ne,
+            wet_flags: surface.wet.len(),
+        });
     }
     if let Some(&p) = surface.element_particle.iter().find(|&&p| p as usize >= n) {
-        return Err(format!(
-            "solid state of step {}: an element belongs to particle {p}, there are {n}",
-            s.stamp.step
-        ));
+        return Err(Error::ElementParticle {
+            step,
+            particle: p,
+            particles: n,
+        });
     }
     let nv = (surface.vertices.len() / dim) as u32;
     if let Some(&v) = surface.elements.iter().find(|&&v| v >= nv) {
-        return Err(format!(
-            "solid state of step {}: an element uses vertex {v}, there are {nv}",
-            s.stamp.step
-        ));
+        return Err(Error::ElementVertex {
+            step,
+            vertex: v,
+            vertices: nv,
+        });
     }
     Ok(SolidFrame {
         dim,

@@ -19,25 +19,47 @@ pub struct Grid {
 }
 
 /// Why a grid cannot be built.
-#[derive(Clone, Debug, PartialEq)]
-pub struct GridError(pub String);
-
-impl std::fmt::Display for GridError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GridError {
+    /// Not 1 to 3 axes, or corners and counts of different lengths.
+    #[error(
+        "grid needs 1 to 3 axes with matching lengths, got lower {lower:?}, upper {upper:?}, \
+         cells {cells:?}"
+    )]
+    Axes {
+        /// Lower corner given \[m\].
+        lower: Vec<f64>,
+        /// Upper corner given \[m\].
+        upper: Vec<f64>,
+        /// Cells per axis given.
+        cells: Vec<usize>,
+    },
+    /// An axis with `upper <= lower` (or NaN) or no cells.
+    #[error(
+        "axis {axis}: need upper > lower and cells > 0, got {lower} .. {upper} with {cells} cells"
+    )]
+    Axis {
+        /// The axis (0, 1, 2).
+        axis: usize,
+        /// Its lower bound \[m\].
+        lower: f64,
+        /// Its upper bound \[m\].
+        upper: f64,
+        /// Its cell count.
+        cells: usize,
+    },
 }
-
-impl std::error::Error for GridError {}
 
 impl Grid {
     /// Builds a grid from per-axis corners and counts (all of the same length 1, 2 or 3).
     pub fn new(lower: &[f64], upper: &[f64], cells: &[usize]) -> Result<Grid, GridError> {
         let dim = lower.len();
         if !(1..=3).contains(&dim) || upper.len() != dim || cells.len() != dim {
-            return Err(GridError(format!(
-                "grid needs 1 to 3 axes with matching lengths, got lower {lower:?}, upper {upper:?}, cells {cells:?}"
-            )));
+            return Err(GridError::Axes {
+                lower: lower.to_vec(),
+                upper: upper.to_vec(),
+                cells: cells.to_vec(),
+            });
         }
         let mut grid = Grid {
             dim,
@@ -50,10 +72,12 @@ impl Grid {
             if upper[axis].partial_cmp(&lower[axis]) != Some(std::cmp::Ordering::Greater)
                 || cells[axis] == 0
             {
-                return Err(GridError(format!(
-                    "axis {axis}: need upper > lower and cells > 0, got {} .. {} with {} cells",
-                    lower[axis], upper[axis], cells[axis]
-                )));
+                return Err(GridError::Axis {
+                    axis,
+                    lower: lower[axis],
+                    upper: upper[axis],
+                    cells: cells[axis],
+                });
             }
             grid.lower[axis] = lower[axis];
             grid.upper[axis] = upper[axis];

@@ -5,9 +5,11 @@
 //! - [`grid`]: the Cartesian grid (1, 2 or 3 active axes).
 //! - [`fv`]: the pure finite-volume core (no IO, no clock).
 //! - [`cutcell`]: the pure cut-cell geometry (no IO, no clock).
-//! - [`node`]: the node loop over any transport; [`double`]: the pressure double.
+//! - [`node`]: the node loop over any transport, written against [`model::FluidModel`];
+//!   [`double`]: the pressure double.
 //! - [`output`]: fluid CSV and legacy VTK writers.
 //! - [`report`]: work–precision study (wall time, CSV and SVG files).
+//! - [`Error`]: what building or running the node fails with (each module's error converts in).
 
 #![warn(missing_docs)]
 
@@ -18,11 +20,15 @@ pub mod cutcell;
 pub mod cutcell_cmd;
 pub mod double;
 pub mod embedded;
+mod error;
 pub mod exchange;
 pub mod fv;
 pub mod grid;
 mod memory;
+pub mod model;
 pub mod node;
 pub mod output;
 pub mod ranks;
 pub mod report;
+
+pub use error::Error;

@@ -6,27 +6,9 @@ use std::path::Path;
 
 use protocol::session::{NodeModel, fail, run_node, unexpected};
 use protocol::transport::Link;
-use protocol::wire::{
-    ConservedTotals, Decision, InterfaceLoads, Message, NodeKind, SolidState, Stamp, StepPlan,
-};
+use protocol::wire::{ConservedTotals, Decision, Message, NodeKind, SolidState, Stamp, StepPlan};
 
-/// What the loop needs from a fluid implementation, beyond what every node gives
-/// ([`NodeModel`]).
-pub trait FluidModel: NodeModel {
-    /// Spatial dimension.
-    fn dim(&self) -> usize;
-    /// Receives the accepted wet surface and kinematics at the start of a step (coupled runs):
-    /// `F^0` before the first step, or the checkpoint's surface after a restore.
-    fn set_initial_surface(&mut self, _state: &SolidState) -> Result<(), String> {
-        Ok(())
-    }
-    /// Start of a step: fluxes over the grid ignoring the solid, and the directional pressures.
-    fn predict(&mut self, plan: &StepPlan) -> Result<(), String>;
-    /// Force and torque per particle on a trial solid state (eq. 23–25 of paper 003).
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String>;
-    /// End of a step: the final solid state (`None` without a solid) is applied.
-    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String>;
-}
+use crate::model::FluidModel;
 
 pub use protocol::session::{LoopConfig, NodeError};
 
@@ -67,7 +49,10 @@ impl NodeModel for FluidSide<'_> {
             None => None,
         };
         if let Some(s) = &self.surface {
-            self.model.set_initial_surface(s)?;
+            // The wire boundary: `NodeModel` is the protocol's trait and takes the text.
+            self.model
+                .set_initial_surface(s)
+                .map_err(|e| e.to_string())?;
         }
         Ok(())
     }
@@ -98,12 +83,12 @@ impl FluidSide<'_> {
         let step = plan.stamp.step;
         self.model
             .predict(plan)
-            .map_err(|e| fail(link, plan.stamp, e))?;
+            .map_err(|e| fail(link, plan.stamp, e.to_string()))?;
         if !coupled {
             return self
                 .model
                 .correct(plan, None)
-                .map_err(|e| fail(link, plan.stamp, e));
+                .map_err(|e| fail(link, plan.stamp, e.to_string()));
         }
         let accepted = self
             .surface
@@ -122,7 +107,7 @@ impl FluidSide<'_> {
             let mut loads = self
                 .model
                 .loads(plan, &trial)
-                .map_err(|e| fail(link, Stamp { step, iteration }, e))?;
+                .map_err(|e| fail(link, Stamp { step, iteration }, e.to_string()))?;
             loads.stamp = Stamp { step, iteration };
             link.send(&Message::InterfaceLoads(loads))?;
             trial = match link.recv()? {
@@ -145,7 +130,7 @@ impl FluidSide<'_> {
         }
         self.model
             .correct(plan, Some(&trial))
-            .map_err(|e| fail(link, plan.stamp, e))?;
+            .map_err(|e| fail(link, plan.stamp, e.to_string()))?;
         self.surface = Some(trial);
         Ok(())
     }
@@ -171,7 +156,7 @@ pub fn run(
             Message::SolidState(s) => {
                 side.model
                     .set_initial_surface(&s)
-                    .map_err(|e| fail(link, s.stamp, e))?;
+                    .map_err(|e| fail(link, s.stamp, e.to_string()))?;
                 side.surface = Some(s);
                 Ok(())
             }
@@ -179,28 +164,4 @@ pub fn run(
         },
         |side, link, plan| side.advance(link, plan, coupled),
     )
-}
-
-/// Builds the fluid implementation named `implementation` (`real` or `pressure`) for a scene.
-pub fn model_from_scene(
-    scene: &protocol::scene::Scene,
-    implementation: &str,
-) -> Result<Box<dyn FluidModel + Send>, String> {
-    let fluid = scene
-        .fluid
-        .as_ref()
-        .ok_or("the scene has no [fluid] section")?;
-    match implementation {
-        "pressure" => Ok(Box::new(crate::double::PressureDouble::new(
-            scene.dim(),
-            fluid
-                .pressure
-                .clone()
-                .ok_or("the pressure double needs a [fluid.pressure] table in the scene")?,
-        ))),
-        "real" => Ok(Box::new(crate::exchange::RealFluid::from_scene(scene)?)),
-        other => Err(format!(
-            "unknown fluid implementation {other:?} (expected real, pressure or replay:FILE.mcap)"
-        )),
-    }
 }

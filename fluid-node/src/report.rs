@@ -9,8 +9,51 @@ use std::time::Instant;
 
 use protocol::scene::Scene;
 
-use crate::fv::FluxKind;
-use crate::fv::study::{RiemannReference, solver_for};
+use crate::fv::study::{RiemannReference, StudyError, solver_for};
+use crate::fv::{FluxKind, SolverError, StepError};
+
+/// Why the work–precision study stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The scene has no `[fluid]` table.
+    #[error("scene {scene} has no [fluid] table")]
+    NoFluid {
+        /// The scene's name.
+        scene: String,
+    },
+    /// The scene is no 1-D Riemann problem.
+    #[error(transparent)]
+    Study(#[from] StudyError),
+    /// An OSMP order other than 3, 5 or 7.
+    #[error("osmp order must be 3, 5 or 7, got {order}")]
+    FluxOrder {
+        /// The order given.
+        order: u32,
+    },
+    /// A solver could not be built.
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// A run met numerical trouble.
+    #[error("{scheme} at {cells} cells: numerical trouble: {source}")]
+    Trouble {
+        /// The scheme (`osmp5`, ...).
+        scheme: String,
+        /// Its cells.
+        cells: u32,
+        /// The failed step.
+        source: StepError,
+    },
+    /// The output folder or a file could not be written.
+    #[error("{action} {}: {source}", path.display())]
+    Io {
+        /// `"creating"` (the folder) or `"writing"` (a file).
+        action: &'static str,
+        /// The path.
+        path: std::path::PathBuf,
+        /// The reason.
+        source: std::io::Error,
+    },
+}
 
 /// One run of the study.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,17 +82,16 @@ pub fn work_precision(
     resolutions: &[u32],
     orders: &[u32],
     out_dir: &Path,
-) -> Result<Vec<Row>, String> {
-    let cfg = scene
-        .fluid
-        .as_ref()
-        .ok_or_else(|| format!("scene {} has no [fluid] table", scene.name))?;
+) -> Result<Vec<Row>, ReportError> {
+    let cfg = scene.fluid.as_ref().ok_or_else(|| ReportError::NoFluid {
+        scene: scene.name.clone(),
+    })?;
     let reference = RiemannReference::from_config(cfg)?;
     let t_end = scene.run.t_end;
     let mut schemes: Vec<(String, u32, FluxKind)> = Vec::new();
     for &order in orders {
         if ![3, 5, 7].contains(&order) {
-            return Err(format!("osmp order must be 3, 5 or 7, got {order}"));
+            return Err(ReportError::FluxOrder { order });
         }
         schemes.push((format!("osmp{order}"), order, FluxKind::Osmp(order)));
     }
@@ -66,12 +108,12 @@ pub fn work_precision(
                 let start = Instant::now();
                 let (steps, last) = solver.run_until(t_end, u64::MAX);
                 wall_s = wall_s.min(start.elapsed().as_secs_f64());
-                if !last.ok() {
-                    return Err(format!(
-                        "{name} at {cells} cells: numerical trouble {:?}",
-                        last.troubles
-                    ));
-                }
+                last.check(last.step)
+                    .map_err(|source| ReportError::Trouble {
+                        scheme: name.clone(),
+                        cells,
+                        source,
+                    })?;
                 run = Some((solver, steps));
             }
             let (solver, steps) = run.expect("TIMING_RUNS > 0");
@@ -85,14 +127,20 @@ pub fn work_precision(
             });
         }
     }
-    std::fs::create_dir_all(out_dir).map_err(|e| format!("creating {}: {e}", out_dir.display()))?;
+    let io = |action, path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReportError::Io {
+            action,
+            path,
+            source,
+        }
+    };
+    std::fs::create_dir_all(out_dir).map_err(io("creating", out_dir))?;
     let base = out_dir.join(format!("work_precision_{}", scene.name));
     let csv_path = base.with_extension("csv");
-    std::fs::write(&csv_path, to_csv(&rows))
-        .map_err(|e| format!("writing {}: {e}", csv_path.display()))?;
+    std::fs::write(&csv_path, to_csv(&rows)).map_err(io("writing", &csv_path))?;
     let svg_path = base.with_extension("svg");
-    std::fs::write(&svg_path, to_svg(&rows, &scene.name))
-        .map_err(|e| format!("writing {}: {e}", svg_path.display()))?;
+    std::fs::write(&svg_path, to_svg(&rows, &scene.name)).map_err(io("writing", &svg_path))?;
     Ok(rows)
 }
 

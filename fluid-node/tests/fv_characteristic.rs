@@ -14,7 +14,7 @@ const GAMMA: f64 = 1.4;
 fn characteristic(p_far: f64) -> BoundaryKind {
     BoundaryKind::Characteristic {
         p_far,
-        sigma: fluid_node::fv::sweep::CHARACTERISTIC_SIGMA,
+        sigma: fluid_node::fv::CHARACTERISTIC_SIGMA,
     }
 }
 

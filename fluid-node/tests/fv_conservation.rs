@@ -158,7 +158,7 @@ fn checkpoint_round_trip_continues_identically() {
     assert_eq!(a.directional_pressures(1), b.directional_pressures(1));
     let mut other = blast(3, 10, BoundaryKind::Wall, 7, 1);
     let err = other.restore_checkpoint(&bytes).expect_err("other grid");
-    assert!(err.contains("checkpoint for grid"), "{err}");
+    assert!(err.to_string().contains("checkpoint for grid"), "{err}");
     assert!(other.restore_checkpoint(&bytes[..10]).is_err());
 }
 
@@ -231,10 +231,10 @@ fn trouble_is_reported_as_data() {
     let mut s = blast(2, 16, BoundaryKind::Wall, 5, 1);
     let before = bits(&s);
     let rep = s.advance(10.0 * s.max_dt());
-    assert_eq!(rep.troubles[0].kind, TroubleKind::TimeStep);
+    assert!(rep.refused.is_some(), "{rep:?}");
     assert_eq!(bits(&s), before);
     let rep = s.advance(f64::NAN);
-    assert_eq!(rep.troubles[0].kind, TroubleKind::TimeStep);
+    assert!(rep.refused.is_some(), "{rep:?}");
 }
 
 #[test]

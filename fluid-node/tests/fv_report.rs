@@ -59,7 +59,7 @@ fn work_precision_writes_table_and_plot() {
     let _ = std::fs::remove_dir_all(&dir);
     // A 2-D scene is refused with a message.
     let err = work_precision(&scene("isentropic-vortex"), &[10], &[5], &dir).expect_err("2-D");
-    assert!(err.contains("1-D"), "{err}");
+    assert!(err.to_string().contains("1-D"), "{err}");
 }
 
 #[test]

@@ -88,7 +88,8 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
             match link.me() {
                 NodeKind::Fluid => {
                     let fluid = scene.fluid.as_ref().expect("fluid section");
-                    let mut model = fluid_node::node::model_from_scene(&scene, &fluid.node)?;
+                    let mut model = fluid_node::cli::model_from_scene(&scene, &fluid.node)
+                        .map_err(|e| e.to_string())?;
                     let cfg = fluid_node::node::LoopConfig {
                         scene_hash: scene.hash(),
                         coupled: scene.solid.is_some(),

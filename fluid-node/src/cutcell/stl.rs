@@ -60,17 +60,53 @@ impl SurfaceMesh {
     }
 }
 
-/// Why a surface file cannot be read.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SurfaceFileError(pub String);
-
-impl std::fmt::Display for SurfaceFileError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why a surface file cannot be read (lines counted from 1).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SurfaceFileError {
+    /// Neither a binary STL of the right size nor text.
+    #[error("not a binary STL (size {size} != 84 + 50 × count) and not UTF-8 text")]
+    NotStl {
+        /// The file's size [bytes].
+        size: usize,
+    },
+    /// Text without the ASCII STL header.
+    #[error(
+        "not an STL file: no binary triangle count matches the size and no ASCII `solid` header"
+    )]
+    NoSolidHeader,
+    /// An ASCII STL vertex coordinate that is not a number.
+    #[error("line {line}: bad vertex coordinate {token:?}")]
+    BadCoordinate {
+        /// The line.
+        line: usize,
+        /// The token found.
+        token: String,
+    },
+    /// An ASCII STL facet with fewer than 3 vertices.
+    #[error("line {line}: facet with {vertices} vertices")]
+    ShortFacet {
+        /// The line of `endfacet`.
+        line: usize,
+        /// The vertices found.
+        vertices: usize,
+    },
+    /// A loops CSV line that is not `x,y`.
+    #[error("line {line}: expected `x,y`, found {text:?}")]
+    BadPoint {
+        /// The line.
+        line: usize,
+        /// Its text.
+        text: String,
+    },
+    /// A loop of fewer than 3 distinct vertices.
+    #[error("loop ending near line {line}: {vertices} vertices, need at least 3")]
+    ShortLoop {
+        /// The line near the loop's end.
+        line: usize,
+        /// The vertices found.
+        vertices: usize,
+    },
 }
-
-impl std::error::Error for SurfaceFileError {}
 
 /// Reads an STL file, binary (80-byte header, `u32` count, 50 bytes per triangle, little endian)
 /// or ASCII (`solid … facet normal … outer loop vertex x y z … endloop endfacet … endsolid`).
@@ -83,17 +119,10 @@ pub fn parse_stl(bytes: &[u8]) -> Result<SurfaceMesh, SurfaceFileError> {
             return Ok(parse_binary(bytes, count));
         }
     }
-    let text = std::str::from_utf8(bytes).map_err(|_| {
-        SurfaceFileError(format!(
-            "not a binary STL (size {} != 84 + 50 × count) and not UTF-8 text",
-            bytes.len()
-        ))
-    })?;
+    let text =
+        std::str::from_utf8(bytes).map_err(|_| SurfaceFileError::NotStl { size: bytes.len() })?;
     if !text.trim_start().starts_with("solid") {
-        return Err(SurfaceFileError(
-            "not an STL file: no binary triangle count matches the size and no ASCII `solid` header"
-                .to_string(),
-        ));
+        return Err(SurfaceFileError::NoSolidHeader);
     }
     parse_ascii(text)
 }
@@ -132,11 +161,9 @@ fn parse_ascii(text: &str) -> Result<SurfaceMesh, SurfaceFileError> {
                 let mut x = [0.0; 3];
                 for value in &mut x {
                     let token = tokens.next().unwrap_or("");
-                    *value = token.parse().map_err(|_| {
-                        SurfaceFileError(format!(
-                            "line {}: bad vertex coordinate {token:?}",
-                            line_no + 1
-                        ))
+                    *value = token.parse().map_err(|_| SurfaceFileError::BadCoordinate {
+                        line: line_no + 1,
+                        token: token.to_string(),
                     })?;
                 }
                 facet.push(x);
@@ -152,11 +179,10 @@ fn parse_ascii(text: &str) -> Result<SurfaceMesh, SurfaceFileError> {
                         mesh.element_particle.push(solid);
                     }
                 } else if !facet.is_empty() {
-                    return Err(SurfaceFileError(format!(
-                        "line {}: facet with {} vertices",
-                        line_no + 1,
-                        facet.len()
-                    )));
+                    return Err(SurfaceFileError::ShortFacet {
+                        line: line_no + 1,
+                        vertices: facet.len(),
+                    });
                 }
                 facet.clear();
             }
@@ -203,10 +229,10 @@ pub fn parse_loops_csv(text: &str) -> Result<SurfaceMesh, SurfaceFileError> {
             }
             None if !seen_data && current.is_empty() && n_loops == 0 => {} // header
             None => {
-                return Err(SurfaceFileError(format!(
-                    "line {}: expected `x,y`, found {line:?}",
-                    line_no + 1
-                )));
+                return Err(SurfaceFileError::BadPoint {
+                    line: line_no + 1,
+                    text: line.to_string(),
+                });
             }
         }
     }
@@ -227,11 +253,10 @@ fn close_loop(
         current.pop();
     }
     if current.len() < 3 {
-        return Err(SurfaceFileError(format!(
-            "loop ending near line {}: {} vertices, need at least 3",
-            line_no + 1,
-            current.len()
-        )));
+        return Err(SurfaceFileError::ShortLoop {
+            line: line_no + 1,
+            vertices: current.len(),
+        });
     }
     let mut area = 0.0;
     for i in 0..current.len() {
@@ -293,7 +318,7 @@ mod tests {
     fn bad_stl_is_refused() {
         assert!(parse_stl(b"hello").is_err());
         let err = parse_stl(b"solid x\nfacet\nouter loop\nvertex 0 0 zz\n").unwrap_err();
-        assert!(err.0.contains("line 4"), "{err}");
+        assert!(err.to_string().contains("line 4"), "{err}");
     }
 
     #[test]

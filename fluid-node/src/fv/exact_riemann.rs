@@ -52,15 +52,30 @@ fn pressure_function(p: f64, k: &Prim1, c: f64, g: f64) -> (f64, f64) {
     }
 }
 
+/// A Riemann problem the exact solver does not take: a side without positive density and
+/// pressure and finite velocity, or γ ≤ 1.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{side} state needs rho > 0, p > 0 and gamma > 1, got {state:?}, gamma {gamma}")]
+pub struct RiemannError {
+    /// `"left"` or `"right"`.
+    pub side: &'static str,
+    /// That side's state.
+    pub state: Prim1,
+    /// The ratio of specific heats given [-].
+    pub gamma: f64,
+}
+
 impl ExactRiemann {
     /// Solves the problem (Newton from the two-rarefaction guess, relative tolerance 1e-14).
-    pub fn new(left: Prim1, right: Prim1, gamma: f64) -> Result<ExactRiemann, String> {
+    pub fn new(left: Prim1, right: Prim1, gamma: f64) -> Result<ExactRiemann, RiemannError> {
         let g = gamma;
         for (side, s) in [("left", left), ("right", right)] {
             if !(s.rho > 0.0 && s.p > 0.0 && s.u.is_finite() && g > 1.0) {
-                return Err(format!(
-                    "{side} state needs rho > 0, p > 0 and gamma > 1, got {s:?}, gamma {g}"
-                ));
+                return Err(RiemannError {
+                    side,
+                    state: s,
+                    gamma: g,
+                });
             }
         }
         let cl = (g * left.p / left.rho).sqrt();

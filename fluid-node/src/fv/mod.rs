@@ -8,20 +8,21 @@
 //!
 //! Public API used by the node loop:
 //! ```text
-//! FluidSolver::from_scene(&FluidConfig, threads) -> Result<FluidSolver, String>
+//! FluidSolver::from_scene(&FluidConfig, threads) -> Result<FluidSolver, SolverError>
 //! solver.grid() -> &Grid                 solver.max_dt() -> f64 (CFL)
 //! solver.advance(dt) -> StepReport       (one split step; report.ok() == false: stop)
 //! solver.totals() -> Totals              (mass, momentum, energy, what left the domain)
 //! solver.primitive(cell) -> (ρ, [u; 3], p)
 //! solver.directional_pressures(axis) -> &[f64]   (p̄_x, p̄_y, p̄_z of paper 003 §3.4)
-//! solver.to_checkpoint() -> Vec<u8>      solver.restore_checkpoint(&[u8]) -> Result<(), String>
+//! solver.to_checkpoint() -> Vec<u8>      solver.restore_checkpoint(&[u8]) -> Result<(), CheckpointError>
 //! ```
 //! Also: [`exact_riemann`] (Toro's exact solver with exact cell averages), [`init`]
 //! (analytic initial conditions for verification) and [`study`] (pure parts of the
 //! work–precision study; timing and files in `crate::report`).
 //!
-//! Pipeline of one step (`solver.rs`): check `dt` against the CFL limit; for each sweep axis
-//! in the order of [`sweep_order`] (2-D: xy, yx, ...; 3-D: xyz, zyx, yzx, xzy, zxy, yxz):
+//! Pipeline of one step (`solver/step.rs`): check `dt` against the CFL step at Courant number
+//! 1 (the one check of the step); for each sweep axis in the order of [`sweep_order`] (2-D:
+//! xy, yx, ...; 3-D: xyz, zyx, yzx, xzy, zxy, yxz):
 //! record `p̄_axis`, then for every pencil along the axis (rayon, fixed partition, `sweep.rs`)
 //! gather the line with `ng` ghost cells from the boundary conditions, compute the face fluxes
 //! and update (`line.rs`), and write back; then sum the outflow, counters and troubles in
@@ -30,7 +31,7 @@
 //! Storage: interior cells only, `dim + 2` conserved values per cell, x fastest (`state.rs`);
 //! ghost layers (`ng` = 3 for OSMP3/5, 4 for OSMP7) live in the per-thread pencil scratch.
 //!
-//! Readings chosen where the sources are incomplete (details in `osmp.rs`, `solver.rs`):
+//! Readings chosen where the sources are incomplete (details in `osmp.rs`, `solver/`):
 //! division-free OSMP with `|λ_0|` curvature normalisation and upwind LC bound (numerics.md
 //! §1.5); per-interface Roe eigensystems (Tenaud's `osmp7.f90`); sweep orders paired with their
 //! reverse so the splitting is second order over every two steps; HLLE fallback where the Roe
@@ -69,6 +70,7 @@ pub mod exact_riemann;
 pub mod init;
 pub mod line;
 pub mod osmp;
+pub mod scene;
 pub mod slab;
 pub mod solver;
 pub mod state;
@@ -80,9 +82,12 @@ mod tests;
 
 pub use comm::{Comm, Serial};
 pub use line::FluxKind;
+pub use scene::{ConfigError, from_scene};
 pub use slab::Slab;
+pub use slab::SlabError;
 pub use solver::{
-    FluidSolver, GhostFill, SplitHooks, StepReport, Totals, Trouble, TroubleKind, sweep_order,
+    CheckpointError, FluidSolver, GhostFill, RefusedTimeStep, SolverError, SplitHooks, StepError,
+    StepReport, Totals, Trouble, TroubleKind, sweep_order,
 };
-pub use state::{BoundaryKind, FluidParams, FluidState, from_scene};
+pub use state::{BoundaryKind, CHARACTERISTIC_SIGMA, FluidParams, FluidState};
 pub use sweep::{FaceTap, Wall, WallRun, mirror};

@@ -16,6 +16,29 @@ use crate::fv::line::MAX_FIXES;
 use crate::fv::state::BoundaryKind;
 use crate::grid::Grid;
 
+/// Why a grid cannot be decomposed over the ranks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SlabError {
+    /// A rank would own fewer planes than its halo is deep.
+    #[error(
+        "fluid.ranks = {ranks}: {cells} cells along axis {axis} give a rank {planes} planes, \
+         fewer than the {depth} planes of its halo (at most {} ranks for this grid)",
+        (cells / depth).max(1)
+    )]
+    TooThin {
+        /// Ranks asked for.
+        ranks: usize,
+        /// Cells along the slab axis.
+        cells: usize,
+        /// The slab axis.
+        axis: usize,
+        /// Planes of the smallest share.
+        planes: usize,
+        /// Planes of a halo.
+        depth: usize,
+    },
+}
+
 /// One rank's part of the grid.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Slab {
@@ -51,7 +74,7 @@ impl Slab {
         ranks: usize,
         ng: usize,
         boundary: [BoundaryKind; 2],
-    ) -> Result<Slab, String> {
+    ) -> Result<Slab, SlabError> {
         assert!(rank < ranks, "rank {rank} of {ranks}");
         let axis = global.dim - 1;
         let n = global.cells[axis];
@@ -60,11 +83,13 @@ impl Slab {
         let offset = rank * share + rank.min(extra);
         let depth = ng + MAX_FIXES;
         if ranks > 1 && share < depth {
-            return Err(format!(
-                "fluid.ranks = {ranks}: {n} cells along axis {axis} give a rank {share} planes, \
-                 fewer than the {depth} planes of its halo (at most {} ranks for this grid)",
-                (n / depth).max(1)
-            ));
+            return Err(SlabError::TooThin {
+                ranks,
+                cells: n,
+                axis,
+                planes: share,
+                depth,
+            });
         }
         let periodic = boundary[0] == BoundaryKind::Periodic;
         let (lo, hi) = if ranks == 1 {

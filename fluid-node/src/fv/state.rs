@@ -1,4 +1,4 @@
-//! Solver parameters, the conserved state of the grid, and their construction from the scene.
+//! Solver parameters and the conserved state of the grid (built from the scene in `scene.rs`).
 //!
 //! The state holds the interior cells only, `nvar = dim + 2` conserved values per cell in
 //! x-fastest order (`ρ, ρu_x[, ρu_y[, ρu_z]], E`): a 2-D scene allocates 2-D data with 4
@@ -7,11 +7,15 @@
 //! scratch line
 //! and are filled from the boundary conditions at every sweep (`sweep.rs`).
 
-use protocol::scene::{Boundary, FluidConfig, Profile};
+use protocol::scene::Boundary;
 
 use crate::fv::euler::{Primitive, conserved};
 use crate::fv::line::FluxKind;
-use crate::grid::Grid;
+
+/// Poinsot–Lele relaxation coefficient σ a characteristic side gets unless the scene's
+/// `fluid.characteristic.sigma` sets one: small enough that the side stays nearly
+/// non-reflecting, non-zero so that the mean pressure cannot drift away from the far field.
+pub const CHARACTERISTIC_SIGMA: f64 = protocol::scene::DEFAULT_CHARACTERISTIC_SIGMA;
 
 /// Parameters of the finite-volume solver, validated.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -44,7 +48,8 @@ pub enum BoundaryKind {
     Characteristic {
         /// Far-field pressure \[Pa\] the incoming characteristic relaxes toward.
         p_far: f64,
-        /// Poinsot–Lele relaxation coefficient σ [-] (default `sweep::CHARACTERISTIC_SIGMA`, or `fluid.characteristic.sigma`;
+        /// Poinsot–Lele relaxation coefficient σ [-] (default [`CHARACTERISTIC_SIGMA`], or
+        /// `fluid.characteristic.sigma`;
         /// 0 gives the zero-gradient outflow).
         sigma: f64,
     },
@@ -52,8 +57,8 @@ pub enum BoundaryKind {
 
 impl From<Boundary> for BoundaryKind {
     /// The scene's kind; a characteristic side gets σ = `CHARACTERISTIC_SIGMA` (the scene's
-    /// `fluid.characteristic.sigma` replaces it in [`from_scene`]) and
-    /// `p_far = 0` here, set from the initial state by [`from_scene`].
+    /// `fluid.characteristic.sigma` replaces it in [`from_scene`](crate::fv::from_scene)) and
+    /// `p_far = 0` here, set from the initial state by [`from_scene`](crate::fv::from_scene).
     fn from(b: Boundary) -> Self {
         match b {
             Boundary::Wall => BoundaryKind::Wall,
@@ -61,39 +66,8 @@ impl From<Boundary> for BoundaryKind {
             Boundary::Outflow => BoundaryKind::Outflow,
             Boundary::Characteristic => BoundaryKind::Characteristic {
                 p_far: 0.0,
-                sigma: crate::fv::sweep::CHARACTERISTIC_SIGMA,
+                sigma: CHARACTERISTIC_SIGMA,
             },
-        }
-    }
-}
-
-/// Sets the far-field pressure of every characteristic side: `fluid.characteristic.p_far`
-/// when the scene gives it, else the mean initial pressure of the cells along that side (the
-/// layer of cells touching it), summed in index order.
-pub fn set_far_pressures(
-    grid: &Grid,
-    params: &mut FluidParams,
-    state: &FluidState,
-    cfg: &FluidConfig,
-) {
-    let given = cfg.characteristic.as_ref().and_then(|c| c.p_far);
-    for axis in 0..grid.dim {
-        for side in 0..2 {
-            if let BoundaryKind::Characteristic { p_far, .. } = &mut params.boundary[axis][side] {
-                if let Some(p) = given {
-                    *p_far = p;
-                    continue;
-                }
-                let layer = if side == 0 { 0 } else { grid.cells[axis] - 1 };
-                let (mut sum, mut count) = (0.0, 0usize);
-                for idx in 0..grid.n_cells() {
-                    if grid.ijk(idx)[axis] == layer {
-                        sum += state.primitive(idx, params.gamma).2;
-                        count += 1;
-                    }
-                }
-                *p_far = sum / count.max(1) as f64;
-            }
         }
     }
 }
@@ -156,134 +130,4 @@ impl FluidState {
         }
         (rho, vel, (gamma - 1.0) * (cell[dim + 1] - ke))
     }
-}
-
-/// Validates `cfg` and builds the grid, the parameters and the initial state: every
-/// `[[fluid.init]]` entry, in order, sets the cells whose centre lies in its region.
-///
-/// Errors (lowercase, with values): bad dimension or counts, γ ≤ 1, CFL outside (0, 1],
-/// order not 3/5/7, periodic on one side only, wrong velocity length, a cell no entry covers,
-/// a non-physical initial state (ρ < 0, p < 0 or non-finite).
-pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), String> {
-    let cells: Vec<usize> = cfg.cells.iter().map(|&n| n as usize).collect();
-    let grid = Grid::new(&cfg.lower, &cfg.upper, &cells).map_err(|e| e.to_string())?;
-    let dim = grid.dim;
-    if !(cfg.gamma > 1.0 && cfg.gamma.is_finite()) {
-        return Err(format!("fluid.gamma must be > 1, got {}", cfg.gamma));
-    }
-    if !(cfg.cfl > 0.0 && cfg.cfl <= 1.0) {
-        return Err(format!("fluid.cfl must be in (0, 1], got {}", cfg.cfl));
-    }
-    if ![3, 5, 7].contains(&cfg.flux.order) {
-        return Err(format!(
-            "fluid.flux.order must be 3, 5 or 7, got {}",
-            cfg.flux.order
-        ));
-    }
-    if !(cfg.vacuum.rho >= 0.0 && cfg.vacuum.p >= 0.0) {
-        return Err(format!(
-            "fluid.vacuum thresholds must be >= 0, got rho {} p {}",
-            cfg.vacuum.rho, cfg.vacuum.p
-        ));
-    }
-    let mut boundary = [[BoundaryKind::Outflow; 2]; 3];
-    for (axis, b) in boundary.iter_mut().enumerate().take(dim) {
-        let [lo, hi] = cfg.boundary.axis(axis);
-        if (lo == Boundary::Periodic) != (hi == Boundary::Periodic) {
-            return Err(format!(
-                "axis {axis}: periodic on both sides or on neither, got [{lo:?}, {hi:?}]"
-            ));
-        }
-        *b = [lo.into(), hi.into()];
-        if let Some(ch) = &cfg.characteristic {
-            for side in b.iter_mut() {
-                if let BoundaryKind::Characteristic { sigma, .. } = side {
-                    *sigma = ch.sigma;
-                }
-            }
-        }
-    }
-    let params = FluidParams {
-        gamma: cfg.gamma,
-        cfl: cfg.cfl,
-        flux: FluxKind::Osmp(cfg.flux.order),
-        boundary,
-        vacuum_rho: cfg.vacuum.rho,
-        vacuum_p: cfg.vacuum.p,
-    };
-    for (k, entry) in cfg.init.iter().enumerate() {
-        if !(entry.velocity.is_empty() || entry.velocity.len() == dim) {
-            return Err(format!(
-                "fluid.init[{k}].velocity: expected 0 or {dim} entries, got {}",
-                entry.velocity.len()
-            ));
-        }
-        let vel_ok = entry.velocity.iter().all(|v| v.is_finite());
-        let finite = entry.rho.is_finite() && entry.p.is_finite() && vel_ok;
-        if !(entry.rho >= 0.0 && entry.p >= 0.0 && finite) {
-            return Err(format!(
-                "fluid.init[{k}]: need finite rho >= 0, p >= 0, velocity, got rho {} p {} velocity {:?}",
-                entry.rho, entry.p, entry.velocity
-            ));
-        }
-    }
-    let mut state = FluidState::zeros(dim, grid.n_cells());
-    if let Some(profile) = &cfg.profile {
-        let to3 = |v: &[f64]| std::array::from_fn(|a| v.get(a).copied().unwrap_or(0.0));
-        match profile {
-            Profile::DensityWave {
-                amplitude,
-                wave,
-                velocity,
-                p,
-            } => crate::fv::init::density_wave(
-                &mut state,
-                &grid,
-                *amplitude,
-                to3(wave),
-                to3(velocity),
-                *p,
-                params.gamma,
-                0.0,
-            ),
-            Profile::IsentropicVortex {
-                beta,
-                center,
-                velocity,
-            } => {
-                if dim != 2 {
-                    return Err(format!("the isentropic vortex is 2-D, the grid is {dim}-D"));
-                }
-                crate::fv::init::isentropic_vortex(
-                    &mut state,
-                    &grid,
-                    *beta,
-                    [center[0], center[1]],
-                    [velocity[0], velocity[1]],
-                    params.gamma,
-                    0.0,
-                );
-            }
-        }
-        let mut params = params;
-        set_far_pressures(&grid, &mut params, &state, cfg);
-        return Ok((grid, params, state));
-    }
-    for idx in 0..grid.n_cells() {
-        let ijk = grid.ijk(idx);
-        let x = grid.cell_center(ijk);
-        let entry = cfg.init.iter().rev().find(|e| e.region.contains(&x[..dim]));
-        let Some(entry) = entry else {
-            return Err(format!(
-                "cell {ijk:?} at {:?} is covered by no [[fluid.init]] entry",
-                &x[..dim]
-            ));
-        };
-        let mut vel = [0.0; 3];
-        vel[..entry.velocity.len()].copy_from_slice(&entry.velocity);
-        state.set_primitive(idx, entry.rho, vel, entry.p, params.gamma);
-    }
-    let mut params = params;
-    set_far_pressures(&grid, &mut params, &state, cfg);
-    Ok((grid, params, state))
 }

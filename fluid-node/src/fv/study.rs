@@ -4,8 +4,33 @@
 
 use protocol::scene::FluidConfig;
 
+use crate::fv::exact_riemann::RiemannError;
 use crate::fv::exact_riemann::{ExactRiemann, Prim1};
-use crate::fv::{FluidSolver, FluxKind};
+use crate::fv::scene::from_scene;
+use crate::fv::{FluidSolver, FluxKind, SolverError};
+
+/// Why a scene cannot serve as the reference of the work–precision study.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StudyError {
+    /// The scene is not 1-D.
+    #[error("work-precision needs a 1-D scene, got {axes} axes")]
+    NotOneD {
+        /// Axes of the scene.
+        axes: usize,
+    },
+    /// No `[[fluid.init]]` entry covers one end.
+    #[error("no [[fluid.init]] entry covers the {side} end")]
+    Uncovered {
+        /// `"left"` or `"right"`.
+        side: &'static str,
+    },
+    /// The two ends hold the same state.
+    #[error("the scene is not a Riemann problem: equal states at both ends")]
+    EqualStates,
+    /// The exact solver does not take the two states.
+    #[error(transparent)]
+    Riemann(#[from] RiemannError),
+}
 
 /// The exact solution of a 1-D scene made of two constant states.
 #[derive(Clone, Copy, Debug)]
@@ -31,18 +56,17 @@ fn init_state(cfg: &FluidConfig, x: f64) -> Option<Prim1> {
 impl RiemannReference {
     /// Reads the left and right states at the ends of a 1-D scene and locates the jump
     /// between them by bisection.
-    pub fn from_config(cfg: &FluidConfig) -> Result<RiemannReference, String> {
+    pub fn from_config(cfg: &FluidConfig) -> Result<RiemannReference, StudyError> {
         if cfg.lower.len() != 1 || cfg.upper.len() != 1 {
-            return Err(format!(
-                "work-precision needs a 1-D scene, got {} axes",
-                cfg.lower.len()
-            ));
+            return Err(StudyError::NotOneD {
+                axes: cfg.lower.len(),
+            });
         }
         let (lo, hi) = (cfg.lower[0], cfg.upper[0]);
-        let left = init_state(cfg, lo).ok_or("no [[fluid.init]] entry covers the left end")?;
-        let right = init_state(cfg, hi).ok_or("no [[fluid.init]] entry covers the right end")?;
+        let left = init_state(cfg, lo).ok_or(StudyError::Uncovered { side: "left" })?;
+        let right = init_state(cfg, hi).ok_or(StudyError::Uncovered { side: "right" })?;
         if left == right {
-            return Err("the scene is not a Riemann problem: equal states at both ends".into());
+            return Err(StudyError::EqualStates);
         }
         let (mut a, mut b) = (lo, hi);
         for _ in 0..200 {
@@ -81,13 +105,13 @@ pub fn solver_for(
     flux: FluxKind,
     cells: u32,
     threads: usize,
-) -> Result<FluidSolver, String> {
+) -> Result<FluidSolver, SolverError> {
     let mut cfg = cfg.clone();
     cfg.cells = vec![cells; cfg.lower.len()];
     if let FluxKind::Osmp(order) = flux {
         cfg.flux.order = order;
     }
-    let (grid, mut params, state) = crate::fv::from_scene(&cfg)?;
+    let (grid, mut params, state) = from_scene(&cfg)?;
     params.flux = flux;
     FluidSolver::new(grid, params, state, threads)
 }

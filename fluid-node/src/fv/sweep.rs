@@ -102,11 +102,6 @@ pub(crate) fn from_local(s: &State, dim: usize, fr: &[Option<usize>; 3], cell: &
     cell[dim + 1] = s[4];
 }
 
-/// Poinsot–Lele relaxation coefficient σ a characteristic side gets unless the scene's
-/// `fluid.characteristic.sigma` sets one: small enough that the side stays nearly
-/// non-reflecting, non-zero so that the mean pressure cannot drift away from the far field.
-pub const CHARACTERISTIC_SIGMA: f64 = protocol::scene::DEFAULT_CHARACTERISTIC_SIGMA;
-
 /// Ghost state of a characteristic outflow side, in the sweep frame, from the boundary cell
 /// `s`; `sigma` is the relaxation coefficient σ, `outward` the sign of the outward normal (−1 low side, +1 high side), `n` the cells
 /// along the axis (so the domain length is `L = n dx`).

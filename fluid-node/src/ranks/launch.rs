@@ -41,10 +41,10 @@ pub fn serve_ranks(opts: &ServeOptions, ranks: u32) -> anyhow::Result<()> {
                         "fluid.ranks = {ranks} runs the real fluid only, not {implementation:?}"
                     ));
                 }
-                Ok(Leader {
-                    inner: RealFluid::from_scene_on(scene, Box::new(comm))?,
-                    calls,
-                })
+                // The wire boundary: `serve` reports the text to the coupler.
+                let inner =
+                    RealFluid::from_scene_on(scene, Box::new(comm)).map_err(|e| e.to_string())?;
+                Ok(Leader { inner, calls })
             },
             |mut model, link, cfg| crate::node::run(&mut model, link, cfg),
         );

@@ -14,9 +14,10 @@ use std::path::{Path, PathBuf};
 use protocol::session::NodeModel;
 use protocol::wire::{ConservedTotals, InterfaceLoads, SolidState, Stamp, StepPlan};
 
+use crate::Error;
 use crate::exchange::RealFluid;
 use crate::fv::comm::Comm;
-use crate::node::FluidModel;
+use crate::model::FluidModel;
 
 /// What rank 0 asks the other ranks to do next.
 #[derive(Debug, serde::Serialize, serde::Deserialize)]
@@ -113,24 +114,24 @@ impl FluidModel for Leader<'_> {
         self.inner.dim()
     }
 
-    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), String> {
+    fn set_initial_surface(&mut self, state: &SolidState) -> Result<(), Error> {
         self.announce(&Call::InitialSurface(Box::new(state.clone())));
         self.inner.set_initial_surface(state)
     }
 
-    fn predict(&mut self, plan: &StepPlan) -> Result<(), String> {
+    fn predict(&mut self, plan: &StepPlan) -> Result<(), Error> {
         self.announce(&Call::Predict(plan.clone()));
         self.inner.predict(plan)
     }
 
-    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, String> {
+    fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, Error> {
         // Every rank holds the whole surface and the gathered pressures, so every rank computes
         // the same loads (`crate::embedded`); rank 0's go to the coupler.
         self.announce(&Call::Loads(plan.clone(), Box::new(state.clone())));
         self.inner.loads(plan, state)
     }
 
-    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), String> {
+    fn correct(&mut self, plan: &StepPlan, state: Option<&SolidState>) -> Result<(), Error> {
         self.announce(&Call::Correct(
             plan.clone(),
             state.map(|s| Box::new(s.clone())),
@@ -139,21 +140,42 @@ impl FluidModel for Leader<'_> {
     }
 }
 
+/// Why a rank other than 0 stopped with an error.
+#[derive(Debug, thiserror::Error)]
+pub enum FollowError {
+    /// Building this rank's model failed (rank 0 met the same error and reported it).
+    #[error(transparent)]
+    Model(#[from] Error),
+    /// Rank 0 asked a call of this rank after building its model failed.
+    #[error("rank 0 asked {call} of a rank that failed")]
+    AskedFailed {
+        /// The call, as `Debug` writes it.
+        call: String,
+    },
+    /// A broadcast from rank 0 does not decode as a call (the codec's reason).
+    #[error("a call from rank 0: {0}")]
+    Decode(String),
+}
+
 /// A rank other than 0: makes rank 0's calls on its slab until [`Call::Stop`]. `model` is
 /// `Err` when building it failed; rank 0 meets the same error and stops, and the error is
 /// returned then. `wait` receives the next call (a broadcast from rank 0 that may wait long).
 pub fn follow(
-    model: Result<RealFluid, String>,
+    model: Result<RealFluid, Error>,
     mut wait: impl FnMut() -> Vec<u8>,
-) -> Result<(), String> {
+) -> Result<(), FollowError> {
     let mut model = model;
     loop {
         let bytes = wait();
-        let call: Call = protocol::codec::decode_blob(&bytes)?;
+        let call: Call = protocol::codec::decode_blob(&bytes).map_err(FollowError::Decode)?;
         let Ok(m) = model.as_mut() else {
             match call {
-                Call::Stop => return model.map(|_| ()),
-                other => return Err(format!("rank 0 asked {other:?} of a rank that failed")),
+                Call::Stop => return Ok(model.map(|_| ())?),
+                other => {
+                    return Err(FollowError::AskedFailed {
+                        call: format!("{other:?}"),
+                    });
+                }
             }
         };
         // Results and errors are rank 0's to report: the other ranks only take part.

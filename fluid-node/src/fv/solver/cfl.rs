@@ -1,0 +1,112 @@
+//! The CFL step of the current state: [`FluidSolver::max_dt`] and the cell that limits it.
+
+use rayon::prelude::*;
+
+use crate::fv::comm::{bytes_f64, f64_bytes};
+use crate::fv::euler::sound_speed;
+use crate::fv::solver::FluidSolver;
+use crate::fv::solver::cell::{BLOCK_CELLS, to_full};
+
+impl FluidSolver {
+    /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
+    /// every directional sweep runs at Courant number ≤ `cfl`. Infinite for a fluid at rest
+    /// with zero sound speed everywhere; NaN if a cell is non-finite. Computed once per state.
+    pub fn max_dt(&self) -> f64 {
+        self.dt_cache.get_or_init(|| self.compute_max_dt()).0
+    }
+
+    /// The cell that limits [`FluidSolver::max_dt`] (index into the whole grid,
+    /// [`FluidSolver::global_grid`]; the first such cell, or the first non-finite one).
+    pub fn limiting_cell(&self) -> usize {
+        self.dt_cache.get_or_init(|| self.compute_max_dt()).1
+    }
+
+    /// `(max_dt, limiting cell)`; the reduction keeps the largest rate and, among equal ones,
+    /// the lowest cell index, so the cell does not depend on the thread or rank count (a max
+    /// is exact in any order).
+    fn compute_max_dt(&self) -> (f64, usize) {
+        let grid = &self.grid;
+        let gamma = self.params.gamma;
+        let vacuum_rho = self.params.vacuum_rho;
+        let vacuum_p = self.params.vacuum_p;
+        let nvar = self.state.nvar;
+        let dim = grid.dim;
+        let u = &self.state.u;
+        let (rate, cell) = self.pool.install(|| {
+            u.par_chunks(nvar * BLOCK_CELLS)
+                .enumerate()
+                .map(|(block, chunk)| {
+                    let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
+                    for (k, cell) in chunk.chunks_exact(nvar).enumerate() {
+                        let idx = block * BLOCK_CELLS + k;
+                        let w = crate::fv::euler::primitive_floored(
+                            &to_full(cell, dim),
+                            gamma,
+                            vacuum_rho,
+                        );
+                        // Below the vacuum density and pressure, ρ, ρu and E are round-off (a
+                        // covered cell beside a crack held ρ = 2e-30 and E = 1e-16, a sound
+                        // speed of 5e6 m/s that collapsed the step): its speeds are taken at the
+                        // vacuum density, as its velocity is. A gas of real pressure at such a
+                        // density keeps its sound speed, so that its collapsing step stops the
+                        // run (issue 11).
+                        let floor = w.rho < vacuum_rho && w.p < vacuum_p;
+                        let c = sound_speed(
+                            &crate::fv::euler::Primitive {
+                                rho: if floor { vacuum_rho } else { w.rho },
+                                ..w
+                            },
+                            gamma,
+                        );
+                        for a in 0..dim {
+                            let r = (w.vel[a].abs() + c) / grid.dx[a];
+                            if !r.is_finite() {
+                                return (f64::NAN, idx);
+                            }
+                            if r > acc.0 {
+                                acc = (r, idx);
+                            }
+                        }
+                    }
+                    acc
+                })
+                .reduce(|| (0.0, usize::MAX), fastest)
+        });
+        let global = &self.slab.global;
+        let mut best = (rate, self.slab.to_global(cell.min(grid.n_cells() - 1)));
+        if self.slab.ranks > 1 {
+            let mine = f64_bytes(&[best.0, best.1 as f64]);
+            best = self
+                .comm
+                .all_gather(&mine)
+                .iter()
+                .map(|b| {
+                    let v = bytes_f64(b);
+                    (v[0], v[1] as usize)
+                })
+                .fold((0.0, usize::MAX), fastest);
+        }
+        (
+            self.params.cfl / best.0,
+            best.1.min(global.n_cells().saturating_sub(1)),
+        )
+    }
+}
+
+/// The faster of two `(rate, cell)` candidates of the CFL step: a NaN rate first (the lowest
+/// cell among NaNs), else the larger rate, the lower cell among equal ones.
+fn fastest(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    match (a.0.is_nan(), b.0.is_nan()) {
+        (true, true) => {
+            if a.1 <= b.1 {
+                a
+            } else {
+                b
+            }
+        }
+        (true, false) => a,
+        (false, true) => b,
+        _ if a.0 > b.0 || (a.0 == b.0 && a.1 <= b.1) => a,
+        _ => b,
+    }
+}
