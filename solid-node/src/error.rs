@@ -83,3 +83,37 @@ fn join(diagnostics: &[Diagnostic]) -> String {
     let texts: Vec<String> = diagnostics.iter().map(Diagnostic::to_string).collect();
     texts.join("; ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::{LinkId, ParticleId};
+
+    /// The coupler's failure text names the step, each particle or link, and its numbers to
+    /// the last bit.
+    #[test]
+    fn a_numerical_failure_names_step_particles_and_numbers() {
+        let err = StepError::Numerical {
+            step: 12,
+            diagnostics: vec![
+                Diagnostic::DisplacementTooLarge {
+                    particle: ParticleId(3),
+                    displacement: 0.1 + 0.2,
+                    size: 0.25,
+                },
+                Diagnostic::Interpenetration {
+                    link: LinkId(7),
+                    particles: [ParticleId(3), ParticleId(4)],
+                    distance: 1e-7,
+                    rest_distance: 0.5,
+                },
+            ],
+        };
+        assert_eq!(
+            err.to_string(),
+            "step 12: particle 3: displacement 0.30000000000000004 m in one step, more than its \
+             size 0.25 m; link 7 of particles 3 and 4: interpenetration, centre distance 1e-7 m \
+             below half the rest distance 0.5 m"
+        );
+    }
+}
