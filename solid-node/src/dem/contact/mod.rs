@@ -47,6 +47,7 @@
 
 pub mod broad;
 pub mod overlap;
+mod shapes;
 
 #[cfg(test)]
 mod tests;
@@ -61,6 +62,8 @@ use broad::{Grid, candidate_pairs};
 use overlap::{
     ClipScratch, Overlap, PolyhedronView, contact_polygon_polygon, contact_polyhedron_polyhedron,
 };
+pub use shapes::ContactError;
+use shapes::{MAX_VERTICES, Piece, Shapes, build_shapes};
 
 /// Overlap volume, as a fraction of the smaller particle's volume, that the step reports as
 /// deep contact ([`crate::dem::Diagnostic::DeepContact`]).
@@ -69,26 +72,6 @@ pub const DEEP_OVERLAP: f64 = 0.25;
 /// Distance to a face plane, as a fraction of the smaller particle size, within which a point
 /// counts as on the plane ([`overlap`]): far above round-off, far below any physical gap.
 const COPLANAR: f64 = 1e-10;
-
-/// Vertices of a 2-D particle at most (stack copies in the plane).
-const MAX_VERTICES: usize = 64;
-
-/// Why the contact cannot be built for a model.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum ContactError {
-    /// A 2-D particle has more vertices than the kernels' stack buffers hold.
-    #[error(
-        "solid.contact: particle {particle} has {vertices} vertices, contact handles at most \
-         {max} in 2-D",
-        max = MAX_VERTICES
-    )]
-    TooManyVertices {
-        /// The particle's index.
-        particle: usize,
-        /// Its number of vertices.
-        vertices: usize,
-    },
-}
 
 /// Contact parameters (validated `[solid.contact]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,42 +130,6 @@ pub struct ContactPair {
     pub stiffness: f64,
 }
 
-/// Per-particle shape data for the contact (body frame), built once.
-#[derive(Clone, Debug, Default)]
-struct Shapes {
-    /// Per particle, range into `vertices` (CSR).
-    vertex_start: Vec<u32>,
-    /// Vertices relative to the centre, body frame (2-D: counter-clockwise).
-    vertices: Vec<Vector3<f64>>,
-    /// Owner of each vertex.
-    vertex_owner: Vec<u32>,
-    /// 3-D: per particle, range into `faces` (CSR).
-    face_start: Vec<u32>,
-    /// 3-D: per face, its loop as a range into `face_vertices` (indices local to the particle).
-    face_ranges: Vec<(u32, u32)>,
-    face_vertices: Vec<u32>,
-    /// 3-D: outward normal of each face, body frame.
-    face_normals: Vec<Vector3<f64>>,
-    face_owner: Vec<u32>,
-    /// Bounding radius about the centre \[m\].
-    radius: Vec<f64>,
-    /// Per particle, range into `pieces` (CSR).
-    piece_start: Vec<u32>,
-    /// The pieces each particle is cut into for the law (see the module doc), body frame.
-    pieces: Vec<Piece>,
-}
-
-/// One convex piece of a particle: 2-D the triangle (centre, vertex, edge midpoint) in
-/// counter-clockwise order; 3-D the tetrahedron (centre, face centroid, edge) as four planes
-/// `(outward normal, point)`. Body frame, relative to the centre.
-#[derive(Clone, Copy, Debug)]
-struct Piece {
-    corners: [Vector3<f64>; 3],
-    planes: [(Vector3<f64>, Vector3<f64>); 4],
-    /// Number of pieces its face is cut into (`κ_p = multiplier × κ`).
-    multiplier: f64,
-}
-
 /// The contact model and its buffers.
 #[derive(Clone, Debug)]
 pub struct Contact {
@@ -210,114 +157,7 @@ impl Contact {
     /// Builds the shapes of every particle from the model; refuses a 2-D particle of more
     /// than 64 vertices (the kernels' stack buffers).
     pub fn new(model: &Model, params: ContactParams) -> Result<Self, ContactError> {
-        let mut shapes = Shapes::default();
-        let mut face_cursor = 0usize;
-        for (p, part) in model.particles.iter().enumerate() {
-            shapes.vertex_start.push(shapes.vertices.len() as u32);
-            shapes.face_start.push(shapes.face_ranges.len() as u32);
-            // Faces of particle p are contiguous in `model.faces`.
-            let first_face = face_cursor;
-            while face_cursor < model.faces.len() && model.faces[face_cursor].particle == p as u32 {
-                face_cursor += 1;
-            }
-            let faces = &model.faces[first_face..face_cursor];
-            // Local vertex numbering by slot.
-            let mut local: Vec<u32> = Vec::new();
-            let mut index_of = |slot: u32, verts: &mut Vec<Vector3<f64>>| -> u32 {
-                if let Some(k) = local.iter().position(|&s| s == slot) {
-                    return k as u32;
-                }
-                local.push(slot);
-                verts.push(model.slots[slot as usize].body);
-                (local.len() - 1) as u32
-            };
-            let mut verts = Vec::new();
-            if model.dim == 2 {
-                for f in faces {
-                    index_of(f.slots[0], &mut verts);
-                }
-            } else {
-                for f in faces {
-                    let begin = shapes.face_vertices.len() as u32;
-                    for &s in &f.slots {
-                        let k = index_of(s, &mut verts);
-                        shapes.face_vertices.push(k);
-                    }
-                    shapes
-                        .face_ranges
-                        .push((begin, shapes.face_vertices.len() as u32 - begin));
-                    let loop_pts: Vec<Vector3<f64>> = f
-                        .slots
-                        .iter()
-                        .map(|&s| model.slots[s as usize].body)
-                        .collect();
-                    let mut area = Vector3::zeros();
-                    for k in 1..loop_pts.len() - 1 {
-                        area += (loop_pts[k] - loop_pts[0]).cross(&(loop_pts[k + 1] - loop_pts[0]));
-                    }
-                    shapes.face_normals.push(area.normalize());
-                    shapes.face_owner.push(p as u32);
-                }
-            }
-            shapes.piece_start.push(shapes.pieces.len() as u32);
-            if model.dim == 2 {
-                let m = verts.len();
-                for k in 0..m {
-                    let (v0, v1) = (verts[k], verts[(k + 1) % m]);
-                    let mid = (v0 + v1) * 0.5;
-                    for (p, q) in [(v0, mid), (mid, v1)] {
-                        shapes.pieces.push(Piece {
-                            corners: [Vector3::zeros(), p, q],
-                            planes: [(Vector3::zeros(), Vector3::zeros()); 4],
-                            multiplier: 2.0,
-                        });
-                    }
-                }
-            } else {
-                for f in faces {
-                    let loop_pts: Vec<Vector3<f64>> = f
-                        .slots
-                        .iter()
-                        .map(|&s| model.slots[s as usize].body)
-                        .collect();
-                    let g = f.centroid_body;
-                    let m = loop_pts.len();
-                    for k in 0..m {
-                        let tet = [Vector3::zeros(), g, loop_pts[k], loop_pts[(k + 1) % m]];
-                        let mut planes = [(Vector3::zeros(), Vector3::zeros()); 4];
-                        for (skip, plane) in planes.iter_mut().enumerate() {
-                            let others: Vec<Vector3<f64>> =
-                                (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
-                            let mut n = (others[1] - others[0]).cross(&(others[2] - others[0]));
-                            if n.dot(&(tet[skip] - others[0])) > 0.0 {
-                                n = -n;
-                            }
-                            *plane = (n.normalize(), others[0]);
-                        }
-                        shapes.pieces.push(Piece {
-                            corners: [tet[1], tet[2], tet[3]],
-                            planes,
-                            multiplier: m as f64,
-                        });
-                    }
-                }
-            }
-            if model.dim == 2 && verts.len() > MAX_VERTICES {
-                return Err(ContactError::TooManyVertices {
-                    particle: p,
-                    vertices: verts.len(),
-                });
-            }
-            let radius = verts.iter().map(|v| v.norm()).fold(0.0, f64::max);
-            shapes.radius.push(radius.max(0.5 * part.size));
-            shapes
-                .vertex_owner
-                .extend(std::iter::repeat_n(p as u32, verts.len()));
-            shapes.vertices.extend(verts);
-        }
-        shapes.vertex_start.push(shapes.vertices.len() as u32);
-        shapes.face_start.push(shapes.face_ranges.len() as u32);
-        shapes.piece_start.push(shapes.pieces.len() as u32);
+        let shapes = build_shapes(model)?;
         Ok(Contact {
             params,
             world: vec![Vector3::zeros(); shapes.vertices.len()],
