@@ -10,6 +10,7 @@ use clap::{Parser, Subcommand};
 use protocol::serve::{ServeError, ServeOptions, serve};
 use protocol::wire::NodeKind;
 
+use crate::error::BuildError;
 use crate::node;
 
 /// The solid node of the co-simulation (normally started by `coupler-node run`).
@@ -75,7 +76,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     serve(
         NodeKind::Solid,
         &opts,
-        model_from_scene,
+        |scene, implementation| model_from_scene(scene, implementation).map_err(|e| e.to_string()),
         |mut model, link, cfg| node::run(model.as_mut(), link, cfg),
     )?;
     Ok(())
@@ -85,22 +86,17 @@ fn run(args: Args) -> anyhow::Result<()> {
 pub fn model_from_scene(
     scene: &protocol::scene::Scene,
     implementation: &str,
-) -> Result<Box<dyn crate::model::SolidModel + Send>, String> {
-    let solid = scene
-        .solid
-        .as_ref()
-        .ok_or("the scene has no [solid] section")?;
+) -> Result<Box<dyn crate::model::SolidModel + Send>, BuildError> {
+    let solid = scene.solid.as_ref().ok_or(BuildError::NoSolidSection)?;
     match implementation {
         "prescribed" => Ok(Box::new(crate::double::PrescribedDouble::new(
             scene.dim(),
             solid
                 .prescribed
                 .as_ref()
-                .ok_or("the prescribed double needs a [solid.prescribed] table in the scene")?,
+                .ok_or(BuildError::NoPrescribedTable)?,
         ))),
         "real" => Ok(Box::new(crate::exchange::RealSolid::from_scene(scene)?)),
-        other => Err(format!(
-            "unknown solid implementation {other:?} (expected real, prescribed or replay:FILE.mcap)"
-        )),
+        other => Err(BuildError::UnknownImplementation(other.to_string())),
     }
 }

@@ -12,6 +12,7 @@ use protocol::wire::{
 };
 use serde::{Deserialize, Serialize};
 
+use crate::error::StepError;
 use crate::model::SolidModel;
 
 /// The double's state.
@@ -228,7 +229,7 @@ impl NodeModel for PrescribedDouble {
 }
 
 impl SolidModel for PrescribedDouble {
-    fn begin_step(&mut self, _plan: &StepPlan) -> Result<(), String> {
+    fn begin_step(&mut self, _plan: &StepPlan) -> Result<(), StepError> {
         Ok(())
     }
 
@@ -236,15 +237,15 @@ impl SolidModel for PrescribedDouble {
         &mut self,
         plan: &StepPlan,
         loads: Option<&InterfaceLoads>,
-    ) -> Result<SolidState, String> {
+    ) -> Result<SolidState, StepError> {
         let dim = self.dim;
         let force: Vec<f64> = match loads {
             Some(l) if l.force.len() >= dim => l.force[..dim].to_vec(),
             Some(l) => {
-                return Err(format!(
-                    "loads for {} values, the double has one particle in {dim}-D",
-                    l.force.len()
-                ));
+                return Err(StepError::DoubleLoadsSize {
+                    n_force: l.force.len(),
+                    dim,
+                });
             }
             None => vec![0.0; dim],
         };
@@ -283,7 +284,7 @@ impl SolidModel for PrescribedDouble {
             }
         };
         if let Some(bad) = x1.iter().chain(&v_half).find(|x| !x.is_finite()) {
-            return Err(format!("particle 0: non-finite position or velocity {bad}"));
+            return Err(StepError::DoubleNonFinite { value: *bad });
         }
         let state = self.solid_state(&x1, &v_half);
         self.trial_x = x1;
@@ -292,7 +293,7 @@ impl SolidModel for PrescribedDouble {
         Ok(state)
     }
 
-    fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
+    fn commit(&mut self, plan: &StepPlan) -> Result<(), StepError> {
         let dim = self.dim;
         for d in 0..dim {
             self.work += self.trial_force[d] * (self.trial_x[d] - self.x[d]);

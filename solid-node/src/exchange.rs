@@ -11,7 +11,8 @@ use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
 };
 
-use crate::dem::{Diagnostic, ParticleId, Solid, WetSurfaceData};
+use crate::dem::{ParticleId, Solid, WetSurfaceData};
+use crate::error::{BuildError, StepError};
 use crate::model::SolidModel;
 
 /// The real solid.
@@ -40,11 +41,8 @@ struct Probe {
 
 impl RealSolid {
     /// Builds the DEM of a scene.
-    pub fn from_scene(scene: &Scene) -> Result<RealSolid, String> {
-        let cfg = scene
-            .solid
-            .as_ref()
-            .ok_or("the scene has no [solid] section")?;
+    pub fn from_scene(scene: &Scene) -> Result<RealSolid, BuildError> {
+        let cfg = scene.solid.as_ref().ok_or(BuildError::NoSolidSection)?;
         let dim = scene.dim();
         let solid = Solid::from_scene(cfg, dim, scene.run.threads as usize)?;
         if cfg.face_inertia == Some(protocol::scene::FaceInertia::Unweighted) {
@@ -64,7 +62,11 @@ impl RealSolid {
         for probe in &scene.output.probes {
             let particle = if let Some(id) = probe.particle {
                 if id as usize >= n {
-                    return Err(format!("probe {:?}: particle {id} of {n}", probe.name));
+                    return Err(BuildError::ProbeParticle {
+                        name: probe.name.clone(),
+                        particle: id,
+                        n_particles: n,
+                    });
                 }
                 ParticleId(id)
             } else if let Some(at) = &probe.particle_at {
@@ -76,7 +78,7 @@ impl RealSolid {
                         };
                         d(a).total_cmp(&d(b))
                     })
-                    .ok_or("no particles to probe")?;
+                    .ok_or(BuildError::NoParticlesToProbe)?;
                 ParticleId(nearest as u32)
             } else {
                 continue;
@@ -121,11 +123,6 @@ impl RealSolid {
             .map(|p| p.size)
             .collect()
     }
-}
-
-fn describe(diagnostics: &[Diagnostic], step: u64) -> String {
-    let list: Vec<String> = diagnostics.iter().map(|d| format!("{d:?}")).collect();
-    format!("step {step}: {}", list.join("; "))
 }
 
 impl NodeModel for RealSolid {
@@ -184,7 +181,9 @@ impl NodeModel for RealSolid {
 
     fn restore(&mut self, bytes: &[u8]) -> Result<(), String> {
         let (links_broken, inner): (u64, Vec<u8>) = protocol::codec::decode_blob(bytes)?;
-        self.solid.restore_checkpoint(&inner)?;
+        self.solid
+            .restore_checkpoint(&inner)
+            .map_err(|e| e.to_string())?;
         self.links_broken = links_broken;
         // A checkpoint is the state at the start of a step: nothing has broken in it yet.
         self.last_broken.clear();
@@ -271,7 +270,7 @@ impl NodeModel for RealSolid {
 }
 
 impl SolidModel for RealSolid {
-    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), String> {
+    fn begin_step(&mut self, plan: &StepPlan) -> Result<(), StepError> {
         self.solid.begin_step(plan.dt);
         Ok(())
     }
@@ -280,20 +279,19 @@ impl SolidModel for RealSolid {
         &mut self,
         plan: &StepPlan,
         loads: Option<&InterfaceLoads>,
-    ) -> Result<SolidState, String> {
+    ) -> Result<SolidState, StepError> {
         let (force, torque) = match loads {
             Some(l) => {
                 if l.force.len() != self.zero_force.len()
                     || l.torque.len() != self.zero_torque.len()
                 {
-                    return Err(format!(
-                        "step {}: loads for {} force and {} torque values, the solid has {} and {}",
-                        plan.stamp.step,
-                        l.force.len(),
-                        l.torque.len(),
-                        self.zero_force.len(),
-                        self.zero_torque.len()
-                    ));
+                    return Err(StepError::LoadsSize {
+                        step: plan.stamp.step,
+                        n_force: l.force.len(),
+                        n_torque: l.torque.len(),
+                        n_force_expected: self.zero_force.len(),
+                        n_torque_expected: self.zero_torque.len(),
+                    });
                 }
                 (l.force.as_slice(), l.torque.as_slice())
             }
@@ -313,7 +311,7 @@ impl SolidModel for RealSolid {
         })
     }
 
-    fn commit(&mut self, plan: &StepPlan) -> Result<(), String> {
+    fn commit(&mut self, plan: &StepPlan) -> Result<(), StepError> {
         let report = self.solid.commit();
         self.links_broken += report.broken_links.len() as u64;
         self.last_broken.clear();
@@ -324,7 +322,10 @@ impl SolidModel for RealSolid {
         if report.diagnostics.is_empty() {
             Ok(())
         } else {
-            Err(describe(&report.diagnostics, plan.stamp.step))
+            Err(StepError::Numerical {
+                step: plan.stamp.step,
+                diagnostics: report.diagnostics,
+            })
         }
     }
 

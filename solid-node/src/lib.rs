@@ -7,7 +7,7 @@
 //! - [`model`]: what the node loop needs from an implementation; [`node`]: the node loop over any
 //!   transport; [`double`]: the prescribed double; `cli` (feature `node`): the binary's command
 //!   line and the choice of model.
-//! - [`output`]: particle CSV and VTK writers.
+//! - [`output`]: particle CSV and VTK writers; [`error`]: the node's typed errors.
 
 #![warn(missing_docs)]
 
@@ -15,6 +15,7 @@
 pub mod cli;
 pub mod dem;
 pub mod double;
+pub mod error;
 pub mod exchange;
 pub mod model;
 pub mod node;

@@ -21,7 +21,7 @@ fn advance(
 ) -> Result<(), NodeError> {
     model
         .begin_step(plan)
-        .map_err(|e| fail(link, plan.stamp, e))?;
+        .map_err(|e| fail(link, plan.stamp, e.to_string()))?;
     if coupled {
         loop {
             let loads = match link.recv()? {
@@ -30,7 +30,7 @@ fn advance(
             };
             let mut trial = model
                 .trial(plan, Some(&loads))
-                .map_err(|e| fail(link, loads.stamp, e))?;
+                .map_err(|e| fail(link, loads.stamp, e.to_string()))?;
             trial.stamp = loads.stamp;
             link.send(&Message::SolidState(trial))?;
             let decision = match link.recv()? {
@@ -51,9 +51,11 @@ fn advance(
     } else {
         model
             .trial(plan, None)
-            .map_err(|e| fail(link, plan.stamp, e))?;
+            .map_err(|e| fail(link, plan.stamp, e.to_string()))?;
     }
-    model.commit(plan).map_err(|e| fail(link, plan.stamp, e))
+    model
+        .commit(plan)
+        .map_err(|e| fail(link, plan.stamp, e.to_string()))
 }
 
 /// Runs the solid side of the handshake until the coupler's shutdown.

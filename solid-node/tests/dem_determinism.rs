@@ -4,7 +4,7 @@
 mod dem_support;
 
 use dem_support::*;
-use solid_node::dem::{ParticleId, Solid};
+use solid_node::dem::{CheckpointError, ParticleId, Solid};
 
 /// Big enough that links and particles span several rayon chunks (256 items) and reach the
 /// pool at all (2048 items: fewer run serially).
@@ -106,8 +106,12 @@ fn checkpoint_restore_continues_bit_identically() {
     );
     let mut wrong = build(&other, 3, 1);
     let err = wrong.restore_checkpoint(&bytes).unwrap_err();
-    assert!(err.contains("particles"), "{err}");
-    assert!(wrong.restore_checkpoint(&[1, 2, 3]).is_err());
+    assert!(matches!(err, CheckpointError::Size { .. }), "{err:?}");
+    assert!(err.to_string().contains("particles"), "{err}");
+    assert!(matches!(
+        wrong.restore_checkpoint(&[1, 2, 3]),
+        Err(CheckpointError::Decode(_))
+    ));
 }
 
 #[test]

@@ -101,7 +101,8 @@ pub fn run_in_process_to(scene: &Scene, out: Option<&std::path::Path>) -> InProc
                 }
                 _ => {
                     let solid = scene.solid.as_ref().expect("solid section");
-                    let mut model = solid_node::cli::model_from_scene(&scene, &solid.node)?;
+                    let mut model = solid_node::cli::model_from_scene(&scene, &solid.node)
+                        .map_err(|e| e.to_string())?;
                     let cfg = solid_node::node::LoopConfig {
                         scene_hash: scene.hash(),
                         coupled: scene.fluid.is_some(),

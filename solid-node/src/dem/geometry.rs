@@ -192,14 +192,28 @@ pub fn inertia_from_second_moment(second: &Matrix3<f64>, density: f64) -> Matrix
     (Matrix3::identity() * second.trace() - second) * density
 }
 
+/// Why the points of an explicit 3-D particle have no convex hull.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum HullError {
+    /// Fewer than 4 points.
+    #[error("a 3-D particle needs at least 4 vertices, got {n_vertices}")]
+    TooFewVertices {
+        /// The number of points given.
+        n_vertices: usize,
+    },
+    /// All points lie in one plane.
+    #[error("the particle's vertices are coplanar")]
+    Coplanar,
+}
+
 /// Faces of the convex hull of `points` as outward vertex loops (indices into `points`).
 ///
 /// O(n⁴) brute force, meant for the few vertices of one explicit particle. Coplanar hull points
 /// are merged into one polygonal face.
-pub fn convex_hull_faces(points: &[Vector3<f64>]) -> Result<Vec<Vec<u32>>, String> {
+pub fn convex_hull_faces(points: &[Vector3<f64>]) -> Result<Vec<Vec<u32>>, HullError> {
     let n = points.len();
     if n < 4 {
-        return Err(format!("a 3-D particle needs at least 4 vertices, got {n}"));
+        return Err(HullError::TooFewVertices { n_vertices: n });
     }
     let scale = points
         .iter()
@@ -251,7 +265,7 @@ pub fn convex_hull_faces(points: &[Vector3<f64>]) -> Result<Vec<Vec<u32>>, Strin
         }
     }
     if faces.len() < 4 {
-        return Err("the particle's vertices are coplanar".to_string());
+        return Err(HullError::Coplanar);
     }
     Ok(faces)
 }

@@ -8,9 +8,96 @@
 use std::collections::BTreeMap;
 
 use nalgebra::Vector3;
-use protocol::scene::{BodyConfig, LinksConfig, Motion, Shape};
+use protocol::scene::{BodyConfig, LinksConfig, Motion, ParticleSpec, Shape};
 
-use crate::dem::geometry::convex_hull_faces;
+use crate::dem::geometry::{HullError, convex_hull_faces};
+
+/// Why the bodies of a scene give no lattice.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LatticeError {
+    /// The scene is neither 2-D nor 3-D.
+    #[error("the solid needs a 2-D or 3-D scene, found {dim}-D")]
+    Dimension {
+        /// The scene's dimension.
+        dim: usize,
+    },
+    /// One body's shape is invalid.
+    #[error("solid.bodies[{body}]: {error}")]
+    Body {
+        /// Index of the body in `solid.bodies`.
+        body: usize,
+        /// What is wrong with it.
+        error: BodyError,
+    },
+    /// No body gave a particle.
+    #[error("the solid has no particles")]
+    NoParticles,
+}
+
+/// What is wrong with one body's shape (the text names the shape or the particle).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BodyError {
+    /// A box with the wrong number of coordinates or a size that is not positive.
+    #[error("box: expected {dim} coordinates and positive sizes")]
+    Box {
+        /// The scene's dimension.
+        dim: usize,
+    },
+    /// `divisions` with the wrong length or a zero.
+    #[error("{shape}: expected {expected} positive divisions, found {found:?}")]
+    Divisions {
+        /// The shape (`box`, `ring`, `tube`).
+        shape: &'static str,
+        /// The number of divisions it takes.
+        expected: usize,
+        /// The divisions given.
+        found: Vec<u32>,
+    },
+    /// A ring outside a 2-D scene or with radii out of order.
+    #[error("ring: a 2-D centre and 0 < inner_radius < outer_radius")]
+    Ring,
+    /// A tube outside a 3-D scene, or with an invalid axis, radii or length.
+    #[error("tube: a 3-D centre, axis 0..=2, 0 < inner < outer, length > 0")]
+    Tube,
+    /// A ring or tube of fewer than 3 particles around.
+    #[error("{shape}: at least 3 particles around, found {found}")]
+    TooFewAround {
+        /// The shape (`ring`, `tube`).
+        shape: &'static str,
+        /// The particles around given.
+        found: usize,
+    },
+    /// An explicit particle's vertex with the wrong number of coordinates.
+    #[error("particle {particle}: vertices need {dim} coordinates")]
+    VertexCoordinates {
+        /// Index of the particle in the body's list.
+        particle: usize,
+        /// The scene's dimension.
+        dim: usize,
+    },
+    /// An explicit 2-D particle of fewer than 3 vertices.
+    #[error("particle {particle}: a polygon needs 3 vertices")]
+    TooFewPolygonVertices {
+        /// Index of the particle in the body's list.
+        particle: usize,
+    },
+    /// An explicit 2-D particle whose vertices run clockwise.
+    #[error("particle {particle}: vertices must run counter-clockwise (signed area {signed_area})")]
+    Clockwise {
+        /// Index of the particle in the body's list.
+        particle: usize,
+        /// Its signed area \[m²\] (not positive).
+        signed_area: f64,
+    },
+    /// An explicit 3-D particle whose vertices have no convex hull.
+    #[error("particle {particle}: {error}")]
+    Hull {
+        /// Index of the particle in the body's list.
+        particle: usize,
+        /// Why.
+        error: HullError,
+    },
+}
 
 /// The particles of all bodies before any mechanics.
 #[derive(Clone, Debug, Default)]
@@ -78,23 +165,25 @@ fn polygon_edges(ids: &[u32]) -> Vec<Vec<u32>> {
         .collect()
 }
 
-fn divisions(body: &BodyConfig, n: usize, what: &str) -> Result<Vec<usize>, String> {
+/// The body's `divisions` for a shape of `n` directions (1 each when absent).
+fn divisions(body: &BodyConfig, n: usize, shape: &'static str) -> Result<Vec<usize>, BodyError> {
     if body.divisions.is_empty() {
         return Ok(vec![1; n]);
     }
     if body.divisions.len() != n || body.divisions.contains(&0) {
-        return Err(format!(
-            "{what}: expected {n} positive divisions, found {:?}",
-            body.divisions
-        ));
+        return Err(BodyError::Divisions {
+            shape,
+            expected: n,
+            found: body.divisions.clone(),
+        });
     }
     Ok(body.divisions.iter().map(|&d| d as usize).collect())
 }
 
 /// Builds the lattice of all bodies of a `dim`-dimensional scene.
-pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, String> {
+pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, LatticeError> {
     if dim != 2 && dim != 3 {
-        return Err(format!("the solid needs a 2-D or 3-D scene, found {dim}-D"));
+        return Err(LatticeError::Dimension { dim });
     }
     let mut lattice = Lattice {
         dim,
@@ -109,8 +198,10 @@ pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, Strin
                 index: BTreeMap::new(),
                 quantum: 1e-9 * scale.max(1e-300),
             };
-            add_body(&mut pool, body, dim, &mut shapes)
-                .map_err(|e| format!("solid.bodies[{body_idx}]: {e}"))?;
+            add_body(&mut pool, body, dim, &mut shapes).map_err(|error| LatticeError::Body {
+                body: body_idx,
+                error,
+            })?;
         }
         for faces in shapes {
             lattice.particles.push(ParticleShape {
@@ -122,7 +213,7 @@ pub fn build_lattice(bodies: &[BodyConfig], dim: usize) -> Result<Lattice, Strin
         }
     }
     if lattice.particles.is_empty() {
-        return Err("the solid has no particles".to_string());
+        return Err(LatticeError::NoParticles);
     }
     Ok(lattice)
 }
@@ -153,94 +244,20 @@ fn point(coords: &[f64]) -> Vector3<f64> {
     )
 }
 
+/// The particles of one body, as faces of pooled vertices, appended to `out`.
 fn add_body(
     pool: &mut VertexPool<'_>,
     body: &BodyConfig,
     dim: usize,
     out: &mut Vec<Vec<Vec<u32>>>,
-) -> Result<(), String> {
+) -> Result<(), BodyError> {
     match &body.shape {
-        Shape::Box { center, size } => {
-            if center.len() != dim || size.len() != dim || size.iter().any(|s| *s <= 0.0) {
-                return Err(format!(
-                    "box: expected {dim} coordinates and positive sizes"
-                ));
-            }
-            let n = divisions(body, dim, "box")?;
-            let lower: Vec<f64> = (0..dim).map(|a| center[a] - 0.5 * size[a]).collect();
-            let at = |a: usize, i: usize| lower[a] + size[a] * i as f64 / n[a] as f64;
-            if dim == 2 {
-                for j in 0..n[1] {
-                    for i in 0..n[0] {
-                        let ids = [
-                            pool.id(Vector3::new(at(0, i), at(1, j), 0.0)),
-                            pool.id(Vector3::new(at(0, i + 1), at(1, j), 0.0)),
-                            pool.id(Vector3::new(at(0, i + 1), at(1, j + 1), 0.0)),
-                            pool.id(Vector3::new(at(0, i), at(1, j + 1), 0.0)),
-                        ];
-                        out.push(polygon_edges(&ids));
-                    }
-                }
-            } else {
-                for k in 0..n[2] {
-                    for j in 0..n[1] {
-                        for i in 0..n[0] {
-                            let mut c = [0u32; 8];
-                            for (corner, slot) in c.iter_mut().enumerate() {
-                                let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, corner >> 2);
-                                *slot = pool.id(Vector3::new(
-                                    at(0, i + di),
-                                    at(1, j + dj),
-                                    at(2, k + dk),
-                                ));
-                            }
-                            out.push(hexahedron_faces(c));
-                        }
-                    }
-                }
-            }
-        }
+        Shape::Box { center, size } => add_box(pool, body, dim, center, size, out),
         Shape::Ring {
             center,
             inner_radius,
             outer_radius,
-        } => {
-            if dim != 2
-                || center.len() != 2
-                || !(0.0 < *inner_radius && inner_radius < outer_radius)
-            {
-                return Err("ring: a 2-D centre and 0 < inner_radius < outer_radius".into());
-            }
-            let n = divisions(body, 1, "ring")?[0];
-            if n < 3 {
-                return Err(format!("ring: at least 3 particles around, found {n}"));
-            }
-            let c = point(center);
-            // NOTE: vertex n − k is the mirror image of vertex k about the x-axis to the last bit
-            // (sin(2π − φ) is not −sin φ in floating point, nor sin π zero), so a ring symmetric
-            // about the line through its centre along x is built symmetric.
-            let on = |r: f64, k: usize| {
-                let k = k % n;
-                let m = k.min(n - k);
-                let (sin, cos) = if 2 * m == n {
-                    (0.0, -1.0)
-                } else {
-                    (2.0 * std::f64::consts::PI * m as f64 / n as f64).sin_cos()
-                };
-                let sin = if m == k { sin } else { -sin };
-                c + Vector3::new(r * cos, r * sin, 0.0)
-            };
-            for k in 0..n {
-                // Counter-clockwise: inner k, outer k, outer k+1, inner k+1.
-                let ids = [
-                    pool.id(on(*inner_radius, k)),
-                    pool.id(on(*outer_radius, k)),
-                    pool.id(on(*outer_radius, k + 1)),
-                    pool.id(on(*inner_radius, k + 1)),
-                ];
-                out.push(polygon_edges(&ids));
-            }
-        }
+        } => add_ring(pool, body, dim, center, *inner_radius, *outer_radius, out),
         Shape::Tube {
             center,
             axis,
@@ -248,84 +265,221 @@ fn add_body(
             outer_radius,
             length,
         } => {
-            if dim != 3
-                || center.len() != 3
-                || *axis > 2
-                || *inner_radius <= 0.0
-                || inner_radius >= outer_radius
-                || *length <= 0.0
-            {
-                return Err("tube: a 3-D centre, axis 0..=2, 0 < inner < outer, length > 0".into());
-            }
-            let nd = divisions(body, 2, "tube")?;
-            let (n_around, n_along) = (nd[0], nd[1]);
-            if n_around < 3 {
-                return Err(format!(
-                    "tube: at least 3 particles around, found {n_around}"
-                ));
-            }
-            let a = *axis as usize;
-            // (u, w, e) right-handed: e = u × w.
-            let e = Vector3::from_fn(|r, _| if r == a { 1.0 } else { 0.0 });
-            let u = Vector3::from_fn(|r, _| if r == (a + 1) % 3 { 1.0 } else { 0.0 });
-            let w = e.cross(&u);
-            let c = point(center);
-            let at = |r: f64, k: usize, l: usize| {
-                let phi = 2.0 * std::f64::consts::PI * (k % n_around) as f64 / n_around as f64;
-                let z = -0.5 * length + length * l as f64 / n_along as f64;
-                c + u * (r * phi.cos()) + w * (r * phi.sin()) + e * z
+            let tube = TubeSpec {
+                center,
+                axis: *axis,
+                inner_radius: *inner_radius,
+                outer_radius: *outer_radius,
+                length: *length,
             };
-            for l in 0..n_along {
-                for k in 0..n_around {
-                    let mut corners = [0u32; 8];
-                    for (corner, slot) in corners.iter_mut().enumerate() {
+            add_tube(pool, body, dim, &tube, out)
+        }
+        Shape::Particles(list) => add_particles(pool, dim, list, out),
+    }
+}
+
+/// A box cut into `divisions` rectangles (2-D) or cuboids (3-D).
+fn add_box(
+    pool: &mut VertexPool<'_>,
+    body: &BodyConfig,
+    dim: usize,
+    center: &[f64],
+    size: &[f64],
+    out: &mut Vec<Vec<Vec<u32>>>,
+) -> Result<(), BodyError> {
+    if center.len() != dim || size.len() != dim || size.iter().any(|s| *s <= 0.0) {
+        return Err(BodyError::Box { dim });
+    }
+    let n = divisions(body, dim, "box")?;
+    let lower: Vec<f64> = (0..dim).map(|a| center[a] - 0.5 * size[a]).collect();
+    let at = |a: usize, i: usize| lower[a] + size[a] * i as f64 / n[a] as f64;
+    if dim == 2 {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let ids = [
+                    pool.id(Vector3::new(at(0, i), at(1, j), 0.0)),
+                    pool.id(Vector3::new(at(0, i + 1), at(1, j), 0.0)),
+                    pool.id(Vector3::new(at(0, i + 1), at(1, j + 1), 0.0)),
+                    pool.id(Vector3::new(at(0, i), at(1, j + 1), 0.0)),
+                ];
+                out.push(polygon_edges(&ids));
+            }
+        }
+    } else {
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let mut c = [0u32; 8];
+                    for (corner, slot) in c.iter_mut().enumerate() {
                         let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, corner >> 2);
-                        let r = if di == 0 {
-                            *inner_radius
-                        } else {
-                            *outer_radius
-                        };
-                        *slot = pool.id(at(r, k + dj, l + dk));
+                        *slot = pool.id(Vector3::new(at(0, i + di), at(1, j + dj), at(2, k + dk)));
                     }
-                    out.push(hexahedron_faces(corners));
+                    out.push(hexahedron_faces(c));
                 }
             }
         }
-        Shape::Particles(list) => {
-            for (p_idx, spec) in list.iter().enumerate() {
-                if spec.vertices.iter().any(|v| v.len() != dim) {
-                    return Err(format!("particle {p_idx}: vertices need {dim} coordinates"));
-                }
-                let pts: Vec<Vector3<f64>> = spec.vertices.iter().map(|v| point(v)).collect();
-                if dim == 2 {
-                    if pts.len() < 3 {
-                        return Err(format!("particle {p_idx}: a polygon needs 3 vertices"));
-                    }
-                    let mut signed = 0.0;
-                    for k in 0..pts.len() {
-                        let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
-                        signed += a.x * b.y - a.y * b.x;
-                    }
-                    if signed <= 0.0 {
-                        return Err(format!(
-                            "particle {p_idx}: vertices must run counter-clockwise (signed area {})",
-                            0.5 * signed
-                        ));
-                    }
-                    let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
-                    out.push(polygon_edges(&ids));
-                } else {
-                    let faces =
-                        convex_hull_faces(&pts).map_err(|e| format!("particle {p_idx}: {e}"))?;
-                    let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
-                    out.push(
-                        faces
-                            .into_iter()
-                            .map(|f| f.into_iter().map(|v| ids[v as usize]).collect())
-                            .collect(),
-                    );
-                }
+    }
+    Ok(())
+}
+
+/// A 2-D ring of `divisions` quadrilaterals one particle thick.
+fn add_ring(
+    pool: &mut VertexPool<'_>,
+    body: &BodyConfig,
+    dim: usize,
+    center: &[f64],
+    inner_radius: f64,
+    outer_radius: f64,
+    out: &mut Vec<Vec<Vec<u32>>>,
+) -> Result<(), BodyError> {
+    if dim != 2 || center.len() != 2 || !(0.0 < inner_radius && inner_radius < outer_radius) {
+        return Err(BodyError::Ring);
+    }
+    let n = divisions(body, 1, "ring")?[0];
+    if n < 3 {
+        return Err(BodyError::TooFewAround {
+            shape: "ring",
+            found: n,
+        });
+    }
+    let c = point(center);
+    // NOTE: vertex n − k is the mirror image of vertex k about the x-axis to the last bit
+    // (sin(2π − φ) is not −sin φ in floating point, nor sin π zero), so a ring symmetric
+    // about the line through its centre along x is built symmetric.
+    let on = |r: f64, k: usize| {
+        let k = k % n;
+        let m = k.min(n - k);
+        let (sin, cos) = if 2 * m == n {
+            (0.0, -1.0)
+        } else {
+            (2.0 * std::f64::consts::PI * m as f64 / n as f64).sin_cos()
+        };
+        let sin = if m == k { sin } else { -sin };
+        c + Vector3::new(r * cos, r * sin, 0.0)
+    };
+    for k in 0..n {
+        // Counter-clockwise: inner k, outer k, outer k+1, inner k+1.
+        let ids = [
+            pool.id(on(inner_radius, k)),
+            pool.id(on(outer_radius, k)),
+            pool.id(on(outer_radius, k + 1)),
+            pool.id(on(inner_radius, k + 1)),
+        ];
+        out.push(polygon_edges(&ids));
+    }
+    Ok(())
+}
+
+/// The parameters of a `tube` shape.
+struct TubeSpec<'a> {
+    center: &'a [f64],
+    axis: u32,
+    inner_radius: f64,
+    outer_radius: f64,
+    length: f64,
+}
+
+/// A 3-D tube of `divisions = [around, along]` hexahedra one particle thick.
+fn add_tube(
+    pool: &mut VertexPool<'_>,
+    body: &BodyConfig,
+    dim: usize,
+    tube: &TubeSpec<'_>,
+    out: &mut Vec<Vec<Vec<u32>>>,
+) -> Result<(), BodyError> {
+    let TubeSpec {
+        center,
+        axis,
+        inner_radius,
+        outer_radius,
+        length,
+    } = *tube;
+    if dim != 3
+        || center.len() != 3
+        || axis > 2
+        || inner_radius <= 0.0
+        || inner_radius >= outer_radius
+        || length <= 0.0
+    {
+        return Err(BodyError::Tube);
+    }
+    let nd = divisions(body, 2, "tube")?;
+    let (n_around, n_along) = (nd[0], nd[1]);
+    if n_around < 3 {
+        return Err(BodyError::TooFewAround {
+            shape: "tube",
+            found: n_around,
+        });
+    }
+    let a = axis as usize;
+    // (u, w, e) right-handed: e = u × w.
+    let e = Vector3::from_fn(|r, _| if r == a { 1.0 } else { 0.0 });
+    let u = Vector3::from_fn(|r, _| if r == (a + 1) % 3 { 1.0 } else { 0.0 });
+    let w = e.cross(&u);
+    let c = point(center);
+    let at = |r: f64, k: usize, l: usize| {
+        let phi = 2.0 * std::f64::consts::PI * (k % n_around) as f64 / n_around as f64;
+        let z = -0.5 * length + length * l as f64 / n_along as f64;
+        c + u * (r * phi.cos()) + w * (r * phi.sin()) + e * z
+    };
+    for l in 0..n_along {
+        for k in 0..n_around {
+            let mut corners = [0u32; 8];
+            for (corner, slot) in corners.iter_mut().enumerate() {
+                let (di, dj, dk) = (corner & 1, (corner >> 1) & 1, corner >> 2);
+                let r = if di == 0 { inner_radius } else { outer_radius };
+                *slot = pool.id(at(r, k + dj, l + dk));
             }
+            out.push(hexahedron_faces(corners));
+        }
+    }
+    Ok(())
+}
+
+/// Explicit particles: 2-D counter-clockwise polygons, 3-D convex hulls of their vertices.
+fn add_particles(
+    pool: &mut VertexPool<'_>,
+    dim: usize,
+    list: &[ParticleSpec],
+    out: &mut Vec<Vec<Vec<u32>>>,
+) -> Result<(), BodyError> {
+    for (p_idx, spec) in list.iter().enumerate() {
+        if spec.vertices.iter().any(|v| v.len() != dim) {
+            return Err(BodyError::VertexCoordinates {
+                particle: p_idx,
+                dim,
+            });
+        }
+        let pts: Vec<Vector3<f64>> = spec.vertices.iter().map(|v| point(v)).collect();
+        if dim == 2 {
+            if pts.len() < 3 {
+                return Err(BodyError::TooFewPolygonVertices { particle: p_idx });
+            }
+            let mut signed = 0.0;
+            for k in 0..pts.len() {
+                let (a, b) = (pts[k], pts[(k + 1) % pts.len()]);
+                signed += a.x * b.y - a.y * b.x;
+            }
+            if signed <= 0.0 {
+                return Err(BodyError::Clockwise {
+                    particle: p_idx,
+                    signed_area: 0.5 * signed,
+                });
+            }
+            let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
+            out.push(polygon_edges(&ids));
+        } else {
+            let faces = convex_hull_faces(&pts).map_err(|error| BodyError::Hull {
+                particle: p_idx,
+                error,
+            })?;
+            let ids: Vec<u32> = pts.iter().map(|p| pool.id(*p)).collect();
+            out.push(
+                faces
+                    .into_iter()
+                    .map(|f| f.into_iter().map(|v| ids[v as usize]).collect())
+                    .collect(),
+            );
         }
     }
     Ok(())

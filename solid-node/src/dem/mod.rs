@@ -76,6 +76,7 @@ pub mod geometry;
 pub mod lattice;
 pub mod link_force;
 pub mod model;
+mod parallel;
 pub mod rattle;
 pub mod report;
 pub mod solid;
@@ -85,7 +86,10 @@ pub mod wet;
 #[cfg(test)]
 mod tests;
 
-pub use model::{LinkId, Material, ParticleId, ParticleMotion};
+pub use contact::ContactError;
+pub use geometry::HullError;
+pub use lattice::{BodyError, LatticeError};
+pub use model::{LinkId, Material, ModelError, ParticleId, ParticleMotion};
 pub use report::{BrokenLink, Diagnostic, Energies, Momentum, StepReport};
-pub use solid::{Solid, Trial};
+pub use solid::{CheckpointError, SetupError, Solid, Trial};
 pub use wet::WetSurfaceData;

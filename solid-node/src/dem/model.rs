@@ -12,9 +12,9 @@ use serde::{Deserialize, Serialize};
 use protocol::scene::{FaceInertia, Motion};
 
 use crate::dem::geometry::{
-    face_moments_with, inertia_from_second_moment, polygon_mass, polyhedron_mass,
+    FaceMoments, face_moments_with, inertia_from_second_moment, polygon_mass, polyhedron_mass,
 };
-use crate::dem::lattice::Lattice;
+use crate::dem::lattice::{Lattice, ParticleShape};
 
 /// Typed index of a particle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -245,8 +245,90 @@ pub struct Model {
     pub vertices0: Vec<Vector3<f64>>,
 }
 
+/// Why a lattice gives no model.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A 3-D particle's faces enclose no volume.
+    #[error("particle {particle}: non-positive volume {volume} (faces not outward?)")]
+    NonPositiveVolume {
+        /// The particle's index.
+        particle: usize,
+        /// Its signed volume \[m³\].
+        volume: f64,
+    },
+    /// A 2-D particle's polygon has no area.
+    #[error("particle {particle}: non-positive area {area}")]
+    NonPositiveArea {
+        /// The particle's index.
+        particle: usize,
+        /// Its signed area \[m²\].
+        area: f64,
+    },
+    /// More than two particles of a body share a face.
+    #[error("a face is shared by {n_particles} particles")]
+    FaceSharedByMany {
+        /// The particles sharing it.
+        n_particles: usize,
+    },
+}
+
 /// Builds the model from a lattice.
-pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, String> {
+pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, ModelError> {
+    let dim = lattice.dim;
+    let Shapes {
+        mut particles,
+        mut faces,
+        slots,
+        face_geo,
+    } = build_particles(lattice, material)?;
+    let mut face_offsets = Vec::with_capacity(lattice.particles.len() + 1);
+    let mut acc = 0usize;
+    for shape in &lattice.particles {
+        face_offsets.push(acc);
+        acc += shape.faces.len();
+    }
+    let links = build_links(
+        lattice,
+        material,
+        &particles,
+        &mut faces,
+        &face_geo,
+        &face_offsets,
+    )?;
+    set_free_volumes(material, &mut particles, &faces, &face_geo, &face_offsets);
+    let (incidence_start, incidence) = incidence(particles.len(), &links);
+    let (vertex_slot_start, vertex_slots) = vertex_slots(lattice.vertices.len(), &slots);
+    Ok(Model {
+        dim,
+        material,
+        particles,
+        kernels: links.iter().map(LinkKernel::from_link).collect(),
+        links,
+        faces,
+        slots,
+        incidence_start,
+        incidence,
+        vertex_slot_start,
+        vertex_slots,
+        vertices0: lattice.vertices.clone(),
+    })
+}
+
+/// The particles, faces and slots of a lattice, and per particle, per face, the face's moments
+/// at t = 0 (space frame) with the volume of the pyramid it makes with the centre.
+struct Shapes {
+    particles: Vec<Particle>,
+    faces: Vec<Face>,
+    slots: Vec<Slot>,
+    face_geo: Vec<Vec<(FaceMoments, f64)>>,
+}
+
+/// Mass properties of one particle: volume (2-D: area), centre, principal moments, principal
+/// axes at t = 0.
+type MassProperties = (f64, Vector3<f64>, [f64; 3], UnitQuaternion<f64>);
+
+/// Every particle's mass properties, faces and vertex slots.
+fn build_particles(lattice: &Lattice, material: Material) -> Result<Shapes, ModelError> {
     let dim = lattice.dim;
     let mut particles = Vec::with_capacity(lattice.particles.len());
     let mut faces: Vec<Face> = Vec::new();
@@ -262,51 +344,8 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
             .iter()
             .flat_map(|a| pts.iter().map(move |b| (a - b).norm()))
             .fold(0.0, f64::max);
-        let (volume, x0, inertia, axes0) = if dim == 3 {
-            let local: Vec<Vec<u32>> = shape
-                .faces
-                .iter()
-                .map(|f| {
-                    f.iter()
-                        .map(|v| ids.binary_search(v).unwrap() as u32)
-                        .collect()
-                })
-                .collect();
-            let mp = polyhedron_mass(&pts, &local);
-            if mp.volume <= 0.0 {
-                return Err(format!(
-                    "particle {p_idx}: non-positive volume {} (faces not outward?)",
-                    mp.volume
-                ));
-            }
-            let tensor = inertia_from_second_moment(&mp.second_moment, material.density);
-            let eig = tensor.symmetric_eigen();
-            let mut axes = eig.eigenvectors;
-            if axes.determinant() < 0.0 {
-                axes.column_mut(2).neg_mut();
-            }
-            let rot = nalgebra::Rotation3::from_matrix_unchecked(axes);
-            let q = UnitQuaternion::from_rotation_matrix(&rot);
-            let ev = eig.eigenvalues;
-            (mp.volume, mp.centroid, [ev[0], ev[1], ev[2]], q)
-        } else {
-            // Polygon loop from the counter-clockwise edges.
-            let loop2: Vec<Vector2<f64>> = shape
-                .faces
-                .iter()
-                .map(|e| lattice.vertices[e[0] as usize].xy())
-                .collect();
-            let (area, c, polar) = polygon_mass(&loop2);
-            if area <= 0.0 {
-                return Err(format!("particle {p_idx}: non-positive area {area}"));
-            }
-            (
-                area,
-                Vector3::new(c.x, c.y, 0.0),
-                [material.density * polar, 0.0, 0.0],
-                UnitQuaternion::identity(),
-            )
-        };
+        let (volume, x0, inertia, axes0) =
+            mass_properties(lattice, shape, &ids, &pts, material, p_idx)?;
         let to_body = |v: Vector3<f64>| axes0.inverse_transform_vector(&v);
         let slot_base = slots.len() as u32;
         for &v in &ids {
@@ -356,7 +395,84 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
             vol_energy_coef: 0.0,
         });
     }
-    // Links: faces with the same vertex set in the same body.
+    Ok(Shapes {
+        particles,
+        faces,
+        slots,
+        face_geo,
+    })
+}
+
+/// Volume, centre and principal inertia of particle `p_idx`, whose sorted vertex ids are `ids`
+/// at `pts`.
+fn mass_properties(
+    lattice: &Lattice,
+    shape: &ParticleShape,
+    ids: &[u32],
+    pts: &[Vector3<f64>],
+    material: Material,
+    p_idx: usize,
+) -> Result<MassProperties, ModelError> {
+    if lattice.dim == 3 {
+        let local: Vec<Vec<u32>> = shape
+            .faces
+            .iter()
+            .map(|f| {
+                f.iter()
+                    .map(|v| ids.binary_search(v).unwrap() as u32)
+                    .collect()
+            })
+            .collect();
+        let mp = polyhedron_mass(pts, &local);
+        if mp.volume <= 0.0 {
+            return Err(ModelError::NonPositiveVolume {
+                particle: p_idx,
+                volume: mp.volume,
+            });
+        }
+        let tensor = inertia_from_second_moment(&mp.second_moment, material.density);
+        let eig = tensor.symmetric_eigen();
+        let mut axes = eig.eigenvectors;
+        if axes.determinant() < 0.0 {
+            axes.column_mut(2).neg_mut();
+        }
+        let rot = nalgebra::Rotation3::from_matrix_unchecked(axes);
+        let q = UnitQuaternion::from_rotation_matrix(&rot);
+        let ev = eig.eigenvalues;
+        Ok((mp.volume, mp.centroid, [ev[0], ev[1], ev[2]], q))
+    } else {
+        // Polygon loop from the counter-clockwise edges.
+        let loop2: Vec<Vector2<f64>> = shape
+            .faces
+            .iter()
+            .map(|e| lattice.vertices[e[0] as usize].xy())
+            .collect();
+        let (area, c, polar) = polygon_mass(&loop2);
+        if area <= 0.0 {
+            return Err(ModelError::NonPositiveArea {
+                particle: p_idx,
+                area,
+            });
+        }
+        Ok((
+            area,
+            Vector3::new(c.x, c.y, 0.0),
+            [material.density * polar, 0.0, 0.0],
+            UnitQuaternion::identity(),
+        ))
+    }
+}
+
+/// Links: faces with the same vertex set in the same body, sorted by `(i, j)`; each face
+/// on a link gets the link's index.
+fn build_links(
+    lattice: &Lattice,
+    material: Material,
+    particles: &[Particle],
+    faces: &mut [Face],
+    face_geo: &[Vec<(FaceMoments, f64)>],
+    face_offsets: &[usize],
+) -> Result<Vec<Link>, ModelError> {
     let mut keyed: Vec<(u32, Vec<u32>, u32)> = Vec::new();
     let mut face_idx = 0u32;
     for shape in &lattice.particles {
@@ -369,15 +485,6 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
     }
     keyed.sort();
     let mut links = Vec::new();
-    let e = material.young;
-    let nu = material.poisson;
-    let lambda = material.lambda();
-    let mut face_offsets = Vec::with_capacity(lattice.particles.len() + 1);
-    let mut acc = 0usize;
-    for shape in &lattice.particles {
-        face_offsets.push(acc);
-        acc += shape.faces.len();
-    }
     let mut k = 0;
     while k < keyed.len() {
         let mut m = k + 1;
@@ -385,7 +492,7 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
             m += 1;
         }
         if m - k > 2 {
-            return Err(format!("a face is shared by {} particles", m - k));
+            return Err(ModelError::FaceSharedByMany { n_particles: m - k });
         }
         if m - k == 2 {
             let (fa, fb) = (keyed[k].2, keyed[k + 1].2);
@@ -396,18 +503,9 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                 (fb, fa, pb, pa)
             };
             let geo = face_geo[i as usize][fi as usize - face_offsets[i as usize]].0;
-            let (pi, pj) = (&particles[i as usize], &particles[j as usize]);
-            let d0 = (pj.x0 - pi.x0).norm();
-            let s = geo.area;
-            let (i_s, i_t) = (geo.i_s, geo.i_t);
-            // 000 §2.2.1: α chosen to recover exact flexion and torsion of a beam. With
-            // I^s = ∫(x·s)², flexion about t costs α_n + α_s = E I^s / S (checked in tests).
-            let base = e / (4.0 * (1.0 + nu) * s);
-            let alpha = [
-                (1.0 + 2.0 * nu) * base * (i_s + i_t),
-                base * ((3.0 + 2.0 * nu) * i_s - (1.0 + 2.0 * nu) * i_t),
-                base * ((3.0 + 2.0 * nu) * i_t - (1.0 + 2.0 * nu) * i_s),
-            ];
+            let link_id = links.len() as u32;
+            faces[fi as usize].link = Some(link_id);
+            faces[fj as usize].link = Some(link_id);
             let law = match &lattice.particles[i as usize].links {
                 None => LinkLaw::Elastic,
                 Some(l) => LinkLaw::Spring {
@@ -415,41 +513,14 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
                     rotation: l.rotation,
                 },
             };
-            let (k_shear, k_vol, flex) = match law {
-                LinkLaw::Elastic => (
-                    s / d0 * e / (1.0 + nu),
-                    // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
-                    0.5 * s * lambda,
-                    [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
-                ),
-                // Σ_k c/2 (1 − Q_I a_k · Q_J a_k) = c (1 − cos φ) for a relative rotation φ.
-                LinkLaw::Spring { rotation, .. } => (0.0, 0.0, [0.5 * rotation; 3]),
-            };
-            let bi = |v: Vector3<f64>| pi.axes0.inverse_transform_vector(&v);
-            let bj = |v: Vector3<f64>| pj.axes0.inverse_transform_vector(&v);
-            let link_id = links.len() as u32;
-            faces[fi as usize].link = Some(link_id);
-            faces[fj as usize].link = Some(link_id);
-            links.push(Link {
-                i,
-                j,
-                area: s,
-                d0,
-                centroid0: geo.centroid,
-                normal0: geo.normal,
-                s0: geo.s,
-                t0: geo.t,
-                i_st: [i_s, i_t],
-                k_shear,
-                k_vol,
-                flex,
-                r_i: bi(geo.centroid - pi.x0),
-                r_j: bj(geo.centroid - pj.x0),
-                axes_i: [bi(geo.normal), bi(geo.s), bi(geo.t)],
-                axes_j: [bj(geo.normal), bj(geo.s), bj(geo.t)],
-                faces: [fi, fj],
+            links.push(link_through(
+                material,
+                (&particles[i as usize], &particles[j as usize]),
+                &geo,
                 law,
-            });
+                [i, j],
+                [fi, fj],
+            ));
         }
         k = m;
     }
@@ -458,7 +529,76 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         faces[l.faces[0] as usize].link = Some(idx as u32);
         faces[l.faces[1] as usize].link = Some(idx as u32);
     }
-    // Free volumes and volumetric weights.
+    Ok(links)
+}
+
+/// The link between particles `ids = [i, j]` through the face `geo` (`faces = [of i, of j]`).
+fn link_through(
+    material: Material,
+    (pi, pj): (&Particle, &Particle),
+    geo: &FaceMoments,
+    law: LinkLaw,
+    [i, j]: [u32; 2],
+    [fi, fj]: [u32; 2],
+) -> Link {
+    let e = material.young;
+    let nu = material.poisson;
+    let lambda = material.lambda();
+    let d0 = (pj.x0 - pi.x0).norm();
+    let s = geo.area;
+    let (i_s, i_t) = (geo.i_s, geo.i_t);
+    // 000 §2.2.1: α chosen to recover exact flexion and torsion of a beam. With
+    // I^s = ∫(x·s)², flexion about t costs α_n + α_s = E I^s / S (checked in tests).
+    let base = e / (4.0 * (1.0 + nu) * s);
+    let alpha = [
+        (1.0 + 2.0 * nu) * base * (i_s + i_t),
+        base * ((3.0 + 2.0 * nu) * i_s - (1.0 + 2.0 * nu) * i_t),
+        base * ((3.0 + 2.0 * nu) * i_t - (1.0 + 2.0 * nu) * i_s),
+    ];
+    let (k_shear, k_vol, flex) = match law {
+        LinkLaw::Elastic => (
+            s / d0 * e / (1.0 + nu),
+            // NOTE: half the printed S λ, see `link_force.rs` (mean of ε^v_I and ε^v_J).
+            0.5 * s * lambda,
+            [alpha[0] * s / d0, alpha[1] * s / d0, alpha[2] * s / d0],
+        ),
+        // Σ_k c/2 (1 − Q_I a_k · Q_J a_k) = c (1 − cos φ) for a relative rotation φ.
+        LinkLaw::Spring { rotation, .. } => (0.0, 0.0, [0.5 * rotation; 3]),
+    };
+    let bi = |v: Vector3<f64>| pi.axes0.inverse_transform_vector(&v);
+    let bj = |v: Vector3<f64>| pj.axes0.inverse_transform_vector(&v);
+    Link {
+        i,
+        j,
+        area: s,
+        d0,
+        centroid0: geo.centroid,
+        normal0: geo.normal,
+        s0: geo.s,
+        t0: geo.t,
+        i_st: [i_s, i_t],
+        k_shear,
+        k_vol,
+        flex,
+        r_i: bi(geo.centroid - pi.x0),
+        r_j: bj(geo.centroid - pj.x0),
+        axes_i: [bi(geo.normal), bi(geo.s), bi(geo.t)],
+        axes_j: [bj(geo.normal), bj(geo.s), bj(geo.t)],
+        faces: [fi, fj],
+        law,
+    }
+}
+
+/// Free volumes (pyramids on the faces without a link) and volumetric weights.
+fn set_free_volumes(
+    material: Material,
+    particles: &mut [Particle],
+    faces: &[Face],
+    face_geo: &[Vec<(FaceMoments, f64)>],
+    face_offsets: &[usize],
+) {
+    let nu = material.poisson;
+    let lambda = material.lambda();
     for (p_idx, p) in particles.iter_mut().enumerate() {
         let start = face_offsets[p_idx];
         let free: f64 = face_geo[p_idx]
@@ -472,10 +612,13 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         p.vol_weight = 0.5 / v_eff;
         p.vol_energy_coef = 0.5 * lambda * v_eff;
     }
-    // Incidence (CSR), links sorted by id per particle.
-    let n = particles.len();
+}
+
+/// Incidence (CSR): per particle, its links sorted by id, as `(link, particle is the link's
+/// i)`; returns the start of each particle's range (length n + 1) and the entries.
+fn incidence(n: usize, links: &[Link]) -> (Vec<u32>, Vec<(u32, bool)>) {
     let mut counts = vec![0u32; n + 1];
-    for l in &links {
+    for l in links {
         counts[l.i as usize + 1] += 1;
         counts[l.j as usize + 1] += 1;
     }
@@ -490,10 +633,15 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         incidence[fill[l.j as usize] as usize] = (idx as u32, false);
         fill[l.j as usize] += 1;
     }
-    // Vertex → slots (CSR).
-    let nv = lattice.vertices.len();
+    (counts, incidence)
+}
+
+/// Vertex → slots (CSR) over `n_vertices` lattice vertices: the start of each vertex's range
+/// and the slots.
+fn vertex_slots(n_vertices: usize, slots: &[Slot]) -> (Vec<u32>, Vec<u32>) {
+    let nv = n_vertices;
     let mut vcount = vec![0u32; nv + 1];
-    for s in &slots {
+    for s in slots {
         vcount[s.vertex as usize + 1] += 1;
     }
     for v in 0..nv {
@@ -505,30 +653,17 @@ pub fn build_model(lattice: &Lattice, material: Material) -> Result<Model, Strin
         vertex_slots[vfill[s.vertex as usize] as usize] = idx as u32;
         vfill[s.vertex as usize] += 1;
     }
-    Ok(Model {
-        dim,
-        material,
-        particles,
-        kernels: links.iter().map(LinkKernel::from_link).collect(),
-        links,
-        faces,
-        slots,
-        incidence_start: counts,
-        incidence,
-        vertex_slot_start: vcount,
-        vertex_slots,
-        vertices0: lattice.vertices.clone(),
-    })
+    (vcount, vertex_slots)
 }
 
 /// Moments of a 2-D edge seen as a unit-depth rectangle: S = ℓ, I^s = ℓ³/12 (in-plane),
 /// I^t = ℓ/12 (depth); normal `(dy, −dx)/ℓ` is outward for a counter-clockwise polygon.
-fn segment_moments(a: Vector3<f64>, b: Vector3<f64>) -> crate::dem::geometry::FaceMoments {
+fn segment_moments(a: Vector3<f64>, b: Vector3<f64>) -> FaceMoments {
     let d = b - a;
     let len = d.norm();
     let s = d / len;
     let normal = Vector3::new(s.y, -s.x, 0.0);
-    crate::dem::geometry::FaceMoments {
+    FaceMoments {
         area: len,
         centroid: (a + b) * 0.5,
         normal,

@@ -2,12 +2,17 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::dem::contact::DEEP_OVERLAP;
 use crate::dem::model::{LinkId, ParticleId};
 
 /// Numerical trouble found at the end of a step (the step is still committed; the caller decides).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+///
+/// Its text names the particle(s) or link and gives the numbers (floats as `{:?}` prints them,
+/// to the last bit).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, thiserror::Error)]
 pub enum Diagnostic {
     /// A position, velocity, orientation or momentum is NaN or infinite.
+    #[error("particle {}: non-finite {quantity}", particle.0)]
     NonFinite {
         /// The particle.
         particle: ParticleId,
@@ -15,6 +20,10 @@ pub enum Diagnostic {
         quantity: String,
     },
     /// The particle moved more than its size h_s in one step (003 §2.2).
+    #[error(
+        "particle {}: displacement {displacement:?} m in one step, more than its size {size:?} m",
+        particle.0
+    )]
     DisplacementTooLarge {
         /// The particle.
         particle: ParticleId,
@@ -24,6 +33,10 @@ pub enum Diagnostic {
         size: f64,
     },
     /// The particle turned more than π/8 in one step (003 §2.2).
+    #[error(
+        "particle {}: rotation {angle:?} rad in one step, more than π/8",
+        particle.0
+    )]
     RotationTooLarge {
         /// The particle.
         particle: ParticleId,
@@ -31,6 +44,13 @@ pub enum Diagnostic {
         angle: f64,
     },
     /// Two linked particles came closer than half their rest distance (deep interpenetration).
+    #[error(
+        "link {} of particles {} and {}: interpenetration, centre distance {distance:?} m below \
+         half the rest distance {rest_distance:?} m",
+        link.0,
+        particles[0].0,
+        particles[1].0
+    )]
     Interpenetration {
         /// The link.
         link: LinkId,
@@ -42,6 +62,10 @@ pub enum Diagnostic {
         rest_distance: f64,
     },
     /// The step exceeds the elastic stability bound of the explicit scheme.
+    #[error(
+        "dt {dt:?} s above the stability bound {limit:?} s set by particle {}",
+        particle.0
+    )]
     DtAboveElasticLimit {
         /// Step used \[s\].
         dt: f64,
@@ -53,6 +77,13 @@ pub enum Diagnostic {
     /// Two particles in contact overlap by more than
     /// [`crate::dem::contact::DEEP_OVERLAP`] of the smaller one's volume (contact too soft or
     /// step too large).
+    #[error(
+        "particles {} and {}: deep contact, overlap {overlap:?} above {} of the smaller one's \
+         volume {volume:?}",
+        particles[0].0,
+        particles[1].0,
+        DEEP_OVERLAP
+    )]
     DeepContact {
         /// The particles.
         particles: [ParticleId; 2],
@@ -62,6 +93,10 @@ pub enum Diagnostic {
         volume: f64,
     },
     /// The RATTLE fixed point did not converge.
+    #[error(
+        "particle {}: the RATTLE fixed point did not converge, last correction {residual:?}",
+        particle.0
+    )]
     RattleNotConverged {
         /// The particle.
         particle: ParticleId,

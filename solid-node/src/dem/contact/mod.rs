@@ -47,21 +47,23 @@
 
 pub mod broad;
 pub mod overlap;
+mod shapes;
 
 #[cfg(test)]
 mod tests;
 
 use nalgebra::{Vector2, Vector3};
-use rayon::prelude::*;
 
 use protocol::scene::ContactConfig;
 
 use crate::dem::model::{Model, ParticleMotion};
-use crate::dem::solid::CHUNK;
+use crate::dem::parallel::{par_each, par_fill};
 use broad::{Grid, candidate_pairs};
 use overlap::{
     ClipScratch, Overlap, PolyhedronView, contact_polygon_polygon, contact_polyhedron_polyhedron,
 };
+pub use shapes::ContactError;
+use shapes::{MAX_VERTICES, Piece, Shapes, build_shapes};
 
 /// Overlap volume, as a fraction of the smaller particle's volume, that the step reports as
 /// deep contact ([`crate::dem::Diagnostic::DeepContact`]).
@@ -70,9 +72,6 @@ pub const DEEP_OVERLAP: f64 = 0.25;
 /// Distance to a face plane, as a fraction of the smaller particle size, within which a point
 /// counts as on the plane ([`overlap`]): far above round-off, far below any physical gap.
 const COPLANAR: f64 = 1e-10;
-
-/// Vertices of a 2-D particle at most (stack copies in the plane).
-const MAX_VERTICES: usize = 64;
 
 /// Contact parameters (validated `[solid.contact]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -131,42 +130,6 @@ pub struct ContactPair {
     pub stiffness: f64,
 }
 
-/// Per-particle shape data for the contact (body frame), built once.
-#[derive(Clone, Debug, Default)]
-struct Shapes {
-    /// Per particle, range into `vertices` (CSR).
-    vertex_start: Vec<u32>,
-    /// Vertices relative to the centre, body frame (2-D: counter-clockwise).
-    vertices: Vec<Vector3<f64>>,
-    /// Owner of each vertex.
-    vertex_owner: Vec<u32>,
-    /// 3-D: per particle, range into `faces` (CSR).
-    face_start: Vec<u32>,
-    /// 3-D: per face, its loop as a range into `face_vertices` (indices local to the particle).
-    face_ranges: Vec<(u32, u32)>,
-    face_vertices: Vec<u32>,
-    /// 3-D: outward normal of each face, body frame.
-    face_normals: Vec<Vector3<f64>>,
-    face_owner: Vec<u32>,
-    /// Bounding radius about the centre \[m\].
-    radius: Vec<f64>,
-    /// Per particle, range into `pieces` (CSR).
-    piece_start: Vec<u32>,
-    /// The pieces each particle is cut into for the law (see the module doc), body frame.
-    pieces: Vec<Piece>,
-}
-
-/// One convex piece of a particle: 2-D the triangle (centre, vertex, edge midpoint) in
-/// counter-clockwise order; 3-D the tetrahedron (centre, face centroid, edge) as four planes
-/// `(outward normal, point)`. Body frame, relative to the centre.
-#[derive(Clone, Copy, Debug)]
-struct Piece {
-    corners: [Vector3<f64>; 3],
-    planes: [(Vector3<f64>, Vector3<f64>); 4],
-    /// Number of pieces its face is cut into (`κ_p = multiplier × κ`).
-    multiplier: f64,
-}
-
 /// The contact model and its buffers.
 #[derive(Clone, Debug)]
 pub struct Contact {
@@ -193,116 +156,8 @@ thread_local! {
 impl Contact {
     /// Builds the shapes of every particle from the model; refuses a 2-D particle of more
     /// than 64 vertices (the kernels' stack buffers).
-    pub fn new(model: &Model, params: ContactParams) -> Result<Self, String> {
-        let mut shapes = Shapes::default();
-        let mut face_cursor = 0usize;
-        for (p, part) in model.particles.iter().enumerate() {
-            shapes.vertex_start.push(shapes.vertices.len() as u32);
-            shapes.face_start.push(shapes.face_ranges.len() as u32);
-            // Faces of particle p are contiguous in `model.faces`.
-            let first_face = face_cursor;
-            while face_cursor < model.faces.len() && model.faces[face_cursor].particle == p as u32 {
-                face_cursor += 1;
-            }
-            let faces = &model.faces[first_face..face_cursor];
-            // Local vertex numbering by slot.
-            let mut local: Vec<u32> = Vec::new();
-            let mut index_of = |slot: u32, verts: &mut Vec<Vector3<f64>>| -> u32 {
-                if let Some(k) = local.iter().position(|&s| s == slot) {
-                    return k as u32;
-                }
-                local.push(slot);
-                verts.push(model.slots[slot as usize].body);
-                (local.len() - 1) as u32
-            };
-            let mut verts = Vec::new();
-            if model.dim == 2 {
-                for f in faces {
-                    index_of(f.slots[0], &mut verts);
-                }
-            } else {
-                for f in faces {
-                    let begin = shapes.face_vertices.len() as u32;
-                    for &s in &f.slots {
-                        let k = index_of(s, &mut verts);
-                        shapes.face_vertices.push(k);
-                    }
-                    shapes
-                        .face_ranges
-                        .push((begin, shapes.face_vertices.len() as u32 - begin));
-                    let loop_pts: Vec<Vector3<f64>> = f
-                        .slots
-                        .iter()
-                        .map(|&s| model.slots[s as usize].body)
-                        .collect();
-                    let mut area = Vector3::zeros();
-                    for k in 1..loop_pts.len() - 1 {
-                        area += (loop_pts[k] - loop_pts[0]).cross(&(loop_pts[k + 1] - loop_pts[0]));
-                    }
-                    shapes.face_normals.push(area.normalize());
-                    shapes.face_owner.push(p as u32);
-                }
-            }
-            shapes.piece_start.push(shapes.pieces.len() as u32);
-            if model.dim == 2 {
-                let m = verts.len();
-                for k in 0..m {
-                    let (v0, v1) = (verts[k], verts[(k + 1) % m]);
-                    let mid = (v0 + v1) * 0.5;
-                    for (p, q) in [(v0, mid), (mid, v1)] {
-                        shapes.pieces.push(Piece {
-                            corners: [Vector3::zeros(), p, q],
-                            planes: [(Vector3::zeros(), Vector3::zeros()); 4],
-                            multiplier: 2.0,
-                        });
-                    }
-                }
-            } else {
-                for f in faces {
-                    let loop_pts: Vec<Vector3<f64>> = f
-                        .slots
-                        .iter()
-                        .map(|&s| model.slots[s as usize].body)
-                        .collect();
-                    let g = f.centroid_body;
-                    let m = loop_pts.len();
-                    for k in 0..m {
-                        let tet = [Vector3::zeros(), g, loop_pts[k], loop_pts[(k + 1) % m]];
-                        let mut planes = [(Vector3::zeros(), Vector3::zeros()); 4];
-                        for (skip, plane) in planes.iter_mut().enumerate() {
-                            let others: Vec<Vector3<f64>> =
-                                (0..4).filter(|&i| i != skip).map(|i| tet[i]).collect();
-                            let mut n = (others[1] - others[0]).cross(&(others[2] - others[0]));
-                            if n.dot(&(tet[skip] - others[0])) > 0.0 {
-                                n = -n;
-                            }
-                            *plane = (n.normalize(), others[0]);
-                        }
-                        shapes.pieces.push(Piece {
-                            corners: [tet[1], tet[2], tet[3]],
-                            planes,
-                            multiplier: m as f64,
-                        });
-                    }
-                }
-            }
-            if model.dim == 2 && verts.len() > MAX_VERTICES {
-                return Err(format!(
-                    "solid.contact: particle {p} has {} vertices, contact handles at most \
-                     {MAX_VERTICES} in 2-D",
-                    verts.len()
-                ));
-            }
-            let radius = verts.iter().map(|v| v.norm()).fold(0.0, f64::max);
-            shapes.radius.push(radius.max(0.5 * part.size));
-            shapes
-                .vertex_owner
-                .extend(std::iter::repeat_n(p as u32, verts.len()));
-            shapes.vertices.extend(verts);
-        }
-        shapes.vertex_start.push(shapes.vertices.len() as u32);
-        shapes.face_start.push(shapes.face_ranges.len() as u32);
-        shapes.piece_start.push(shapes.pieces.len() as u32);
+    pub fn new(model: &Model, params: ContactParams) -> Result<Self, ContactError> {
+        let shapes = build_shapes(model)?;
         Ok(Contact {
             params,
             world: vec![Vector3::zeros(); shapes.vertices.len()],
@@ -335,20 +190,48 @@ impl Contact {
         model: &Model,
         pool: Option<&rayon::ThreadPool>,
         x: &[[f64; 3]],
-        rotate: &(dyn Fn(usize, &Vector3<f64>) -> Vector3<f64> + Sync),
+        rotate: &Rotate<'_>,
         broken: &[bool],
         force: &mut [[f64; 3]],
         torque: &mut [[f64; 3]],
     ) -> f64 {
         let dim = model.dim;
+        self.place_shapes(dim, pool, x, rotate);
+        candidate_pairs(
+            dim,
+            x,
+            &self.shapes.radius,
+            &mut self.grid,
+            &mut self.candidates,
+        );
+        self.keep_law_pairs(model, broken);
+        let frame = Frame {
+            shapes: &self.shapes,
+            world: &self.world,
+            planes: &self.planes,
+            x,
+            rotate,
+        };
+        par_each(pool, &mut self.pairs, |pair| pair_law(model, &frame, pair));
+        self.gather(force, torque)
+    }
+
+    /// World vertices of every particle and (3-D) world planes of every face.
+    fn place_shapes(
+        &mut self,
+        dim: usize,
+        pool: Option<&rayon::ThreadPool>,
+        x: &[[f64; 3]],
+        rotate: &Rotate<'_>,
+    ) {
         let shapes = &self.shapes;
-        par_map(pool, &mut self.world, |k| {
+        par_fill(pool, &mut self.world, |k| {
             let p = shapes.vertex_owner[k] as usize;
             Vector3::from(x[p]) + rotate(p, &shapes.vertices[k])
         });
         if dim == 3 {
             let world: &[Vector3<f64>] = &self.world;
-            par_map(pool, &mut self.planes, |f| {
+            par_fill(pool, &mut self.planes, |f| {
                 let p = shapes.face_owner[f] as usize;
                 let n = rotate(p, &shapes.face_normals[f]);
                 let (start, _) = shapes.face_ranges[f];
@@ -356,8 +239,12 @@ impl Contact {
                 (n, n.dot(&world[v0 as usize]))
             });
         }
-        candidate_pairs(dim, x, &shapes.radius, &mut self.grid, &mut self.candidates);
-        // Keep the pairs the law applies to: not linked by an unbroken link, one at least free.
+    }
+
+    /// Keeps the candidate pairs the law applies to: not linked by an unbroken link, one at
+    /// least free.
+    fn keep_law_pairs(&mut self, model: &Model, broken: &[bool]) {
+        let dim = model.dim;
         self.pairs.clear();
         for &(a, b) in &self.candidates {
             let (pa, pb) = (&model.particles[a as usize], &model.particles[b as usize]);
@@ -375,142 +262,11 @@ impl Contact {
                 ..ContactPair::default()
             });
         }
-        let world: &[Vector3<f64>] = &self.world;
-        let planes: &[(Vector3<f64>, f64)] = &self.planes;
-        let planes_all = planes;
-        par_each(pool, &mut self.pairs, |pair| {
-            let (a, b) = (pair.a as usize, pair.b as usize);
-            let tol = COPLANAR * model.particles[a].size.min(model.particles[b].size);
-            pair.overlap = SCRATCH.with(|s| {
-                let scratch = &mut s.borrow_mut();
-                if dim == 2 {
-                    overlap_2d(shapes, world, x, a, b, tol, scratch)
-                } else {
-                    let view = |p: usize| {
-                        let (f0, f1) = (
-                            shapes.face_start[p] as usize,
-                            shapes.face_start[p + 1] as usize,
-                        );
-                        let (v0, v1) = (
-                            shapes.vertex_start[p] as usize,
-                            shapes.vertex_start[p + 1] as usize,
-                        );
-                        PolyhedronView {
-                            vertices: &world[v0..v1],
-                            face_ranges: &shapes.face_ranges[f0..f1],
-                            face_vertices: &shapes.face_vertices,
-                            planes: &planes[f0..f1],
-                            center: Vector3::from(x[p]),
-                        }
-                    };
-                    contact_polyhedron_polyhedron(&view(a), &view(b), tol, scratch)
-                }
-            });
-            pair.force_b = Vector3::zeros();
-            pair.torque_a = Vector3::zeros();
-            pair.torque_b = Vector3::zeros();
-            pair.energy = 0.0;
-            pair.stiffness = 0.0;
-            if pair.overlap.volume <= 0.0 {
-                return;
-            }
-            // The law, piece by piece of B.
-            let xb = Vector3::from(x[b]);
-            let range = shapes.piece_start[b] as usize..shapes.piece_start[b + 1] as usize;
-            let (va0, va1) = (
-                shapes.vertex_start[a] as usize,
-                shapes.vertex_start[a + 1] as usize,
-            );
-            let (fa0, fa1) = (
-                shapes.face_start[a] as usize,
-                shapes.face_start[a + 1] as usize,
-            );
-            for piece in &shapes.pieces[range] {
-                // Cheap rejection: all corners outside one face plane of A.
-                let corners = [
-                    xb,
-                    xb + rotate(b, &piece.corners[0]),
-                    xb + rotate(b, &piece.corners[1]),
-                    xb + rotate(b, &piece.corners[2]),
-                ];
-                // (2-D: the centre is `corners[0]` and `corners[1]`.)
-                let outside = |n: &Vector3<f64>, d: f64| corners.iter().all(|c| n.dot(c) > d);
-                let separated = if dim == 2 {
-                    let poly = &world[va0..va1];
-                    (0..poly.len()).any(|k| {
-                        let e = poly[(k + 1) % poly.len()] - poly[k];
-                        let n = Vector3::new(e.y, -e.x, 0.0);
-                        outside(&n, n.dot(&poly[k]))
-                    })
-                } else {
-                    planes_all[fa0..fa1].iter().any(|(n, d)| outside(n, *d))
-                };
-                if separated {
-                    continue;
-                }
-                let o = SCRATCH.with(|s| {
-                    let scratch = &mut s.borrow_mut();
-                    if dim == 2 {
-                        let (v0, v1) = (
-                            shapes.vertex_start[a] as usize,
-                            shapes.vertex_start[a + 1] as usize,
-                        );
-                        let mut pa = [Vector2::zeros(); MAX_VERTICES];
-                        for (k, w) in world[v0..v1].iter().enumerate() {
-                            pa[k] = w.xy();
-                        }
-                        let tri = piece.corners.map(|c| (xb + rotate(b, &c)).xy());
-                        contact_polygon_polygon(
-                            &pa[..v1 - v0],
-                            Vector2::new(x[a][0], x[a][1]),
-                            &tri,
-                            xb.xy(),
-                            tol,
-                            scratch,
-                        )
-                    } else {
-                        let planes = piece.planes.map(|(n, p)| {
-                            let n = rotate(b, &n);
-                            (n, n.dot(&(xb + rotate(b, &p))))
-                        });
-                        let (f0, f1) = (
-                            shapes.face_start[a] as usize,
-                            shapes.face_start[a + 1] as usize,
-                        );
-                        let (v0, v1) = (
-                            shapes.vertex_start[a] as usize,
-                            shapes.vertex_start[a + 1] as usize,
-                        );
-                        let view_a = PolyhedronView {
-                            vertices: &world[v0..v1],
-                            face_ranges: &shapes.face_ranges[f0..f1],
-                            face_vertices: &shapes.face_vertices,
-                            planes: &planes_all[f0..f1],
-                            center: Vector3::from(x[a]),
-                        };
-                        let view_b = PolyhedronView {
-                            vertices: &[],
-                            face_ranges: &[],
-                            face_vertices: &[],
-                            planes: &planes,
-                            center: xb,
-                        };
-                        contact_polyhedron_polyhedron(&view_a, &view_b, tol, scratch)
-                    }
-                });
-                if o.volume <= 0.0 {
-                    continue;
-                }
-                let kappa = pair.kappa * piece.multiplier;
-                let scale = kappa * o.volume;
-                pair.energy += 0.5 * scale * o.volume;
-                pair.force_b -= o.grad_b * scale;
-                pair.torque_a -= o.grad_rot_a * scale;
-                pair.torque_b -= o.grad_rot_b * scale;
-                pair.stiffness += kappa * o.grad_b.norm_squared();
-            }
-        });
-        // Serial gather in pair order (bit-reproducible).
+    }
+
+    /// Serial gather of the pairs' loads in pair order (bit-reproducible); returns the contact
+    /// potential.
+    fn gather(&mut self, force: &mut [[f64; 3]], torque: &mut [[f64; 3]]) -> f64 {
         let mut energy = 0.0;
         for pair in &self.pairs {
             if pair.energy <= 0.0 {
@@ -551,7 +307,7 @@ impl Contact {
         let pairs: &[ContactPair] = &self.pairs;
         self.damping.clear();
         self.damping.resize(pairs.len(), [Vector3::zeros(); 3]);
-        par_map(pool, &mut self.damping, |k| {
+        par_fill(pool, &mut self.damping, |k| {
             pair_damping(model, &params, &pairs[k], x, v, omega)
         });
         for (pair, d) in pairs.iter().zip(&self.damping) {
@@ -600,6 +356,168 @@ impl Contact {
         }
         best
     }
+}
+
+/// `rotate(p, v)`: a body vector `v` of particle `p` turned into space.
+pub type Rotate<'a> = dyn Fn(usize, &Vector3<f64>) -> Vector3<f64> + Sync + 'a;
+
+/// The particles' shapes placed at a configuration, as the narrow phase and the law read them.
+struct Frame<'a> {
+    shapes: &'a Shapes,
+    /// World vertices of all particles.
+    world: &'a [Vector3<f64>],
+    /// 3-D: world planes `(n, d)` of all faces.
+    planes: &'a [(Vector3<f64>, f64)],
+    /// Centres.
+    x: &'a [[f64; 3]],
+    rotate: &'a Rotate<'a>,
+}
+
+/// The overlap of one pair and, when they overlap, the law piece by piece of B: elastic force,
+/// torques, potential and tangent stiffness (zero when apart).
+fn pair_law(model: &Model, frame: &Frame<'_>, pair: &mut ContactPair) {
+    let dim = model.dim;
+    let Frame {
+        shapes,
+        world,
+        planes,
+        x,
+        rotate,
+    } = *frame;
+    let (a, b) = (pair.a as usize, pair.b as usize);
+    let tol = COPLANAR * model.particles[a].size.min(model.particles[b].size);
+    pair.overlap = SCRATCH.with(|s| {
+        let scratch = &mut s.borrow_mut();
+        if dim == 2 {
+            overlap_2d(shapes, world, x, a, b, tol, scratch)
+        } else {
+            let view = |p: usize| polyhedron_view(frame, p);
+            contact_polyhedron_polyhedron(&view(a), &view(b), tol, scratch)
+        }
+    });
+    pair.force_b = Vector3::zeros();
+    pair.torque_a = Vector3::zeros();
+    pair.torque_b = Vector3::zeros();
+    pair.energy = 0.0;
+    pair.stiffness = 0.0;
+    if pair.overlap.volume <= 0.0 {
+        return;
+    }
+    // The law, piece by piece of B.
+    let xb = Vector3::from(x[b]);
+    let range = shapes.piece_start[b] as usize..shapes.piece_start[b + 1] as usize;
+    let (va0, va1) = (
+        shapes.vertex_start[a] as usize,
+        shapes.vertex_start[a + 1] as usize,
+    );
+    let (fa0, fa1) = (
+        shapes.face_start[a] as usize,
+        shapes.face_start[a + 1] as usize,
+    );
+    for piece in &shapes.pieces[range] {
+        // Cheap rejection: all corners outside one face plane of A.
+        let corners = [
+            xb,
+            xb + rotate(b, &piece.corners[0]),
+            xb + rotate(b, &piece.corners[1]),
+            xb + rotate(b, &piece.corners[2]),
+        ];
+        // (2-D: the centre is `corners[0]` and `corners[1]`.)
+        let outside = |n: &Vector3<f64>, d: f64| corners.iter().all(|c| n.dot(c) > d);
+        let separated = if dim == 2 {
+            let poly = &world[va0..va1];
+            (0..poly.len()).any(|k| {
+                let e = poly[(k + 1) % poly.len()] - poly[k];
+                let n = Vector3::new(e.y, -e.x, 0.0);
+                outside(&n, n.dot(&poly[k]))
+            })
+        } else {
+            planes[fa0..fa1].iter().any(|(n, d)| outside(n, *d))
+        };
+        if separated {
+            continue;
+        }
+        let o = piece_overlap(dim, frame, a, b, piece, tol);
+        if o.volume <= 0.0 {
+            continue;
+        }
+        let kappa = pair.kappa * piece.multiplier;
+        let scale = kappa * o.volume;
+        pair.energy += 0.5 * scale * o.volume;
+        pair.force_b -= o.grad_b * scale;
+        pair.torque_a -= o.grad_rot_a * scale;
+        pair.torque_b -= o.grad_rot_b * scale;
+        pair.stiffness += kappa * o.grad_b.norm_squared();
+    }
+}
+
+/// Particle `p` as a polyhedron in space (3-D).
+fn polyhedron_view<'a>(frame: &Frame<'a>, p: usize) -> PolyhedronView<'a> {
+    let shapes = frame.shapes;
+    let (f0, f1) = (
+        shapes.face_start[p] as usize,
+        shapes.face_start[p + 1] as usize,
+    );
+    let (v0, v1) = (
+        shapes.vertex_start[p] as usize,
+        shapes.vertex_start[p + 1] as usize,
+    );
+    PolyhedronView {
+        vertices: &frame.world[v0..v1],
+        face_ranges: &shapes.face_ranges[f0..f1],
+        face_vertices: &shapes.face_vertices,
+        planes: &frame.planes[f0..f1],
+        center: Vector3::from(frame.x[p]),
+    }
+}
+
+/// The overlap of particle A with one piece of B, placed in space.
+fn piece_overlap(
+    dim: usize,
+    frame: &Frame<'_>,
+    a: usize,
+    b: usize,
+    piece: &Piece,
+    tol: f64,
+) -> Overlap {
+    let (world, x, rotate) = (frame.world, frame.x, frame.rotate);
+    let xb = Vector3::from(x[b]);
+    SCRATCH.with(|s| {
+        let scratch = &mut s.borrow_mut();
+        if dim == 2 {
+            let (v0, v1) = (
+                frame.shapes.vertex_start[a] as usize,
+                frame.shapes.vertex_start[a + 1] as usize,
+            );
+            let mut pa = [Vector2::zeros(); MAX_VERTICES];
+            for (k, w) in world[v0..v1].iter().enumerate() {
+                pa[k] = w.xy();
+            }
+            let tri = piece.corners.map(|c| (xb + rotate(b, &c)).xy());
+            contact_polygon_polygon(
+                &pa[..v1 - v0],
+                Vector2::new(x[a][0], x[a][1]),
+                &tri,
+                xb.xy(),
+                tol,
+                scratch,
+            )
+        } else {
+            let planes = piece.planes.map(|(n, p)| {
+                let n = rotate(b, &n);
+                (n, n.dot(&(xb + rotate(b, &p))))
+            });
+            let view_a = polyhedron_view(frame, a);
+            let view_b = PolyhedronView {
+                vertices: &[],
+                face_ranges: &[],
+                face_vertices: &[],
+                planes: &planes,
+                center: xb,
+            };
+            contact_polyhedron_polyhedron(&view_a, &view_b, tol, scratch)
+        }
+    })
 }
 
 /// Whether `a` and `b` are joined by an unbroken link.
@@ -689,31 +607,4 @@ fn pair_damping(
         }
     }
     [f, ra.cross(&(-f)), rb.cross(&f)]
-}
-
-/// `out[k] = f(k)` over a fixed partition.
-fn par_map<T: Send>(
-    pool: Option<&rayon::ThreadPool>,
-    out: &mut [T],
-    f: impl Fn(usize) -> T + Sync + Send,
-) {
-    crate::dem::solid::par_fill(pool, out, f);
-}
-
-/// `f(&mut items[k])` for every item over a fixed partition.
-fn par_each<T: Send>(
-    pool: Option<&rayon::ThreadPool>,
-    items: &mut [T],
-    f: impl Fn(&mut T) + Sync + Send,
-) {
-    match pool {
-        Some(pool) => pool.install(|| {
-            items.par_chunks_mut(CHUNK).for_each(|chunk| {
-                for item in chunk {
-                    f(item);
-                }
-            })
-        }),
-        None => items.iter_mut().for_each(f),
-    }
 }

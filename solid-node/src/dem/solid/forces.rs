@@ -8,7 +8,8 @@ use crate::dem::link_force::{
     spring_force_3d,
 };
 use crate::dem::model::Model;
-use crate::dem::solid::{par_fill, quat};
+use crate::dem::parallel::par_fill;
+use crate::dem::solid::orientation::quat;
 
 /// Scratch buffers of the force evaluation (allocated once).
 #[derive(Clone, Debug, Default)]
