@@ -195,26 +195,11 @@ fn run(axis: usize, n: usize) -> Outcome {
             rho1 * (x_shock.min(b) - a).max(0.0) + RHO0 * (b - x_shock.max(a)).max(0.0);
         l1 += (alpha[m] * dx * profile[m] - exact_mass).abs();
     }
-    let first = (x_piston / dx).ceil() as usize + PLATEAU_SKIP_PISTON;
-    let last = (x_shock / dx).floor() as usize - PLATEAU_SKIP_SHOCK;
-    let plateau = (first < last).then(|| {
-        let cells = &profile[first..last];
-        let mean = cells.iter().sum::<f64>() / cells.len() as f64;
-        let (min, max) = cells
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &r| {
-                (lo.min(r), hi.max(r))
-            });
-        (cells.len(), mean, min, max)
-    });
+    let plateau = plateau(&profile, x_piston, x_shock, dx);
     // The shock: the last crossing of the mid density.
     let mid = 0.5 * (RHO0 + rho1);
     let from = (x_piston / dx).ceil() as usize;
-    let m = (from..n - 1)
-        .rev()
-        .find(|&m| profile[m] >= mid && profile[m + 1] < mid)
-        .expect("a shock in the channel");
-    let crossing = m as f64 + 0.5 + (profile[m] - mid) / (profile[m] - profile[m + 1]);
+    let crossing = last_crossing(&profile, from, mid);
     Outcome {
         n,
         profile,
@@ -228,6 +213,39 @@ fn run(axis: usize, n: usize) -> Outcome {
         steps,
         seconds: clock.elapsed().as_secs_f64(),
     }
+}
+
+/// The plateau cells of the row-averaged density `profile` between the piston at `x_piston`
+/// and the shock at `x_shock` (cells of width `dx`), and the mean, min and max of their density.
+fn plateau(
+    profile: &[f64],
+    x_piston: f64,
+    x_shock: f64,
+    dx: f64,
+) -> Option<(usize, f64, f64, f64)> {
+    let first = (x_piston / dx).ceil() as usize + PLATEAU_SKIP_PISTON;
+    let last = (x_shock / dx).floor() as usize - PLATEAU_SKIP_SHOCK;
+    (first < last).then(|| {
+        let cells = &profile[first..last];
+        let mean = cells.iter().sum::<f64>() / cells.len() as f64;
+        let (min, max) = cells
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &r| {
+                (lo.min(r), hi.max(r))
+            });
+        (cells.len(), mean, min, max)
+    })
+}
+
+/// Where `profile` last falls through `mid` after cell `from`, in cells (linear between cell
+/// centres).
+fn last_crossing(profile: &[f64], from: usize, mid: f64) -> f64 {
+    let n = profile.len();
+    let m = (from..n - 1)
+        .rev()
+        .find(|&m| profile[m] >= mid && profile[m + 1] < mid)
+        .expect("a shock in the channel");
+    m as f64 + 0.5 + (profile[m] - mid) / (profile[m] - profile[m + 1])
 }
 
 fn print(label: &str, o: &Outcome) {

@@ -85,8 +85,9 @@ fn regions() -> Vec<Region> {
     ]
 }
 
-fn scenes() -> Vec<Scene> {
-    let fluid = |profile: Profile| FluidConfig {
+/// A fluid section with every key set, `profile` its initial profile.
+fn fluid(profile: Profile) -> FluidConfig {
+    FluidConfig {
         node: "real".into(),
         gamma: 1.4,
         cfl: 0.5,
@@ -120,7 +121,11 @@ fn scenes() -> Vec<Scene> {
         }),
         profile: Some(profile),
         ranks: 2,
-    };
+    }
+}
+
+/// A solid section with every key set, `motion` its prescribed motion.
+fn solid(motion: PrescribedMotion) -> SolidConfig {
     let body = |shape: Shape, motion: Motion| BodyConfig {
         shape,
         divisions: vec![2, 2],
@@ -130,7 +135,7 @@ fn scenes() -> Vec<Scene> {
             rotation: 1.0,
         }),
     };
-    let solid = |motion: PrescribedMotion| SolidConfig {
+    SolidConfig {
         node: "real".into(),
         density: Some(1.0),
         young: Some(1.0),
@@ -196,7 +201,10 @@ fn scenes() -> Vec<Scene> {
             motion,
         }),
         contact: Some(ContactConfig::default()),
-    };
+    }
+}
+
+fn scenes() -> Vec<Scene> {
     let run = RunConfig {
         dt_max: Some(1.0),
         max_steps: Some(10),
