@@ -296,7 +296,7 @@ fn rigid_motions_and_deformations_3d_conserve() {
             assert_conserves(&rep, &format!("{name} deformation {case}"));
             worst = worst.worst(rep);
         }
-        // A smooth deformation of up to 0.9 cell (that of tests/cutcell_swept.rs).
+        // A smooth deformation of up to 0.9 cell (that of tests/it/cutcell_swept.rs).
         let amp = 0.9 * dx;
         let after = body.map(|p| {
             [
