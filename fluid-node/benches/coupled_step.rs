@@ -41,7 +41,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-#[path = "../tests/embedded_support/mod.rs"]
+#[path = "../tests/it/embedded_support/mod.rs"]
 mod support;
 
 use fluid_node::cutcell::{CutGeometry, SubfaceSwept, compute, subface_swept_volumes};

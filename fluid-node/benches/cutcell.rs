@@ -19,7 +19,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 // The test meshes (the bench uses the same sphere as the tests).
-#[path = "../tests/cutcell_support/mod.rs"]
+#[path = "../tests/it/cutcell_support/mod.rs"]
 mod cutcell_support;
 
 use criterion::{BenchmarkId, Criterion, Throughput};

@@ -1,0 +1,5 @@
+//! Integration tests of `coupler-node`, one test binary: the MCAP record (read back, cut,
+//! recovered, damaged, exported) and the report figures.
+
+mod record;
+mod report;

@@ -1,0 +1,138 @@
+//! MCAP record, exports: the tidy table of `inspect --export csv` and the diagnostics schema.
+
+use super::*;
+
+/// Issue 15, item 6: `inspect --export csv` is one tidy table, one row per number, that reads
+/// back in Rust (and with numpy's `genfromtxt(names=True)` where numpy is installed).
+#[test]
+fn the_tidy_table_has_one_row_per_number_and_reads_back() {
+    let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
+    let rec = read_recording(&bytes).unwrap();
+    let csv = export_table(&rec, None).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some(TABLE_HEADER));
+    type Row = (u64, u32, String, String, u64, f64);
+    let rows: Vec<Row> = lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            assert_eq!(c.len(), 6, "{l}");
+            (
+                c[0].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[1].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[2].to_string(),
+                c[3].to_string(),
+                c[4].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+                c[5].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
+            )
+        })
+        .collect();
+    let pick = |step: u64, iteration: u32, channel: &str, field: &str| -> Vec<f64> {
+        rows.iter()
+            .filter(|r| r.0 == step && r.1 == iteration && r.2 == channel && r.3 == field)
+            .map(|r| r.5)
+            .collect()
+    };
+    // The loads of step 2, iteration 1: force[i] = 0.5 i + step, 12 numbers, exact.
+    let force = pick(2, 1, "/fluid-to-coupler", "force");
+    assert_eq!(force.len(), 12);
+    for (i, f) in force.iter().enumerate() {
+        assert!(
+            (f - (0.5 * i as f64 + 2.0)).abs() <= 1e-15,
+            "force[{i}] = {f}"
+        );
+    }
+    // Diagnostics: residuals and the ledger, iteration 0.
+    assert_eq!(pick(1, 0, "/diagnostics", "residuals"), [1e-3, 1e-9]);
+    assert_eq!(pick(1, 0, "/diagnostics", "ledger.fluid_mass"), [1.5]);
+    assert_eq!(pick(1, 0, "/diagnostics", "ledger.step"), [1.0]);
+    assert_eq!(pick(1, 0, "/diagnostics", "converged"), [1.0]);
+    // Every frame and diagnostics message contributes its stamp / step.
+    assert_eq!(
+        rows.iter().filter(|r| r.3 == "stamp.step").count() + rec.topic(DIAGNOSTICS_TOPIC).count(),
+        rec.messages.len()
+    );
+    // Checkpoint bytes (a placeholder string) and strings are not rows.
+    assert!(rows.iter().all(|r| r.3 != "bytes" && r.3 != "sender"));
+    // One step only, and a step that is not there.
+    let one = export_table(&rec, Some(1)).unwrap();
+    assert!(one.lines().skip(1).all(|l| l.starts_with("1,")), "{one}");
+    let err = export_table(&rec, Some(7)).unwrap_err().to_string();
+    assert!(err.contains("step 7") && err.contains("0 to 2"), "{err}");
+
+    // numpy, when the Python of the tests has it (COSIM_PYTHON; numpy is not required).
+    let Ok(python) = std::env::var("COSIM_PYTHON") else {
+        eprintln!("COSIM_PYTHON unset: numpy check not run");
+        return;
+    };
+    let has_numpy = std::process::Command::new(&python)
+        .args(["-c", "import numpy"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_numpy {
+        eprintln!("{python} has no numpy: numpy check not run");
+        return;
+    }
+    let path = std::env::temp_dir().join(format!("cosim-table-{}.csv", std::process::id()));
+    std::fs::write(&path, &csv).unwrap();
+    let script = "import sys, numpy as np\n\
+        a = np.genfromtxt(sys.argv[1], delimiter=',', names=True, dtype=None, encoding='utf-8')\n\
+        m = (a['step'] == 2) & (a['iteration'] == 1) & (a['channel'] == '/fluid-to-coupler') & (a['field'] == 'force')\n\
+        print(len(a), repr(float(a['value'][m].sum())))\n";
+    let out = std::process::Command::new(&python)
+        .arg("-c")
+        .arg(script)
+        .arg(&path)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut it = text.split_whitespace();
+    assert_eq!(it.next(), Some(rows.len().to_string().as_str()), "{text}");
+    let sum: f64 = it.next().unwrap().parse().unwrap();
+    // Σ (0.5 i + 2), i < 12 = 33 + 24.
+    assert!((sum - 57.0).abs() <= 1e-12, "{text}");
+}
+
+/// Issue 15, item 5: the diagnostics schema is derived from the type: every key of a fully
+/// filled diagnostics object, nested ones included, is a property of the schema at its level,
+/// and the nested types are inlined (Foxglove resolves no `$ref`).
+#[test]
+fn the_diagnostics_schema_names_every_field_written() {
+    let schema: serde_json::Value = serde_json::from_str(&diagnostics_schema()).unwrap();
+    assert_eq!(schema["title"], "cosim.Diagnostics");
+    assert!(!diagnostics_schema().contains("$ref"), "{schema:#}");
+    let full = Diagnostics {
+        output: Some(3),
+        ledger: Some(LedgerEntry::default()),
+        ..Diagnostics::default()
+    };
+    let value = serde_json::to_value(&full).unwrap();
+    fn check(value: &serde_json::Value, schema: &serde_json::Value, path: &str, n: &mut usize) {
+        let Some(object) = value.as_object() else {
+            return;
+        };
+        // An optional struct is `anyOf: [{object}, {null}]` (or a type list).
+        let props = schema.get("properties").or_else(|| {
+            schema["anyOf"]
+                .as_array()
+                .and_then(|a| a.iter().find_map(|s| s.get("properties")))
+        });
+        let props = props.unwrap_or_else(|| panic!("{path}: no properties in {schema:#}"));
+        for (key, v) in object {
+            let sub = props
+                .get(key)
+                .unwrap_or_else(|| panic!("{path}.{key} is written but not in the schema"));
+            *n += 1;
+            check(v, sub, &format!("{path}.{key}"), n);
+        }
+    }
+    let mut n = 0;
+    check(&value, &schema, "", &mut n);
+    // 15 top-level fields, 16 of the ledger entry, 3 busy seconds.
+    assert_eq!(n, 15 + 16 + 3, "{value:#}");
+}
