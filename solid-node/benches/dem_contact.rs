@@ -43,7 +43,7 @@ fn config(shape: Shape, divisions: Vec<u32>, steel: bool, contact: bool) -> Soli
     }
 }
 
-/// The fragmenting 12×6×4 lattice of `tests/dem_contact.rs`, 40 steps in.
+/// The fragmenting 12×6×4 lattice of the integration test `dem_contact`, 40 steps in.
 fn lattice(threads: usize) -> Solid {
     let shape = Shape::Box {
         center: vec![0.0; 3],

@@ -1,5 +1,5 @@
 //! How long the coupler takes to notice a killed node and end the run naming it: the figure the
-//! README's "a node process that exits early ends the run within 1 s" rests on. The e2e test
+//! "a node process that exits early ends the run within 1 s" (docs/performance.md, Liveness) rests on. The e2e test
 //! only bounds it generously (a loaded 2-core machine stretches it); this measures it.
 //!
 //! `cargo bench -p cosim-tests --bench kill_detection` (`TRIALS=N`, default 5 per node) prints
@@ -93,7 +93,7 @@ fn main() {
         times.sort();
         if let (Some(median), Some(max)) = (times.get(times.len() / 2), times.last()) {
             println!(
-                "{node}: median {:.3} s, largest {:.3} s over {} trials (README: within 1 s)",
+                "{node}: median {:.3} s, largest {:.3} s over {} trials (docs/performance.md: within 1 s)",
                 median.as_secs_f64(),
                 max.as_secs_f64(),
                 times.len()

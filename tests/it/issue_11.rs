@@ -14,7 +14,7 @@ use crate::e2e::{
     workspace,
 };
 
-/// Exit status of `coupler-node run` stopped by SIGINT, SIGTERM or SIGHUP (README).
+/// Exit status of `coupler-node run` stopped by SIGINT, SIGTERM or SIGHUP (docs/usage.md, "Deadlines, exit status, signals").
 const INTERRUPTED: i32 = 130;
 
 /// Files of run `run_id` left in /dev/shm.

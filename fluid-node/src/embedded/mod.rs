@@ -24,9 +24,9 @@
 //! On a grid decomposed over ranks ([`crate::fv::Slab`]) every rank holds the whole surface and
 //! runs all of this on the whole grid; the solver applies and gathers the sweeps' hooks per
 //! slab, and the states of near cells come from their ranks ([`crate::fv::FluidSolver::cells_at`]), so
-//! every rank computes the bits of one rank (`fluid-node/tests/fv_ranks.rs`, docs/mpi.md).
+//! every rank computes the bits of one rank (the fluid-node tests `fv_ranks`, docs/mpi.md).
 //!
-//! Properties (tested in `fluid-node/tests/embedded_*.rs`): fluid mass, momentum and energy plus
+//! Properties (tested in the fluid-node tests `embedded_*`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the
 //! face fluxes are shared); a uniform pressure gives no force on any cut cell and no velocity
 //! (identity 19–21); a uniform flow around a body translating with it stays uniform (the

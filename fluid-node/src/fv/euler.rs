@@ -191,7 +191,7 @@ pub fn roe_strengths(roe: &RoeAverage, du: &State, gamma: f64) -> [f64; NQ] {
     let a_ent = (gamma - 1.0) * inv_c * inv_c * (du[0] * (roe.h - u * u) + u * du[1] - de);
     // NOTE: both acoustic strengths in closed form (Toro takes α₊ = Δρ − α₋ − α_ent): a
     // mirror image of the interface swaps them with a change of sign, to the last bit only
-    // when their formulas are each other's mirror images (`tests/fv_mirror.rs`).
+    // when their formulas are each other's mirror images (the integration test `fv_mirror`).
     let a_minus = (du[0] * (u + c) - du[1] - c * a_ent) * (0.5 * inv_c);
     let a_plus = (du[0] * (c - u) + du[1] - c * a_ent) * (0.5 * inv_c);
     [a_minus, a_plus, a_ent, a_t1, a_t2]

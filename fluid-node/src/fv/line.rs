@@ -407,7 +407,7 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
             // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
             // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
             // image is the mirror image of the flux to the last bit (a problem symmetric about
-            // a plane stays symmetric, `tests/fv_mirror.rs`), whatever the order of the others.
+            // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
             let (r0, r1) = (roe_eigenvector(&roe[j], 0), roe_eigenvector(&roe[j], 1));
             for q in 0..NQ {
                 flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];

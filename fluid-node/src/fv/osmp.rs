@@ -265,7 +265,7 @@ impl Window {
 /// breaks mirror symmetry, numerics.md Note 1); (c) the LC bound normalised by the upwind
 /// strength (Suresh–Huynh/MITgcm form, Note 2), which needs no division by `α_0`; (d) the UL
 /// bound `2 (1−ν_up) α_up / max(ν_up, ν_0)` (see the note in the loop). Orders are
-/// checked numerically in `fv::tests` (scalar) and `tests/fv_accuracy.rs` (Euler).
+/// checked numerically in `fv::tests` (scalar) and the integration test `fv_accuracy` (Euler).
 pub fn psi_line<const ORDER: u32, const LIMITED: bool>(
     speed: &SpeedLine,
     wave: &WaveLine,

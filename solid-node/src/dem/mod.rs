@@ -35,7 +35,7 @@
 //!   exact negative gradient of one potential (energy conservation, checked by finite
 //!   differences in the unit tests).
 //! - Volumetric force `S λ (ε^v_I + ε^v_J)/2`: the printed sum doubles λ; the mean gives E
-//!   exactly for a one-particle-thick bar with ν ≠ 0 (free-volume design, `tests/dem_wave.rs`).
+//!   exactly for a one-particle-thick bar with ν ≠ 0 (free-volume design, the integration test `dem_wave`).
 //! - ε^v_I uses the free volume `V_I + 3ν/(1−2ν) V^f_I` (003; 000 prints `V_I` twice).
 //! - Fracture: the relative elongation `(|X_I − X_J| − D⁰)/D⁰` is compared with
 //!   `elongation_at_break` as a fraction (000 writes it in percent).
