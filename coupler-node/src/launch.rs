@@ -376,7 +376,7 @@ impl Supervisor {
             }),
             Ok(Err(err)) => {
                 let _ = thread.join();
-                Err(anyhow::anyhow!(err))
+                Err(err)
             }
             Err(_) => anyhow::bail!("the supervisor thread ended before starting the nodes"),
         }
@@ -393,7 +393,7 @@ async fn supervise(
     commands: Vec<(NodeKind, tokio::process::Command, u32)>,
     abort: Abort,
     hung_up: Arc<AtomicBool>,
-    started: std::sync::mpsc::Sender<Result<(), String>>,
+    started: std::sync::mpsc::Sender<anyhow::Result<()>>,
     stop: tokio::sync::oneshot::Receiver<Duration>,
 ) -> Vec<(NodeKind, ExitInfo)> {
     // NOTE: SIGHUP is handled here, like SIGINT and SIGTERM are by iceoryx2 in the bus waits:
@@ -402,7 +402,7 @@ async fn supervise(
     let mut hangup = match signal(SignalKind::hangup()) {
         Ok(stream) => stream,
         Err(err) => {
-            let _ = started.send(Err(format!("handling SIGHUP: {err}")));
+            let _ = started.send(Err(anyhow::Error::new(err).context("handling SIGHUP")));
             return Vec::new();
         }
     };
@@ -424,7 +424,9 @@ async fn supervise(
                 children.push((node, child));
             }
             Err(err) => {
-                let _ = started.send(Err(format!("starting the {node} node: {err}")));
+                let _ = started.send(Err(
+                    anyhow::Error::new(err).context(format!("starting the {node} node"))
+                ));
                 return Vec::new();
             }
         }

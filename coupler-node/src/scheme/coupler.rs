@@ -19,9 +19,13 @@ pub struct Coupler {
     pub(super) cfg: CouplerConfig,
     pub(super) phase: Phase,
     pub(super) queue: VecDeque<(NodeKind, Message)>,
+    /// The current step.
     pub(super) step: u64,
+    /// Its start time \[s\].
     pub(super) t: f64,
+    /// Index of the first output time not yet written.
     pub(super) next_output: usize,
+    /// The current step as agreed, from the proposals until its totals are booked.
     pub(super) plan: Option<Agreed>,
     /// Input of the current iteration (the accepted `F^n`, a prediction, a relaxed trial).
     pub(super) input: Option<SolidState>,
