@@ -38,11 +38,11 @@ pub fn check(
     fluid: Option<&str>,
     solid: Option<&str>,
 ) -> anyhow::Result<CheckSummary> {
-    let scene = crate::launch::load_scene(path, fluid, solid)?;
+    let scene = crate::preflight::load_scene(path, fluid, solid)?;
     scene
-        .check_memory(crate::launch::available_memory()?)
+        .check_memory(crate::preflight::available_memory()?)
         .with_context(|| path.display().to_string())?;
-    crate::replay::check_replay_doubles(&scene)?;
+    crate::preflight::check_replay_doubles(&scene)?;
     Ok(summarize(&scene))
 }
 

@@ -275,47 +275,21 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             step,
             fluid_ranks,
             hostfile,
-        } => {
-            let out = match out {
-                Some(out) => out,
-                None => {
-                    // The scene is read twice (here for its name); errors surface in `run`.
-                    let name = launch::load_scene(&scene, None, None)
-                        .map(|s| s.name)
-                        .unwrap_or_else(|_| "run".into());
-                    PathBuf::from("out").join(name)
-                }
-            };
-            let summary = launch::run(&RunOptions {
-                scene,
-                out: out.clone(),
-                overwrite,
-                fluid,
-                solid,
-                timeout: timeout_s,
-                progress: verbosity.quiet == 0,
-                verbosity,
-                fluid_bin: None,
-                solid_bin: None,
-                restart: restart.zip(step),
-                fluid_ranks,
-                hostfile,
-            })?;
-            tracing::info!(
-                "{}: {} in {} steps, t = {:.6e} s, wall {:.2} s, iterations mean {:.2} max {}, mass err {:.2e}, energy err {:.2e}; outputs in {}",
-                summary.scene,
-                summary.status,
-                summary.steps,
-                summary.t_end,
-                summary.wall_s,
-                summary.coupling_iterations.mean,
-                summary.coupling_iterations.max,
-                summary.mass_rel_err,
-                summary.energy_rel_err,
-                out.display()
-            );
-            Ok(ExitCode::SUCCESS)
-        }
+        } => run(RunOptions {
+            out: out.unwrap_or_else(|| default_out(&scene)),
+            scene,
+            overwrite,
+            fluid,
+            solid,
+            timeout: timeout_s,
+            progress: verbosity.quiet == 0,
+            verbosity,
+            fluid_bin: None,
+            solid_bin: None,
+            restart: restart.zip(step),
+            fluid_ranks,
+            hostfile,
+        }),
         Command::Check {
             scene,
             fluid,
@@ -331,56 +305,98 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             node,
             double,
             timeout_s,
+        } => replay(&crate::replay::ReplayOptions {
+            file,
+            step,
+            node: NodeKind::from(node),
+            implementation: double,
+            timeout: timeout_s,
+            bin: None,
+            verbosity,
+        }),
+        Command::Report(report) => self::report(report),
+        Command::Inspect {
+            file,
+            step,
+            export,
+            recover,
+        } => inspect(&file, step, export, recover),
+    }
+}
+
+/// `out/<scene name>`, or `out/run` when the scene does not read (`run` then reports why).
+fn default_out(scene: &std::path::Path) -> PathBuf {
+    // The scene is read twice (here for its name); errors surface in `run`.
+    let name = crate::preflight::load_scene(scene, None, None)
+        .map(|s| s.name)
+        .unwrap_or_else(|_| "run".into());
+    PathBuf::from("out").join(name)
+}
+
+/// `coupler-node run`.
+fn run(options: RunOptions) -> anyhow::Result<ExitCode> {
+    let summary = launch::run(&options)?;
+    tracing::info!(
+        "{}: {} in {} steps, t = {:.6e} s, wall {:.2} s, iterations mean {:.2} max {}, mass err {:.2e}, energy err {:.2e}; outputs in {}",
+        summary.scene,
+        summary.status,
+        summary.steps,
+        summary.t_end,
+        summary.wall_s,
+        summary.coupling_iterations.mean,
+        summary.coupling_iterations.max,
+        summary.mass_rel_err,
+        summary.energy_rel_err,
+        options.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `coupler-node replay`: 0 when identical, 1 when the replay differs.
+fn replay(options: &crate::replay::ReplayOptions) -> anyhow::Result<ExitCode> {
+    match crate::replay::replay(options)? {
+        crate::replay::Outcome::Identical {
+            compared,
+            from_step,
         } => {
-            let node = NodeKind::from(node);
-            let outcome = crate::replay::replay(&crate::replay::ReplayOptions {
-                file,
-                step,
-                node,
-                implementation: double,
-                timeout: timeout_s,
-                bin: None,
-                verbosity,
-            })?;
-            match outcome {
-                crate::replay::Outcome::Identical {
-                    compared,
-                    from_step,
-                } => {
-                    println!("identical");
-                    tracing::info!(
-                        "{compared} {node} messages compared, steps {from_step} to {step}"
-                    );
-                    Ok(ExitCode::SUCCESS)
-                }
-                crate::replay::Outcome::Differs(diff) => {
-                    println!("differs: {diff}");
-                    Ok(ExitCode::from(1))
-                }
-            }
+            println!("identical");
+            tracing::info!(
+                "{compared} {} messages compared, steps {from_step} to {}",
+                options.node,
+                options.step
+            );
+            Ok(ExitCode::SUCCESS)
         }
-        Command::Report(Report::Figures { run, out, polar }) => {
+        crate::replay::Outcome::Differs(diff) => {
+            println!("differs: {diff}");
+            Ok(ExitCode::from(1))
+        }
+    }
+}
+
+/// `coupler-node report ...`.
+fn report(report: Report) -> anyhow::Result<ExitCode> {
+    match report {
+        Report::Figures { run, out, polar } => {
             let out = out.unwrap_or_else(|| run.join("figures"));
             for path in crate::report::figures(&run, &out, polar)? {
                 println!("{}", path.display());
             }
-            Ok(ExitCode::SUCCESS)
         }
-        Command::Report(Report::Pressure {
+        Report::Pressure {
             runs,
             reference,
             out,
-        }) => {
+        } => {
             crate::report::pressure(&runs, reference, &out)?;
             println!("{}", out.display());
-            Ok(ExitCode::SUCCESS)
         }
-        Command::Report(Report::WorkPrecision {
+        Report::WorkPrecision {
             runs,
             reference,
             probe,
             out,
-        }) => {
+        } => {
             println!("run,group,wall_s,steps,energy_error,displacement_error");
             for p in crate::report::work_precision(&runs, &reference, &probe, &out)? {
                 println!(
@@ -388,68 +404,77 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
                     p.run, p.group, p.wall_s, p.steps, p.energy_error, p.displacement_error
                 );
             }
-            Ok(ExitCode::SUCCESS)
         }
-        Command::Report(Report::Energy { runs, scale, out }) => {
+        Report::Energy { runs, scale, out } => {
             crate::report::energy(&runs, &scale, &out)?;
             println!("{}", out.display());
-            Ok(ExitCode::SUCCESS)
-        }
-        Command::Inspect {
-            file,
-            step,
-            export,
-            recover,
-        } => {
-            let bytes = std::fs::read(&file)
-                .with_context(|| format!("reading record {}", file.display()))?;
-            let rec = if recover {
-                let fixed = crate::record::recover(&bytes)
-                    .with_context(|| format!("recovering {}", file.display()))?;
-                let target = file.with_extension("recovered.mcap");
-                std::fs::write(&target, &fixed.bytes)
-                    .with_context(|| format!("writing {}", target.display()))?;
-                for dropped in &fixed.dropped {
-                    tracing::warn!("dropped {dropped}");
-                }
-                tracing::info!(
-                    "wrote {}: {} messages kept, {} damaged part{} dropped",
-                    target.display(),
-                    fixed.recording.messages.len(),
-                    fixed.dropped.len(),
-                    if fixed.dropped.len() == 1 { "" } else { "s" }
-                );
-                fixed.recording
-            } else {
-                crate::record::read_recording(&bytes).with_context(|| {
-                    format!(
-                        "reading record {} (--recover keeps what verifies)",
-                        file.display()
-                    )
-                })?
-            };
-            let format = export.map(crate::inspect::ExportFormat::from);
-            match (step, format) {
-                (Some(step), format) => {
-                    let format = format.unwrap_or(crate::inspect::ExportFormat::Json);
-                    print!("{}", crate::inspect::export_step(&rec, step, format)?);
-                }
-                (None, Some(crate::inspect::ExportFormat::Csv)) => {
-                    print!("{}", crate::inspect::export_table(&rec, None)?);
-                }
-                (None, Some(crate::inspect::ExportFormat::Json)) => {
-                    anyhow::bail!(
-                        "--export json exports one step: add --step N (--export csv without --step exports them all)"
-                    )
-                }
-                (None, None) => {
-                    if !recover && let Some(end) = crate::inspect::describe_end(&rec.end) {
-                        tracing::warn!("{}: {end}; --recover rewrites it whole", file.display());
-                    }
-                    print!("{}", crate::inspect::list_steps(&rec)?);
-                }
-            }
-            Ok(ExitCode::SUCCESS)
         }
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `coupler-node inspect`.
+fn inspect(
+    file: &std::path::Path,
+    step: Option<u64>,
+    export: Option<ExportArg>,
+    recover: bool,
+) -> anyhow::Result<ExitCode> {
+    let rec = read_for_inspection(file, recover)?;
+    let format = export.map(crate::inspect::ExportFormat::from);
+    match (step, format) {
+        (Some(step), format) => {
+            let format = format.unwrap_or(crate::inspect::ExportFormat::Json);
+            print!("{}", crate::inspect::export_step(&rec, step, format)?);
+        }
+        (None, Some(crate::inspect::ExportFormat::Csv)) => {
+            print!("{}", crate::inspect::export_table(&rec, None)?);
+        }
+        (None, Some(crate::inspect::ExportFormat::Json)) => {
+            anyhow::bail!(
+                "--export json exports one step: add --step N (--export csv without --step exports them all)"
+            )
+        }
+        (None, None) => {
+            if !recover && let Some(end) = crate::inspect::describe_end(&rec.end) {
+                tracing::warn!("{}: {end}; --recover rewrites it whole", file.display());
+            }
+            print!("{}", crate::inspect::list_steps(&rec)?);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The record `file`; with `recover`, what of it verifies, also written beside it as
+/// `*.recovered.mcap`.
+fn read_for_inspection(
+    file: &std::path::Path,
+    recover: bool,
+) -> anyhow::Result<crate::record::Recording> {
+    let bytes =
+        std::fs::read(file).with_context(|| format!("reading record {}", file.display()))?;
+    if !recover {
+        return crate::record::read_recording(&bytes).with_context(|| {
+            format!(
+                "reading record {} (--recover keeps what verifies)",
+                file.display()
+            )
+        });
+    }
+    let fixed =
+        crate::record::recover(&bytes).with_context(|| format!("recovering {}", file.display()))?;
+    let target = file.with_extension("recovered.mcap");
+    std::fs::write(&target, &fixed.bytes)
+        .with_context(|| format!("writing {}", target.display()))?;
+    for dropped in &fixed.dropped {
+        tracing::warn!("dropped {dropped}");
+    }
+    tracing::info!(
+        "wrote {}: {} messages kept, {} damaged part{} dropped",
+        target.display(),
+        fixed.recording.messages.len(),
+        fixed.dropped.len(),
+        if fixed.dropped.len() == 1 { "" } else { "s" }
+    );
+    Ok(fixed.recording)
 }

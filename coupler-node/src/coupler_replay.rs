@@ -17,8 +17,8 @@ use protocol::codec;
 use protocol::scene::Scene;
 use protocol::wire::{Message, NodeKind};
 
+use crate::frame_diff::{Outcome, compare};
 use crate::record::{self, Recording};
-use crate::replay::{Outcome, compare};
 use crate::scheme::{Action, Coupler, CouplerCheckpoint, CouplerConfig};
 
 /// Where a frame of the record goes, from the coupler's side.

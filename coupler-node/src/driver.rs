@@ -21,6 +21,22 @@ use crate::progress::Progress;
 use crate::record::Diagnostics;
 use crate::scheme::{Action, Coupler, Finish, StepReport};
 
+/// Why a [`RecordSink`] could not keep what the loop handed it.
+#[derive(Debug, thiserror::Error)]
+pub enum SinkError {
+    /// The MCAP record failed.
+    #[error(transparent)]
+    Record(#[from] crate::record::RecordError),
+    /// A CSV file of the run (`ledger.csv`, `links_broken.csv`) could not be written.
+    #[error("writing {}: {source}", path.display())]
+    Csv {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The IO error.
+        source: std::io::Error,
+    },
+}
+
 /// Where the loop writes what it sees. `t` is the simulated time a message belongs to \[s\]
 /// (a frame's: the start of its step; diagnostics: the end of the step), a function of the
 /// run; `wall_ns` the wall clock.
@@ -33,7 +49,7 @@ pub trait RecordSink {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String>;
+    ) -> Result<(), SinkError>;
     /// A node's checkpoint frame.
     fn checkpoint(
         &mut self,
@@ -41,38 +57,45 @@ pub trait RecordSink {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String>;
+    ) -> Result<(), SinkError>;
     /// One step's diagnostics as a JSON object.
-    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String>;
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), SinkError>;
     /// The ledger entry of an accepted step, before its `end_step` (`ledger.csv`); the
     /// default keeps nothing.
-    fn ledger(&mut self, _entry: &LedgerEntry) -> Result<(), String> {
+    fn ledger(&mut self, _entry: &LedgerEntry) -> Result<(), SinkError> {
         Ok(())
     }
     /// The links broken in accepted step `step`, which ends at `t` \[s\], as particle-id
     /// pairs in break order, before its `end_step` (`links_broken.csv`; called for every step,
     /// with an empty list when none broke); the default keeps nothing.
-    fn links_broken(&mut self, _t: f64, _step: u64, _pairs: &[[u32; 2]]) -> Result<(), String> {
+    fn links_broken(&mut self, _t: f64, _step: u64, _pairs: &[[u32; 2]]) -> Result<(), SinkError> {
         Ok(())
     }
     /// The step is complete: make it durable.
-    fn end_step(&mut self) -> Result<(), String>;
+    fn end_step(&mut self) -> Result<(), SinkError>;
 }
 
 /// A sink that keeps nothing (`record = "none"`).
 pub struct NoRecord;
 
 impl RecordSink for NoRecord {
-    fn frame(&mut self, _: NodeKind, _: NodeKind, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn frame(
+        &mut self,
+        _: NodeKind,
+        _: NodeKind,
+        _: f64,
+        _: u64,
+        _: &[u8],
+    ) -> Result<(), SinkError> {
         Ok(())
     }
-    fn checkpoint(&mut self, _: NodeKind, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn checkpoint(&mut self, _: NodeKind, _: f64, _: u64, _: &[u8]) -> Result<(), SinkError> {
         Ok(())
     }
-    fn diagnostics(&mut self, _: f64, _: u64, _: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, _: f64, _: u64, _: &[u8]) -> Result<(), SinkError> {
         Ok(())
     }
-    fn end_step(&mut self) -> Result<(), String> {
+    fn end_step(&mut self) -> Result<(), SinkError> {
         Ok(())
     }
 }
@@ -170,7 +193,7 @@ pub enum DriverError {
     },
     /// Recording failed.
     #[error("recording: {0}")]
-    Record(String),
+    Record(SinkError),
     /// A node's process ended or the supervisor asked to stop.
     #[error("{0}")]
     Aborted(String),
@@ -282,7 +305,9 @@ pub fn drive(
                     ..Diagnostics::default()
                 })
                 .expect("diagnostics serialize");
-                let _ = sink.diagnostics(*t, wall_ns(), &json);
+                if let Err(err) = sink.diagnostics(*t, wall_ns(), &json) {
+                    tracing::warn!("the record lacks the failed step's diagnostics: {err}");
+                }
             }
             let t = coupler.time();
             for node in [NodeKind::Fluid, NodeKind::Solid] {
@@ -299,11 +324,17 @@ pub fn drive(
                         }),
                     );
                     tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step);
-                    let _ = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame);
+                    if let Err(err) = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame) {
+                        tracing::warn!(
+                            "the record lacks the shutdown sent to the {node} node: {err}"
+                        );
+                    }
                     let _ = transport.send(node, &frame);
                 }
             }
-            let _ = sink.end_step();
+            if let Err(err) = sink.end_step() {
+                tracing::warn!("the record's last step is not flushed: {err}");
+            }
             (reason, Some(err))
         }
     };
@@ -356,7 +387,7 @@ impl RecordSink for TimedSink<'_> {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String> {
+    ) -> Result<(), SinkError> {
         self.timed(|s| s.frame(from, to, t, wall_ns, frame))
     }
 
@@ -366,23 +397,23 @@ impl RecordSink for TimedSink<'_> {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String> {
+    ) -> Result<(), SinkError> {
         self.timed(|s| s.checkpoint(node, t, wall_ns, frame))
     }
 
-    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), SinkError> {
         self.timed(|s| s.diagnostics(t, wall_ns, json))
     }
 
-    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), SinkError> {
         self.timed(|s| s.ledger(entry))
     }
 
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
         self.timed(|s| s.links_broken(t, step, pairs))
     }
 
-    fn end_step(&mut self) -> Result<(), String> {
+    fn end_step(&mut self) -> Result<(), SinkError> {
         self.timed(|s| s.end_step())
     }
 }
@@ -434,51 +465,8 @@ fn drive_inner(
     let mut starts = StepStarts::default();
     loop {
         starts.observe(coupler);
-        let waiting_since = Instant::now();
-        // NOTE: waiting for one node, the transport watches that node alone (cheaper than a
-        // wait set over both); the other node's early frames stay queued in the transport
-        // until the state machine waits for them.
-        let expected = match coupler.waiting_for().as_slice() {
-            [one] => Some(*one),
-            _ => None,
-        };
-        let (from, frame) = loop {
-            if let Some(reason) = abort.check() {
-                return Err(DriverError::Aborted(reason));
-            }
-            match transport.recv(expected, slice) {
-                Ok(got) => break got,
-                Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
-                Err(TransportError::Timeout { .. }) => {
-                    let who: Vec<&str> = coupler.waiting_for().iter().map(|n| n.name()).collect();
-                    return Err(DriverError::Aborted(format!(
-                        "{} node stopped answering: no message within {:?} at step {}",
-                        who.join(" and "),
-                        cfg.timeout,
-                        coupler.step()
-                    )));
-                }
-                Err(err) => return Err(err.into()),
-            }
-        };
-        let waited = waiting_since.elapsed().as_secs_f64();
-        match from {
-            NodeKind::Fluid => busy.fluid += waited,
-            NodeKind::Solid => busy.solid += waited,
-            NodeKind::Coupler => {}
-        }
-        let (header, msg) = match codec::decode(&frame) {
-            Ok(decoded) => decoded,
-            Err(DecodeError::VersionMismatch { expected, got }) => {
-                return Err(DriverError::Coupler(crate::scheme::CouplerError::Refused {
-                    node: from,
-                    reason: format!(
-                        "protocol version mismatch: coupler speaks version {expected}, {from} node speaks version {got}"
-                    ),
-                }));
-            }
-            Err(source) => return Err(DriverError::Decode { from, source }),
-        };
+        let (from, frame) = receive(transport, coupler, cfg, abort, slice, busy)?;
+        let (header, msg) = decode(from, &frame)?;
         let now = wall_ns();
         let t = starts.of(header.stamp.step, coupler);
         let record = if header.kind == MessageKind::Checkpoint {
@@ -530,42 +518,7 @@ fn drive_inner(
                 }
                 Action::StepDone(report) => {
                     check_dt_min(&report, cfg.dt_min, first_proposal, cfg.t_end)?;
-                    let json = serde_json::to_vec(&Diagnostics {
-                        step: report.step,
-                        t: report.t,
-                        dt: report.dt,
-                        limiter: report.limiter.clone(),
-                        iterations: report.iterations,
-                        residuals: report.residuals.clone(),
-                        relaxation: report.relaxation.clone(),
-                        columns: report.columns.clone(),
-                        columns_dropped: report.columns_dropped,
-                        predicted: report.predicted,
-                        converged: true,
-                        output: report.output,
-                        ledger: Some(report.ledger.clone()),
-                        vacuum_cells: report.vacuum_cells,
-                        busy_s: busy.clone(),
-                    })
-                    .expect("diagnostics serialize");
-                    sink.diagnostics(report.t, wall_ns(), &json)
-                        .map_err(DriverError::Record)?;
-                    sink.ledger(&report.ledger).map_err(DriverError::Record)?;
-                    sink.links_broken(report.t, report.step, &report.broken_links)
-                        .map_err(DriverError::Record)?;
-                    sink.end_step().map_err(DriverError::Record)?;
-                    tracing::debug!(
-                        "step {} done: t = {:.6e} s, dt = {:.4e} s ({}), {} iteration{}, residual {:.3e}, mass err {:.2e}, energy err {:.2e}",
-                        report.step,
-                        report.t,
-                        report.dt,
-                        report.limiter,
-                        report.iterations,
-                        if report.iterations == 1 { "" } else { "s" },
-                        report.residuals.last().copied().unwrap_or(0.0),
-                        report.ledger.mass_rel_err,
-                        report.ledger.energy_rel_err
-                    );
+                    record_step(&report, sink, busy)?;
                     progress.update(&report);
                     if let Some(k) = report.output {
                         outputs.push((k, report.t));
@@ -579,6 +532,115 @@ fn drive_inner(
             }
         }
     }
+}
+
+/// The next frame from the node the coupler waits for (from either while it waits for both),
+/// the wait booked to that node's busy time. Ends at the supervisor's abort, or when no frame
+/// came within `cfg.timeout`.
+fn receive(
+    transport: &mut dyn Transport,
+    coupler: &Coupler,
+    cfg: &DriverConfig,
+    abort: &Abort,
+    slice: Duration,
+    busy: &mut Busy,
+) -> Result<(NodeKind, Vec<u8>), DriverError> {
+    let waiting_since = Instant::now();
+    // NOTE: waiting for one node, the transport watches that node alone (cheaper than a
+    // wait set over both); the other node's early frames stay queued in the transport
+    // until the state machine waits for them.
+    let expected = match coupler.waiting_for().as_slice() {
+        [one] => Some(*one),
+        _ => None,
+    };
+    let (from, frame) = loop {
+        if let Some(reason) = abort.check() {
+            return Err(DriverError::Aborted(reason));
+        }
+        match transport.recv(expected, slice) {
+            Ok(got) => break got,
+            Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
+            Err(TransportError::Timeout { .. }) => {
+                let who: Vec<&str> = coupler.waiting_for().iter().map(|n| n.name()).collect();
+                return Err(DriverError::Aborted(format!(
+                    "{} node stopped answering: no message within {:?} at step {}",
+                    who.join(" and "),
+                    cfg.timeout,
+                    coupler.step()
+                )));
+            }
+            Err(err) => return Err(err.into()),
+        }
+    };
+    let waited = waiting_since.elapsed().as_secs_f64();
+    match from {
+        NodeKind::Fluid => busy.fluid += waited,
+        NodeKind::Solid => busy.solid += waited,
+        NodeKind::Coupler => {}
+    }
+    Ok((from, frame))
+}
+
+/// A frame from `from`, decoded; a frame of another protocol version is a refusal.
+fn decode(from: NodeKind, frame: &[u8]) -> Result<(codec::Header, Message), DriverError> {
+    match codec::decode(frame) {
+        Ok(decoded) => Ok(decoded),
+        Err(DecodeError::VersionMismatch { expected, got }) => {
+            Err(DriverError::Coupler(crate::scheme::CouplerError::Refused {
+                node: from,
+                reason: format!(
+                    "protocol version mismatch: coupler speaks version {expected}, {from} node speaks version {got}"
+                ),
+            }))
+        }
+        Err(source) => Err(DriverError::Decode { from, source }),
+    }
+}
+
+/// A finished step into the sink: its diagnostics, ledger row and broken links, then made
+/// durable; and its debug line.
+fn record_step(
+    report: &StepReport,
+    sink: &mut dyn RecordSink,
+    busy: &Busy,
+) -> Result<(), DriverError> {
+    let json = serde_json::to_vec(&Diagnostics {
+        step: report.step,
+        t: report.t,
+        dt: report.dt,
+        limiter: report.limiter.clone(),
+        iterations: report.iterations,
+        residuals: report.residuals.clone(),
+        relaxation: report.relaxation.clone(),
+        columns: report.columns.clone(),
+        columns_dropped: report.columns_dropped,
+        predicted: report.predicted,
+        converged: true,
+        output: report.output,
+        ledger: Some(report.ledger.clone()),
+        vacuum_cells: report.vacuum_cells,
+        busy_s: busy.clone(),
+    })
+    .expect("diagnostics serialize");
+    sink.diagnostics(report.t, wall_ns(), &json)
+        .map_err(DriverError::Record)?;
+    sink.ledger(&report.ledger).map_err(DriverError::Record)?;
+    sink.links_broken(report.t, report.step, &report.broken_links)
+        .map_err(DriverError::Record)?;
+    sink.end_step().map_err(DriverError::Record)?;
+    tracing::debug!(
+        "step {} done: t = {:.6e} s, dt = {:.4e} s ({}), {} iteration{}, residual {:.3e}, mass err {:.2e}, energy err {:.2e}",
+        report.step,
+        report.t,
+        report.dt,
+        report.limiter,
+        report.iterations,
+        if report.iterations == 1 { "" } else { "s" },
+        report.residuals.last().copied().unwrap_or(0.0),
+        report.ledger.mass_rel_err,
+        report.ledger.energy_rel_err
+    );
+    Ok(())
 }
 
 /// The log of a message the coupler sends: each fixed-point decision at trace (once, though

@@ -28,14 +28,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::Context;
 use protocol::logs::Verbosity;
-use protocol::scene::{RecordLevel, Scene};
+use protocol::scene::Scene;
 use protocol::transport::{Transport, TransportError};
 use protocol::wire::NodeKind;
 
 use crate::driver::{self, Abort, DriverConfig, RecordSink, Summary};
-use crate::ledger::CSV_HEADER;
-use crate::scheme::{Coupler, CouplerConfig};
-use crate::sink::{CsvFile, FileSink, LINKS_BROKEN_HEADER, RunSink};
+use crate::preflight::{available_memory, load_scene, node_binary, with_fluid_ranks};
+use crate::scheme::{Coupler, CouplerConfig, Resume};
+use crate::sink::RunSink;
 
 /// Options of `coupler-node run`.
 #[derive(Clone, Debug)]
@@ -77,31 +77,6 @@ pub const EXIT_INTERRUPTED: u8 = 130;
 #[error("{0}")]
 pub struct Interrupted(pub String);
 
-/// Reads and validates a scene, applying implementation overrides; returns it with its path.
-pub fn load_scene(path: &Path, fluid: Option<&str>, solid: Option<&str>) -> anyhow::Result<Scene> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading scene {}", path.display()))?;
-    let name = path.display().to_string();
-    let mut scene = Scene::from_toml_str(&text, &name)?;
-    if let Some(choice) = fluid {
-        let f = scene.fluid.as_mut().with_context(|| {
-            format!("{name}: --fluid {choice} but the scene has no [fluid] section")
-        })?;
-        f.node = choice.to_string();
-    }
-    if let Some(choice) = solid {
-        let s = scene.solid.as_mut().with_context(|| {
-            format!("{name}: --solid {choice} but the scene has no [solid] section")
-        })?;
-        s.node = choice.to_string();
-    }
-    if fluid.is_some() || solid.is_some() {
-        // Validate again with the choices applied (a real node needs more keys than a double).
-        scene = Scene::from_toml_str(&scene.to_toml(), &name)?;
-    }
-    Ok(scene)
-}
-
 /// A short run id for the shared-memory prefix: scene name and process id.
 pub fn run_id(scene: &Scene) -> String {
     let short: String = scene
@@ -142,63 +117,10 @@ pub fn sweep_stale_runs() -> Vec<String> {
         .collect()
 }
 
-/// The binary of a node: explicit path, `COSIM_<NODE>_BIN`, or beside this executable.
-pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
-    if let Some(p) = explicit {
-        return Ok(p.to_path_buf());
-    }
-    let var = format!("COSIM_{}_BIN", node.name().to_uppercase());
-    if let Ok(p) = std::env::var(&var) {
-        return Ok(PathBuf::from(p));
-    }
-    let exe = std::env::current_exe().context("locating this executable")?;
-    let dir = exe.parent().context("this executable has no directory")?;
-    let name = format!("{}-node{}", node.name(), std::env::consts::EXE_SUFFIX);
-    let path = dir.join(&name);
-    anyhow::ensure!(
-        path.exists(),
-        "{name} not found beside {} (build the workspace, or set {var})",
-        exe.display()
-    );
-    Ok(path)
-}
-
-/// Memory the machine can give a run, in bytes: `MemAvailable` of `/proc/meminfo` (`MemTotal`
-/// on kernels without it).
-pub fn available_memory() -> anyhow::Result<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").context("reading /proc/meminfo")?;
-    let field = |name: &str| {
-        text.lines()
-            .find_map(|l| l.strip_prefix(name))
-            .and_then(|rest| {
-                rest.trim()
-                    .trim_end_matches("kB")
-                    .trim()
-                    .parse::<u64>()
-                    .ok()
-            })
-            .map(|kib| kib * 1024)
-    };
-    field("MemAvailable:")
-        .or_else(|| field("MemTotal:"))
-        .context("/proc/meminfo has neither MemAvailable nor MemTotal")
-}
-
 /// Runs a scene end to end; returns the summary (also written to `OUT/summary.json`). An
 /// interrupted run returns [`Interrupted`] (after writing the summary).
 pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
-    let mut scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
-    if let Some(ranks) = opts.fluid_ranks {
-        scene = with_fluid_ranks(scene, ranks, &opts.scene)?;
-    }
-    scene
-        .check_memory(available_memory()?)
-        .with_context(|| opts.scene.display().to_string())?;
-    crate::replay::check_replay_doubles(&scene)?;
-    let resume = match &opts.restart {
-        Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
-        None => None,
-    };
+    let (scene, resume) = resolve(opts)?;
     let mut nodes = Vec::new();
     if let Some(f) = &scene.fluid {
         nodes.push((NodeKind::Fluid, f.node.clone()));
@@ -244,77 +166,16 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
         .with_context(|| format!("opening the bus for run {run_id}"))?;
 
-    let fluid_ranks = scene.fluid.as_ref().map_or(1, |f| f.ranks);
-    let mpirun = if fluid_ranks > 1 {
-        let fluid_bin = &binaries[0];
-        Some(crate::mpi_launch::MpiLaunch::find(
-            fluid_bin,
-            fluid_ranks,
-            opts.hostfile.as_deref(),
-        )?)
-    } else {
-        anyhow::ensure!(
-            opts.hostfile.is_none(),
-            "--hostfile is for a fluid of several ranks (fluid.ranks or --fluid-ranks > 1)"
-        );
-        None
-    };
-    let mut children = Vec::new();
-    for ((node, implementation), binary) in nodes.iter().zip(&binaries) {
-        let mut cmd = match (&mpirun, node) {
-            (Some(mpi), NodeKind::Fluid) => mpi.command(binary),
-            _ => tokio::process::Command::new(binary),
-        };
-        cmd.arg("--scene")
-            .arg(&resolved)
-            .arg("--run-id")
-            .arg(&run_id)
-            .arg("--out")
-            .arg(&opts.out)
-            .arg("--double")
-            .arg(implementation)
-            .arg("--timeout-s")
-            .arg(opts.timeout.as_secs_f64().to_string())
-            .args(opts.verbosity.to_args())
-            .stdin(Stdio::null())
-            // NOTE: a group of its own, so that Ctrl-C or a terminal hangup reaches the coupler
-            // only, which shuts the node down cleanly (a node killed by the signal would read
-            // as a node death).
-            .process_group(0)
-            .kill_on_drop(true);
-        let ranks = match node {
-            NodeKind::Fluid if mpirun.is_some() => {
-                // The launcher's report names a rank that died (read from its stderr).
-                cmd.stderr(Stdio::piped());
-                fluid_ranks
-            }
-            _ => 1,
-        };
-        children.push((*node, cmd, ranks));
-    }
+    let children = node_commands(opts, &scene, &nodes, &binaries, &resolved, &run_id)?;
     let abort = Abort::default();
     let hung_up = Arc::new(AtomicBool::new(false));
     let supervisor = Supervisor::start(children, abort.clone(), hung_up.clone())?;
 
-    let record_path = opts.out.join("exchange.mcap");
-    let file_sink = match scene.run.record {
-        RecordLevel::None => None,
-        level => Some(FileSink::create(&record_path, level, &scene)?),
-    };
-    let mut run_sink = RunSink {
-        record: file_sink,
-        ledger: CsvFile::create(&opts.out.join("ledger.csv"), CSV_HEADER)?,
-        links_broken: scene
-            .solid
-            .as_ref()
-            .is_some_and(|s| s.fracture.is_some())
-            .then(|| CsvFile::create(&opts.out.join("links_broken.csv"), LINKS_BROKEN_HEADER))
-            .transpose()?,
-    };
+    let mut run_sink = RunSink::create(&opts.out, &scene)?;
     let sink: &mut dyn RecordSink = &mut run_sink;
     let cfg = CouplerConfig::from_scene(&scene);
     let mut coupler = match resume {
-        Some(resume) => Coupler::resuming(cfg, resume).map_err(|e| anyhow::anyhow!(e))?,
+        Some(resume) => Coupler::resuming(cfg, resume)?,
         None => Coupler::new(cfg),
     };
     let cfg = DriverConfig {
@@ -326,7 +187,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     };
     let transport: &mut dyn Transport = &mut bus;
     let (mut summary, error) = driver::drive(transport, &mut coupler, sink, &cfg, &abort);
-    let finished = run_sink.record.as_mut().map_or(Ok(()), FileSink::finish);
+    let finished = run_sink.finish();
     let exits = supervisor.stop(Duration::from_secs(2));
     for (node, exit) in &exits {
         tracing::debug!("the {node} node ended: {}", exit.text);
@@ -354,20 +215,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             .nodes
             .insert(node.name().to_string(), implementation.clone());
     }
-    let mut table = String::from("k,t\n");
-    // Output 0 is the initial state when the scene asks for t = 0; the steps' outputs follow.
-    let first_planned = u32::from(scene.initial_output());
-    if scene.initial_output() {
-        table.push_str(&format!("0,{:e}\n", 0.0));
-    }
-    for (k, t) in &summary.outputs {
-        table.push_str(&format!("{},{t:e}\n", k + first_planned));
-    }
-    std::fs::write(opts.out.join("outputs.csv"), table)
-        .with_context(|| format!("writing {}", opts.out.join("outputs.csv").display()))?;
-    let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-    std::fs::write(opts.out.join("summary.json"), json + "\n")
-        .with_context(|| format!("writing {}", opts.out.join("summary.json").display()))?;
+    write_run_files(&scene, &summary, &opts.out)?;
     finished.context("finishing the record")?;
     if interrupted {
         return Err(Interrupted(summary.status).into());
@@ -378,6 +226,103 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     Ok(summary)
 }
 
+/// `OUT/outputs.csv` (the output times) and `OUT/summary.json`.
+fn write_run_files(scene: &Scene, summary: &Summary, out: &Path) -> anyhow::Result<()> {
+    let mut table = String::from("k,t\n");
+    // Output 0 is the initial state when the scene asks for t = 0; the steps' outputs follow.
+    let first_planned = u32::from(scene.initial_output());
+    if scene.initial_output() {
+        table.push_str(&format!("0,{:e}\n", 0.0));
+    }
+    for (k, t) in &summary.outputs {
+        table.push_str(&format!("{},{t:e}\n", k + first_planned));
+    }
+    std::fs::write(out.join("outputs.csv"), table)
+        .with_context(|| format!("writing {}", out.join("outputs.csv").display()))?;
+    let json = serde_json::to_string_pretty(summary).expect("summary serializes");
+    std::fs::write(out.join("summary.json"), json + "\n")
+        .with_context(|| format!("writing {}", out.join("summary.json").display()))?;
+    Ok(())
+}
+
+/// The scene as the run will use it (overrides applied, memory and `replay:FILE` records
+/// checked) and, for `--restart`, what the run resumes from.
+fn resolve(opts: &RunOptions) -> anyhow::Result<(Scene, Option<Resume>)> {
+    let mut scene = load_scene(&opts.scene, opts.fluid.as_deref(), opts.solid.as_deref())?;
+    if let Some(ranks) = opts.fluid_ranks {
+        scene = with_fluid_ranks(scene, ranks, &opts.scene)?;
+    }
+    scene
+        .check_memory(available_memory()?)
+        .with_context(|| opts.scene.display().to_string())?;
+    crate::preflight::check_replay_doubles(&scene)?;
+    let resume = match &opts.restart {
+        Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
+        None => None,
+    };
+    Ok((scene, resume))
+}
+
+/// The command of each node (`mpirun` for a fluid of several ranks), with the ranks it runs.
+fn node_commands(
+    opts: &RunOptions,
+    scene: &Scene,
+    nodes: &[(NodeKind, String)],
+    binaries: &[PathBuf],
+    resolved: &Path,
+    run_id: &str,
+) -> anyhow::Result<Vec<(NodeKind, tokio::process::Command, u32)>> {
+    let fluid_ranks = scene.fluid.as_ref().map_or(1, |f| f.ranks);
+    let mpirun = if fluid_ranks > 1 {
+        let fluid_bin = &binaries[0];
+        Some(crate::mpi_launch::MpiLaunch::find(
+            fluid_bin,
+            fluid_ranks,
+            opts.hostfile.as_deref(),
+        )?)
+    } else {
+        anyhow::ensure!(
+            opts.hostfile.is_none(),
+            "--hostfile is for a fluid of several ranks (fluid.ranks or --fluid-ranks > 1)"
+        );
+        None
+    };
+    let mut children = Vec::new();
+    for ((node, implementation), binary) in nodes.iter().zip(binaries) {
+        let mut cmd = match (&mpirun, node) {
+            (Some(mpi), NodeKind::Fluid) => mpi.command(binary),
+            _ => tokio::process::Command::new(binary),
+        };
+        cmd.arg("--scene")
+            .arg(resolved)
+            .arg("--run-id")
+            .arg(run_id)
+            .arg("--out")
+            .arg(&opts.out)
+            .arg("--double")
+            .arg(implementation)
+            .arg("--timeout-s")
+            .arg(opts.timeout.as_secs_f64().to_string())
+            .args(opts.verbosity.to_args())
+            .stdin(Stdio::null())
+            // NOTE: a group of its own, so that Ctrl-C or a terminal hangup reaches the coupler
+            // only, which shuts the node down cleanly (a node killed by the signal would read
+            // as a node death).
+            .process_group(0)
+            .kill_on_drop(true);
+        let ranks = match node {
+            NodeKind::Fluid if mpirun.is_some() => {
+                // The launcher's report names a rank that died (read from its stderr).
+                cmd.stderr(Stdio::piped());
+                fluid_ranks
+            }
+            _ => 1,
+        };
+        children.push((*node, cmd, ranks));
+    }
+    Ok(children)
+}
+
 /// How a child ended.
 #[derive(Clone, Debug)]
 pub struct ExitInfo {
@@ -385,17 +330,6 @@ pub struct ExitInfo {
     pub success: bool,
     /// `exit code N`, `killed by signal N`, or `killed after the grace period`.
     pub text: String,
-}
-
-/// `scene` with `fluid.ranks = ranks`, validated again.
-pub fn with_fluid_ranks(mut scene: Scene, ranks: u32, path: &Path) -> anyhow::Result<Scene> {
-    let name = path.display().to_string();
-    let f = scene
-        .fluid
-        .as_mut()
-        .with_context(|| format!("{name}: --fluid-ranks {ranks} but the scene has no [fluid]"))?;
-    f.ranks = ranks;
-    Ok(Scene::from_toml_str(&scene.to_toml(), &name)?)
 }
 
 /// Starts the children and watches them on a tokio runtime of its own thread.
@@ -442,7 +376,7 @@ impl Supervisor {
             }),
             Ok(Err(err)) => {
                 let _ = thread.join();
-                Err(anyhow::anyhow!(err))
+                Err(err)
             }
             Err(_) => anyhow::bail!("the supervisor thread ended before starting the nodes"),
         }
@@ -459,7 +393,7 @@ async fn supervise(
     commands: Vec<(NodeKind, tokio::process::Command, u32)>,
     abort: Abort,
     hung_up: Arc<AtomicBool>,
-    started: std::sync::mpsc::Sender<Result<(), String>>,
+    started: std::sync::mpsc::Sender<anyhow::Result<()>>,
     stop: tokio::sync::oneshot::Receiver<Duration>,
 ) -> Vec<(NodeKind, ExitInfo)> {
     // NOTE: SIGHUP is handled here, like SIGINT and SIGTERM are by iceoryx2 in the bus waits:
@@ -468,7 +402,7 @@ async fn supervise(
     let mut hangup = match signal(SignalKind::hangup()) {
         Ok(stream) => stream,
         Err(err) => {
-            let _ = started.send(Err(format!("handling SIGHUP: {err}")));
+            let _ = started.send(Err(anyhow::Error::new(err).context("handling SIGHUP")));
             return Vec::new();
         }
     };
@@ -490,7 +424,9 @@ async fn supervise(
                 children.push((node, child));
             }
             Err(err) => {
-                let _ = started.send(Err(format!("starting the {node} node: {err}")));
+                let _ = started.send(Err(
+                    anyhow::Error::new(err).context(format!("starting the {node} node"))
+                ));
                 return Vec::new();
             }
         }

@@ -12,14 +12,14 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use crate::frame_diff::compare;
+use crate::record::{self, Recording};
 use anyhow::Context;
 use protocol::codec;
-use protocol::scene::Scene;
 use protocol::transport::Transport;
 use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
-use serde_json::Value;
 
-use crate::record::{self, Recording};
+pub use crate::frame_diff::Outcome;
 
 /// Options of `coupler-node replay`.
 #[derive(Clone, Debug)]
@@ -38,20 +38,6 @@ pub struct ReplayOptions {
     pub bin: Option<PathBuf>,
     /// `-v`/`-q` of the node's logs (the coupler's own).
     pub verbosity: protocol::logs::Verbosity,
-}
-
-/// What the replay found.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Outcome {
-    /// Every compared message matched.
-    Identical {
-        /// Messages compared.
-        compared: usize,
-        /// Step the comparison started at (a checkpoint, or 0).
-        from_step: u64,
-    },
-    /// The first difference.
-    Differs(String),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,32 +66,6 @@ fn script(rec: &Recording, node: NodeKind) -> Vec<(Dir, u64, Vec<u8>)> {
             Some((dir, m.step, m.data.clone()))
         })
         .collect()
-}
-
-/// Checks, before any process starts, that every `replay:FILE` node of `scene` names a record
-/// that reads and holds messages of that node (the node reads `FILE` from the same directory).
-pub fn check_replay_doubles(scene: &Scene) -> anyhow::Result<()> {
-    let nodes = [
-        (
-            NodeKind::Fluid,
-            scene.fluid.as_ref().map(|f| f.node.as_str()),
-        ),
-        (
-            NodeKind::Solid,
-            scene.solid.as_ref().map(|s| s.node.as_str()),
-        ),
-    ];
-    for (node, choice) in nodes {
-        let Some(file) = choice.and_then(|c| c.strip_prefix("replay:")) else {
-            continue;
-        };
-        let key = format!("{node}.node = \"replay:{file}\"");
-        let bytes =
-            std::fs::read(file).with_context(|| format!("{key}: reading the record {file}"))?;
-        protocol::replay::Script::from_mcap(&bytes, node)
-            .with_context(|| format!("{key}: the record {file} cannot be replayed"))?;
-    }
-    Ok(())
 }
 
 /// Runs the replay.
@@ -167,7 +127,7 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
     let run_id = format!("replay{}", std::process::id());
     protocol::bus::cleanup_run(&run_id)?;
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &[opts.node])?;
-    let binary = crate::launch::node_binary(opts.node, opts.bin.as_deref())?;
+    let binary = crate::preflight::node_binary(opts.node, opts.bin.as_deref())?;
     let mut child = std::process::Command::new(&binary)
         .arg("--scene")
         .arg(&scene_path)
@@ -300,80 +260,4 @@ fn drive(
         compared,
         from_step,
     })
-}
-
-/// `None` when equal; otherwise where the first difference is (`channel` names the frames).
-pub(crate) fn compare(channel: &str, recorded: &[u8], replayed: &[u8]) -> Option<String> {
-    if recorded == replayed {
-        return None;
-    }
-    let (rh, rm) = match codec::decode(recorded) {
-        Ok(x) => x,
-        Err(e) => {
-            return Some(format!(
-                "{channel}: the recorded frame does not decode: {e}"
-            ));
-        }
-    };
-    let (ph, pm) = match codec::decode(replayed) {
-        Ok(x) => x,
-        Err(e) => {
-            return Some(format!(
-                "{channel}: the replayed frame does not decode: {e}"
-            ));
-        }
-    };
-    let head = format!(
-        "{channel} step {} iteration {}",
-        rh.stamp.step, rh.stamp.iteration
-    );
-    if rh.kind != ph.kind || rh.stamp != ph.stamp {
-        return Some(format!(
-            "{head}: recorded {:?} (step {}, iteration {}), replayed {:?} (step {}, iteration {})",
-            rh.kind, rh.stamp.step, rh.stamp.iteration, ph.kind, ph.stamp.step, ph.stamp.iteration
-        ));
-    }
-    let a = serde_json::to_value(&rm).unwrap_or(Value::Null);
-    let b = serde_json::to_value(&pm).unwrap_or(Value::Null);
-    let (path, va, vb) = first_difference(&a, &b, String::new()).unwrap_or((
-        "(bytes)".into(),
-        Value::Null,
-        Value::Null,
-    ));
-    Some(format!(
-        "{head}: field {path}: recorded {va}, replayed {vb}"
-    ))
-}
-
-fn first_difference(a: &Value, b: &Value, path: String) -> Option<(String, Value, Value)> {
-    match (a, b) {
-        (Value::Object(x), Value::Object(y)) => {
-            for (k, va) in x {
-                let vb = y.get(k).unwrap_or(&Value::Null);
-                let sub = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                if let Some(d) = first_difference(va, vb, sub) {
-                    return Some(d);
-                }
-            }
-            None
-        }
-        (Value::Array(x), Value::Array(y)) => {
-            for i in 0..x.len().max(y.len()) {
-                let va = x.get(i).unwrap_or(&Value::Null);
-                let vb = y.get(i).unwrap_or(&Value::Null);
-                if let Some(d) = first_difference(va, vb, format!("{path}[{i}]")) {
-                    return Some(d);
-                }
-            }
-            None
-        }
-        // NOTE: numbers are compared by their bits through the JSON text, which prints the
-        // shortest representation that round-trips, so different bits print differently.
-        _ if a == b => None,
-        _ => Some((path, a.clone(), b.clone())),
-    }
 }

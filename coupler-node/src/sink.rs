@@ -10,93 +10,9 @@ use anyhow::Context;
 use protocol::scene::{RecordLevel, Scene};
 use protocol::wire::NodeKind;
 
-use crate::driver::RecordSink;
-use crate::ledger::LedgerEntry;
+use crate::driver::{RecordSink, SinkError};
+use crate::ledger::{CSV_HEADER, LedgerEntry};
 use crate::record::Recorder;
-
-/// A recorder writing to a file.
-pub struct FileSink {
-    recorder: Option<Recorder<BufWriter<File>>>,
-    frames: bool,
-}
-
-impl FileSink {
-    /// Creates `path` and writes the scene as metadata.
-    pub fn create(path: &Path, level: RecordLevel, scene: &Scene) -> anyhow::Result<FileSink> {
-        let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let recorder = Recorder::new(
-            BufWriter::new(file),
-            level,
-            scene.run.record_compression,
-            &scene.name,
-            &scene.to_toml(),
-        )
-        .with_context(|| format!("starting the record {}", path.display()))?;
-        Ok(FileSink {
-            recorder: Some(recorder),
-            frames: matches!(level, RecordLevel::All | RecordLevel::Exchange),
-        })
-    }
-
-    fn recorder(&mut self) -> Result<&mut Recorder<BufWriter<File>>, String> {
-        self.recorder
-            .as_mut()
-            .ok_or_else(|| "the record is already finished".to_string())
-    }
-
-    /// Writes the summary and footer.
-    pub fn finish(&mut self) -> anyhow::Result<()> {
-        if let Some(recorder) = self.recorder.take() {
-            use std::io::Write;
-            let mut w = recorder.finish().context("finishing the MCAP record")?;
-            w.flush().context("flushing the MCAP record")?;
-        }
-        Ok(())
-    }
-}
-
-impl RecordSink for FileSink {
-    fn frame(
-        &mut self,
-        from: NodeKind,
-        to: NodeKind,
-        t: f64,
-        wall_ns: u64,
-        frame: &[u8],
-    ) -> Result<(), String> {
-        if !self.frames {
-            return Ok(());
-        }
-        self.recorder()?
-            .record_frame(from, to, t, wall_ns, frame)
-            .map_err(|e| e.to_string())
-    }
-
-    fn checkpoint(
-        &mut self,
-        node: NodeKind,
-        t: f64,
-        wall_ns: u64,
-        frame: &[u8],
-    ) -> Result<(), String> {
-        if !self.frames {
-            return Ok(());
-        }
-        self.recorder()?
-            .record_checkpoint(node, t, wall_ns, frame)
-            .map_err(|e| e.to_string())
-    }
-
-    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
-        self.recorder()?
-            .record_diagnostics(t, wall_ns, json)
-            .map_err(|e| e.to_string())
-    }
-
-    fn end_step(&mut self) -> Result<(), String> {
-        self.recorder()?.end_step().map_err(|e| e.to_string())
-    }
-}
 
 /// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
@@ -122,14 +38,17 @@ impl CsvFile {
     }
 
     /// Appends `rows` (each with its newline) in one write; nothing for no rows.
-    pub fn append(&mut self, rows: &str) -> Result<(), String> {
+    pub fn append(&mut self, rows: &str) -> Result<(), SinkError> {
         use std::io::Write;
         if rows.is_empty() {
             return Ok(());
         }
         self.file
             .write_all(rows.as_bytes())
-            .map_err(|e| format!("writing {}: {e}", self.path.display()))
+            .map_err(|source| SinkError::Csv {
+                path: self.path.clone(),
+                source,
+            })
     }
 }
 
@@ -146,20 +65,63 @@ pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
         .collect()
 }
 
-/// What `coupler-node run` writes as it goes: the record (none at level `none`),
-/// `ledger.csv` (always) and `links_broken.csv` (scenes with `solid.fracture`).
+/// What `coupler-node run` writes as it goes: the record `exchange.mcap` (none at level
+/// `none`), `ledger.csv` (always) and `links_broken.csv` (scenes with `solid.fracture`). One
+/// layer over the files: each call goes straight to the file it concerns.
 pub struct RunSink {
-    /// The MCAP record.
-    pub record: Option<FileSink>,
+    /// The MCAP record (`None` at level `none`, and once [`RunSink::finish`]ed).
+    record: Option<Recorder<BufWriter<File>>>,
+    /// Frames and checkpoints are recorded (levels `all` and `exchange`).
+    frames: bool,
     /// The conservation history, `ledger.csv`.
-    pub ledger: CsvFile,
+    ledger: CsvFile,
     /// The broken links, `links_broken.csv`, when the scene can break any.
-    pub links_broken: Option<CsvFile>,
+    links_broken: Option<CsvFile>,
 }
 
 impl RunSink {
-    fn record(&mut self) -> Option<&mut FileSink> {
-        self.record.as_mut()
+    /// Creates the run's files in `out`, the record first (with the scene as its metadata).
+    pub fn create(out: &Path, scene: &Scene) -> anyhow::Result<RunSink> {
+        let level = scene.run.record;
+        let record = match level {
+            RecordLevel::None => None,
+            level => {
+                let path = out.join("exchange.mcap");
+                let file =
+                    File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+                let recorder = Recorder::new(
+                    BufWriter::new(file),
+                    level,
+                    scene.run.record_compression,
+                    &scene.name,
+                    &scene.to_toml(),
+                )
+                .with_context(|| format!("starting the record {}", path.display()))?;
+                Some(recorder)
+            }
+        };
+        Ok(RunSink {
+            record,
+            frames: matches!(level, RecordLevel::All | RecordLevel::Exchange),
+            ledger: CsvFile::create(&out.join("ledger.csv"), CSV_HEADER)?,
+            links_broken: scene
+                .solid
+                .as_ref()
+                .is_some_and(|s| s.fracture.is_some())
+                .then(|| CsvFile::create(&out.join("links_broken.csv"), LINKS_BROKEN_HEADER))
+                .transpose()?,
+        })
+    }
+
+    /// Writes the record's summary and footer (nothing without a record). Later calls of the
+    /// sink write nothing more into the record.
+    pub fn finish(&mut self) -> anyhow::Result<()> {
+        if let Some(recorder) = self.record.take() {
+            use std::io::Write;
+            let mut w = recorder.finish().context("finishing the MCAP record")?;
+            w.flush().context("flushing the MCAP record")?;
+        }
+        Ok(())
     }
 }
 
@@ -171,9 +133,13 @@ impl RecordSink for RunSink {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String> {
-        self.record()
-            .map_or(Ok(()), |r| r.frame(from, to, t, wall_ns, frame))
+    ) -> Result<(), SinkError> {
+        match &mut self.record {
+            Some(recorder) if self.frames => {
+                Ok(recorder.record_frame(from, to, t, wall_ns, frame)?)
+            }
+            _ => Ok(()),
+        }
     }
 
     fn checkpoint(
@@ -182,27 +148,36 @@ impl RecordSink for RunSink {
         t: f64,
         wall_ns: u64,
         frame: &[u8],
-    ) -> Result<(), String> {
-        self.record()
-            .map_or(Ok(()), |r| r.checkpoint(node, t, wall_ns, frame))
+    ) -> Result<(), SinkError> {
+        match &mut self.record {
+            Some(recorder) if self.frames => {
+                Ok(recorder.record_checkpoint(node, t, wall_ns, frame)?)
+            }
+            _ => Ok(()),
+        }
     }
 
-    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), String> {
-        self.record()
-            .map_or(Ok(()), |r| r.diagnostics(t, wall_ns, json))
+    fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), SinkError> {
+        match &mut self.record {
+            Some(recorder) => Ok(recorder.record_diagnostics(t, wall_ns, json)?),
+            None => Ok(()),
+        }
     }
 
-    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), String> {
+    fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), SinkError> {
         self.ledger.append(&entry.csv_row())
     }
 
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
         self.links_broken
             .as_mut()
             .map_or(Ok(()), |csv| csv.append(&links_broken_rows(t, step, pairs)))
     }
 
-    fn end_step(&mut self) -> Result<(), String> {
-        self.record().map_or(Ok(()), |r| r.end_step())
+    fn end_step(&mut self) -> Result<(), SinkError> {
+        match &mut self.record {
+            Some(recorder) => Ok(recorder.end_step()?),
+            None => Ok(()),
+        }
     }
 }

@@ -141,7 +141,7 @@ fn node_loop<N: NodeModel + ?Sized>(
                     }
                     other => other?,
                 }
-                let t_end = plan.t + plan.dt;
+                let t_end = plan.t_end();
                 node.record_probes(t_end);
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
                     node.write_output(k + first_planned, t_end, out)

@@ -155,6 +155,17 @@ pub struct StepPlan {
     pub predicted: bool,
 }
 
+impl StepPlan {
+    /// Time at the end of the step, `t + dt` \[s\]: where the nodes' outputs, probes and
+    /// totals of the step stand.
+    ///
+    /// NOTE: the coupler's own clock lands on the output time itself at the end of an output
+    /// step (`coupler-node`'s `dt::Agreed::end`); the two can differ in the last bit.
+    pub fn t_end(&self) -> f64 {
+        self.t + self.dt
+    }
+}
+
 /// Pressure loads the fluid applies to the solid, one entry per particle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct InterfaceLoads {

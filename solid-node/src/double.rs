@@ -249,7 +249,7 @@ impl SolidModel for PrescribedDouble {
             }
             None => vec![0.0; dim],
         };
-        let t1 = plan.t + plan.dt;
+        let t1 = plan.t_end();
         let (x1, v_half) = match self.motion().clone() {
             PrescribedMotion::Fixed => (self.x0.clone(), vec![0.0; dim]),
             PrescribedMotion::Velocity(v) => (

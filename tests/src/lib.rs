@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use coupler_node::driver::{self, Abort, DriverConfig, RecordSink, Summary};
+use coupler_node::driver::{self, Abort, DriverConfig, RecordSink, SinkError, Summary};
 use coupler_node::scheme::{Coupler, CouplerConfig};
 use protocol::scene::Scene;
 use protocol::transport::{Link, MemoryTransport};
@@ -28,24 +28,24 @@ impl RecordSink for MemorySink {
         _: f64,
         _: u64,
         f: &[u8],
-    ) -> Result<(), String> {
+    ) -> Result<(), SinkError> {
         self.frames.push((from, to, f.to_vec()));
         Ok(())
     }
-    fn checkpoint(&mut self, node: NodeKind, _: f64, _: u64, f: &[u8]) -> Result<(), String> {
+    fn checkpoint(&mut self, node: NodeKind, _: f64, _: u64, f: &[u8]) -> Result<(), SinkError> {
         self.frames.push((node, NodeKind::Coupler, f.to_vec()));
         Ok(())
     }
-    fn diagnostics(&mut self, _: f64, _: u64, json: &[u8]) -> Result<(), String> {
+    fn diagnostics(&mut self, _: f64, _: u64, json: &[u8]) -> Result<(), SinkError> {
         self.diagnostics.push(json.to_vec());
         Ok(())
     }
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), String> {
+    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
         self.links_broken
             .push_str(&coupler_node::sink::links_broken_rows(t, step, pairs));
         Ok(())
     }
-    fn end_step(&mut self) -> Result<(), String> {
+    fn end_step(&mut self) -> Result<(), SinkError> {
         Ok(())
     }
 }

@@ -5,7 +5,8 @@ use std::collections::BTreeMap;
 use protocol::mcap_read::{self, Dropped, End, Mode, Scan};
 use protocol::topics;
 
-use crate::record::{DIAGNOSTICS_TOPIC, RecordError};
+use crate::record::channels::DIAGNOSTICS_TOPIC;
+use crate::record::error::RecordError;
 
 /// One recorded message.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -7,8 +7,9 @@ use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions};
 use protocol::mcap_read::{self, Dropped, Mode};
 
+use crate::record::error::RecordError;
+use crate::record::reader::Recording;
 use crate::record::reader::{check_layout, recording};
-use crate::record::{RecordError, Recording};
 
 /// What [`recover`] made.
 #[derive(Clone, Debug)]

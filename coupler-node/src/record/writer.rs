@@ -15,12 +15,12 @@ use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::topics::{self, RECORD_LAYOUT};
 use protocol::wire::NodeKind;
 
-use crate::record::RecordError;
 use crate::record::channels::{
     DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, FRAME_MESSAGE_ENCODING, FRAME_SCHEMA_ENCODING,
     FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_schema_text, frame_topic,
     level_name,
 };
+use crate::record::error::RecordError;
 
 /// Largest uncompressed chunk [`Recorder`] holds in memory before it writes it (4 MiB).
 const CHUNK_SIZE: u64 = 4 << 20;

@@ -3,6 +3,8 @@
 
 use serde_json::Value;
 
+use crate::report::error::ReportError;
+
 /// A numeric CSV table (header line, then numbers).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Table {
@@ -14,11 +16,11 @@ pub struct Table {
 
 impl Table {
     /// Parses `text` (`what` names it in errors).
-    pub fn parse(text: &str, what: &str) -> Result<Table, String> {
+    pub fn parse(text: &str, what: &str) -> Result<Table, ReportError> {
         let mut lines = text.lines();
         let header: Vec<String> = lines
             .next()
-            .ok_or_else(|| format!("{what}: empty"))?
+            .ok_or_else(|| ReportError::Empty { what: what.into() })?
             .split(',')
             .map(|h| h.trim().to_string())
             .collect();
@@ -31,14 +33,18 @@ impl Table {
                 .split(',')
                 .map(|v| v.trim().parse::<f64>())
                 .collect::<Result<_, _>>()
-                .map_err(|e| format!("{what}: line {}: {e}", i + 2))?;
+                .map_err(|source| ReportError::Number {
+                    what: what.into(),
+                    line: i + 2,
+                    source,
+                })?;
             if row.len() != header.len() {
-                return Err(format!(
-                    "{what}: line {} has {} values, the header {}",
-                    i + 2,
-                    row.len(),
-                    header.len()
-                ));
+                return Err(ReportError::RowLength {
+                    what: what.into(),
+                    line: i + 2,
+                    values: row.len(),
+                    columns: header.len(),
+                });
             }
             rows.push(row);
         }
@@ -72,17 +78,20 @@ pub struct EnergyPoint {
 /// the record's `diagnostics` channel holds them).
 pub fn energy_history<'a>(
     diagnostics: impl IntoIterator<Item = &'a [u8]>,
-) -> Result<Vec<EnergyPoint>, String> {
+) -> Result<Vec<EnergyPoint>, ReportError> {
     let mut out = Vec::new();
     let mut exchange: f64 = 0.0;
     for (i, json) in diagnostics.into_iter().enumerate() {
-        let v: Value =
-            serde_json::from_slice(json).map_err(|e| format!("diagnostics object {i}: {e}"))?;
-        let num = |path: &[&str]| -> Result<f64, String> {
+        let v: Value = serde_json::from_slice(json)
+            .map_err(|source| ReportError::Json { index: i, source })?;
+        let num = |path: &[&str]| -> Result<f64, ReportError> {
             path.iter()
                 .try_fold(&v, |v, k| v.get(k))
                 .and_then(Value::as_f64)
-                .ok_or_else(|| format!("diagnostics object {i}: no number at {}", path.join(".")))
+                .ok_or_else(|| ReportError::Missing {
+                    index: i,
+                    path: path.join("."),
+                })
         };
         let t = num(&["t"])?;
         exchange = exchange
@@ -146,9 +155,13 @@ mod tests {
         let t = Table::parse("t,x\n0,1\n0.5,2e0\n", "probe").expect("parses");
         assert_eq!(t.pairs("t", "x"), Some(vec![(0.0, 1.0), (0.5, 2.0)]));
         assert_eq!(t.pairs("t", "y"), None);
-        let err = Table::parse("t,x\n0,1,2\n", "probe").expect_err("ragged");
+        let err = Table::parse("t,x\n0,1,2\n", "probe")
+            .expect_err("ragged")
+            .to_string();
         assert!(err.contains("line 2 has 3 values"), "{err}");
-        let err = Table::parse("t,x\n0,abc\n", "probe").expect_err("not a number");
+        let err = Table::parse("t,x\n0,abc\n", "probe")
+            .expect_err("not a number")
+            .to_string();
         assert!(err.contains("probe: line 2"), "{err}");
     }
 
@@ -174,7 +187,9 @@ mod tests {
             assert_eq!(*t, wt);
             assert!((e - we).abs() < 1e-15, "{e} vs {we}");
         }
-        let bad = energy_history([b"{\"t\": 1}".as_slice()]).expect_err("no ledger");
+        let bad = energy_history([b"{\"t\": 1}".as_slice()])
+            .expect_err("no ledger")
+            .to_string();
         assert!(bad.contains("ledger.work_fluid"), "{bad}");
     }
 

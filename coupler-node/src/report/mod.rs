@@ -20,6 +20,7 @@
 //! Every chart also writes its numbers as CSV beside it.
 
 pub mod data;
+pub mod error;
 pub mod plot;
 
 use std::path::{Path, PathBuf};
@@ -146,6 +147,26 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
             &mut written,
         )?;
     }
+    let particles = probe_figures(run, out, &mut written)?;
+    if particles.len() > 1 {
+        probes_together(&particles, out, &mut written)?;
+    }
+    if let Some(fluid) = scene.fluid.as_ref().filter(|_| scene.dim() == 2) {
+        field_figures(run, out, fluid, &mut written)?;
+    }
+    if polar {
+        polar_figures(run, out, &mut written)?;
+    }
+    Ok(written)
+}
+
+/// One chart per probe file of `run` (position, trajectory and stress of a particle, or the
+/// pressure of a fluid probe); returns the particle probes, by name.
+fn probe_figures(
+    run: &Path,
+    out: &Path,
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<Vec<(String, Table)>> {
     let mut particles: Vec<(String, Table)> = Vec::new();
     for (name, path) in numbered(run, "probe_", ".csv") {
         let t = read_table(&path)?;
@@ -162,7 +183,7 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
                 &format!("{name}: x of the particle"),
                 ("t [s]", "x [m]"),
                 &one(x),
-                &mut written,
+                written,
             )?;
             chart(
                 out,
@@ -170,7 +191,7 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
                 &format!("{name}: trajectory"),
                 ("x [m]", "y [m]"),
                 &one(xy),
-                &mut written,
+                written,
             )?;
             if let Some(s) = t.pairs("t", "sigma_n") {
                 chart(
@@ -179,7 +200,7 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
                     &format!("{name}: normal stress"),
                     ("t [s]", "sigma_n [Pa]"),
                     &one(s),
-                    &mut written,
+                    written,
                 )?;
             }
             particles.push((name, t));
@@ -193,102 +214,120 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
                     label: name.clone(),
                     points: p,
                 }],
-                &mut written,
+                written,
             )?;
         }
     }
-    if particles.len() > 1 {
-        let displacement: Vec<Series> = particles
-            .iter()
-            .filter_map(|(name, t)| {
-                let x = t.pairs("t", "x")?;
-                let x0 = x.first()?.1;
-                Some(Series {
-                    label: name.clone(),
-                    points: x.iter().map(|(t, x)| (*t, x - x0)).collect(),
-                })
+    Ok(particles)
+}
+
+/// The particle probes on one chart each for displacement and stress.
+fn probes_together(
+    particles: &[(String, Table)],
+    out: &Path,
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let displacement: Vec<Series> = particles
+        .iter()
+        .filter_map(|(name, t)| {
+            let x = t.pairs("t", "x")?;
+            let x0 = x.first()?.1;
+            Some(Series {
+                label: name.clone(),
+                points: x.iter().map(|(t, x)| (*t, x - x0)).collect(),
             })
-            .collect();
+        })
+        .collect();
+    chart(
+        out,
+        "probes_displacement",
+        "x displacement of the probed particles",
+        ("t [s]", "x - x(0) [m]"),
+        &displacement,
+        written,
+    )?;
+    let stress: Vec<Series> = particles
+        .iter()
+        .filter_map(|(name, t)| {
+            Some(Series {
+                label: name.clone(),
+                points: t.pairs("t", "sigma_n")?,
+            })
+        })
+        .collect();
+    if !stress.is_empty() {
         chart(
             out,
-            "probes_displacement",
-            "x displacement of the probed particles",
-            ("t [s]", "x - x(0) [m]"),
-            &displacement,
-            &mut written,
+            "probes_sigma",
+            "normal stress of the probed particles",
+            ("t [s]", "sigma_n [Pa]"),
+            &stress,
+            written,
         )?;
-        let stress: Vec<Series> = particles
-            .iter()
-            .filter_map(|(name, t)| {
-                Some(Series {
-                    label: name.clone(),
-                    points: t.pairs("t", "sigma_n")?,
-                })
-            })
-            .collect();
-        if !stress.is_empty() {
+    }
+    Ok(())
+}
+
+/// The density and pressure fields of a 2-D fluid's outputs as pictures, with the solid's
+/// surface of the same output drawn over them.
+fn field_figures(
+    run: &Path,
+    out: &Path,
+    fluid: &protocol::scene::FluidConfig,
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let grid = |cells: Vec<(f64, f64, f64)>| Field {
+        cells,
+        lower: [fluid.lower[0], fluid.lower[1]],
+        upper: [fluid.upper[0], fluid.upper[1]],
+        n: [fluid.cells[0] as usize, fluid.cells[1] as usize],
+    };
+    for (k, path) in numbered(run, "fluid_", ".csv") {
+        let t = read_table(&path)?;
+        let surface = run.join(format!("surface_{k}.csv"));
+        let segments: Vec<[f64; 4]> = if surface.exists() {
+            let s = read_table(&surface)?;
+            match ["x0", "y0", "x1", "y1"].map(|c| s.column(c)) {
+                [Some(a), Some(b), Some(c), Some(d)] => {
+                    s.rows.iter().map(|r| [r[a], r[b], r[c], r[d]]).collect()
+                }
+                _ => Vec::new(),
+            }
+        } else {
+            Vec::new()
+        };
+        for var in ["rho", "p"] {
+            let (Some(x), Some(y), Some(v)) = (t.column("x"), t.column("y"), t.column(var)) else {
+                continue;
+            };
+            let png = out.join(format!("field_{k}_{var}.png"));
+            let cells = t.rows.iter().map(|r| (r[x], r[y], r[v])).collect();
+            field_png(&png, &grid(cells), &segments, 1000).map_err(|e| anyhow::anyhow!(e))?;
+            written.push(png);
+        }
+    }
+    Ok(())
+}
+
+/// The normal stress of each solid output against the azimuthal angle (`--polar`).
+fn polar_figures(run: &Path, out: &Path, written: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    for (k, path) in numbered(run, "solid_", ".csv") {
+        let t = read_table(&path)?;
+        if let Some(points) = stress_by_angle(&t) {
             chart(
                 out,
-                "probes_sigma",
-                "normal stress of the probed particles",
-                ("t [s]", "sigma_n [Pa]"),
-                &stress,
-                &mut written,
+                &format!("solid_{k}_sigma_theta"),
+                &format!("output {k}: normal stress against the azimuthal angle"),
+                ("theta [deg]", "sigma_n [Pa]"),
+                &[Series {
+                    label: format!("output {k}"),
+                    points,
+                }],
+                written,
             )?;
         }
     }
-    if let Some(fluid) = scene.fluid.as_ref().filter(|_| scene.dim() == 2) {
-        let grid = |cells: Vec<(f64, f64, f64)>| Field {
-            cells,
-            lower: [fluid.lower[0], fluid.lower[1]],
-            upper: [fluid.upper[0], fluid.upper[1]],
-            n: [fluid.cells[0] as usize, fluid.cells[1] as usize],
-        };
-        for (k, path) in numbered(run, "fluid_", ".csv") {
-            let t = read_table(&path)?;
-            let surface = run.join(format!("surface_{k}.csv"));
-            let segments: Vec<[f64; 4]> = if surface.exists() {
-                let s = read_table(&surface)?;
-                match ["x0", "y0", "x1", "y1"].map(|c| s.column(c)) {
-                    [Some(a), Some(b), Some(c), Some(d)] => {
-                        s.rows.iter().map(|r| [r[a], r[b], r[c], r[d]]).collect()
-                    }
-                    _ => Vec::new(),
-                }
-            } else {
-                Vec::new()
-            };
-            for var in ["rho", "p"] {
-                let (Some(x), Some(y), Some(v)) = (t.column("x"), t.column("y"), t.column(var))
-                else {
-                    continue;
-                };
-                let png = out.join(format!("field_{k}_{var}.png"));
-                let cells = t.rows.iter().map(|r| (r[x], r[y], r[v])).collect();
-                field_png(&png, &grid(cells), &segments, 1000).map_err(|e| anyhow::anyhow!(e))?;
-                written.push(png);
-            }
-        }
-    }
-    if polar {
-        for (k, path) in numbered(run, "solid_", ".csv") {
-            let t = read_table(&path)?;
-            if let Some(points) = stress_by_angle(&t) {
-                chart(
-                    out,
-                    &format!("solid_{k}_sigma_theta"),
-                    &format!("output {k}: normal stress against the azimuthal angle"),
-                    ("theta [deg]", "sigma_n [Pa]"),
-                    &[Series {
-                        label: format!("output {k}"),
-                        points,
-                    }],
-                    &mut written,
-                )?;
-            }
-        }
-    }
-    Ok(written)
+    Ok(())
 }
 
 /// `report energy`: the energy errors of `runs`, each times its scale, on one chart `out`.

@@ -5,6 +5,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use crate::report::error::ReportError;
+
 /// A named curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
@@ -48,7 +50,7 @@ pub fn line_chart(
     x_desc: &str,
     y_desc: &str,
     series: &[Series],
-) -> Result<(), String> {
+) -> Result<(), ReportError> {
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
         let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
         root.fill(&WHITE)?;
@@ -85,7 +87,10 @@ pub fn line_chart(
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| format!("drawing {}: {e}", path.display()))
+    draw().map_err(|e| ReportError::Draw {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
 }
 
 /// A cell-centred 2-D field: centres and values (cells missing from the list are drawn grey).
@@ -108,10 +113,13 @@ pub fn field_png(
     field: &Field,
     segments: &[[f64; 4]],
     width: u32,
-) -> Result<(), String> {
+) -> Result<(), ReportError> {
     let [nx, ny] = field.n;
     if nx == 0 || ny == 0 {
-        return Err(format!("drawing {}: an empty grid", path.display()));
+        return Err(ReportError::Draw {
+            path: path.to_path_buf(),
+            message: "an empty grid".into(),
+        });
     }
     let px = (width as usize / nx).max(1);
     let (w, h) = ((nx * px) as u32, (ny * px) as u32);
@@ -148,5 +156,8 @@ pub fn field_png(
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| format!("drawing {}: {e}", path.display()))
+    draw().map_err(|e| ReportError::Draw {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
 }

@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::iqn::{IqnColumns, IqnIls};
 
-use super::CouplerConfig;
+use crate::scheme::config::CouplerConfig;
+use crate::scheme::error::RestoreError;
 
 /// What the acceleration carries between steps.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -216,16 +217,11 @@ impl Acceleration {
     }
 
     /// Takes back what [`Acceleration::state`] gave.
-    pub(super) fn restore(&mut self, state: &AccelerationState) -> Result<(), String> {
+    pub(super) fn restore(&mut self, state: &AccelerationState) -> Result<(), RestoreError> {
         match (self.iqn.as_mut(), &state.iqn) {
             (Some(iqn), Some(columns)) => iqn.restore(columns),
             (None, None) => {}
-            _ => {
-                return Err(
-                    "the checkpoint's relaxation is not the scene's (IQN-ILS columns present in one only)"
-                        .into(),
-                );
-            }
+            _ => return Err(RestoreError::Relaxation),
         }
         self.accepted = state.accepted.clone();
         self.previous = state.previous.clone();

@@ -1,7 +1,15 @@
 //! The handshake without shared memory: fake nodes answer the coupler's actions.
 
+use std::collections::VecDeque;
+
+use protocol::PROTOCOL_VERSION;
+use protocol::scene::{Predictor, Relaxation};
+use protocol::wire::{
+    ConservedTotals, Decision, DtProposal, Hello, InterfaceLoads, Message, NodeKind, Scheme,
+    SolidState, Stamp, WetSurface,
+};
+
 use super::*;
-use protocol::wire::{DtProposal, Hello, InterfaceLoads, WetSurface};
 
 /// A 2-D single-particle world: the fluid's load is `-c x_surface`, the solid's trial position is
 /// `a + d n + b F` at step `n`, so the fixed point is `x*_n = (a + d n) / (1 + b c)` and plain

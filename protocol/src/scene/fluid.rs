@@ -285,8 +285,20 @@ impl FluidConfig {
         ghost + 3
     }
 
-    /// The `[fluid]` rules.
+    /// The `[fluid]` rules, in the order their errors are reported.
     pub(super) fn validate(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        self.validate_grid(c)?;
+        self.validate_numerics(c)?;
+        self.validate_ranks(c)?;
+        self.validate_characteristic(c)?;
+        self.validate_profile(c)?;
+        self.validate_init(c)?;
+        self.validate_pressure(c)?;
+        Ok(())
+    }
+
+    /// The node, the box, the cells and the boundary kinds.
+    fn validate_grid(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let fluid = self;
         let dim = c.dim;
         check_node_impl("fluid.node", &fluid.node, &["real", "pressure"], c.file)?;
@@ -335,6 +347,12 @@ impl FluidConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The gas, the Courant number, the flux order and the vacuum thresholds.
+    fn validate_numerics(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
         c.positive("fluid.gamma", fluid.gamma - 1.0)
             .map_err(|_| c.invalid("fluid.gamma", "a number > 1", fluid.gamma.to_string()))?;
         if !(fluid.cfl > 0.0 && fluid.cfl <= 1.0) {
@@ -349,6 +367,13 @@ impl FluidConfig {
         }
         c.positive("fluid.vacuum.rho", fluid.vacuum.rho)?;
         c.positive("fluid.vacuum.p", fluid.vacuum.p)?;
+        Ok(())
+    }
+
+    /// The MPI ranks: a real fluid with enough planes of the last axis for each.
+    fn validate_ranks(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
+        let dim = c.dim;
         if !(1..=4096).contains(&fluid.ranks) {
             return Err(c.invalid("fluid.ranks", "1 to 4096", fluid.ranks.to_string()));
         }
@@ -374,6 +399,12 @@ impl FluidConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The `[fluid.characteristic]` table, with a characteristic side to apply to.
+    fn validate_characteristic(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
         if let Some(ch) = &fluid.characteristic {
             let dim = fluid.lower.len().min(3);
             let any = (0..dim).any(|a| fluid.boundary.axis(a).contains(&Boundary::Characteristic));
@@ -401,6 +432,13 @@ impl FluidConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The analytic initial profile.
+    fn validate_profile(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
+        let dim = c.dim;
         match &fluid.profile {
             Some(Profile::DensityWave {
                 amplitude,
@@ -435,6 +473,12 @@ impl FluidConfig {
             }
             None => {}
         }
+        Ok(())
+    }
+
+    /// The `[[fluid.init]]` entries: each valid and in the domain, and every cell covered.
+    fn validate_init(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
         if fluid.node == "real" && fluid.init.is_empty() && fluid.profile.is_none() {
             return Err(c.invalid(
                 "fluid.init",
@@ -480,6 +524,12 @@ impl FluidConfig {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The `[fluid.pressure]` table of the pressure double.
+    fn validate_pressure(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let fluid = self;
         if let Some(pressure) = &fluid.pressure {
             if !pressure.value.is_finite() {
                 return Err(c.invalid(

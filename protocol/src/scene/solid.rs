@@ -335,8 +335,18 @@ pub enum PrescribedMotion {
 impl SolidConfig {
     /// The `[solid]` rules.
     pub(super) fn validate(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        self.validate_material(c)?;
+        self.validate_options(c)?;
+        self.validate_bodies(c)?;
+        self.validate_constraints(c)?;
+        self.validate_init(c)?;
+        self.validate_prescribed(c)?;
+        Ok(())
+    }
+
+    /// The node and, for the real solid, its material and at least one body.
+    fn validate_material(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let solid = self;
-        let dim = c.dim;
         check_node_impl("solid.node", &solid.node, &["real", "prescribed"], c.file)?;
         if solid.node == "real" {
             for (path, v) in [
@@ -372,6 +382,13 @@ impl SolidConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Face inertia, fracture, contact and gravity.
+    fn validate_options(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let solid = self;
+        let dim = c.dim;
         if solid.face_inertia == Some(FaceInertia::Unweighted) && dim != 3 {
             return Err(c.invalid(
                 "solid.face_inertia",
@@ -390,6 +407,13 @@ impl SolidConfig {
         if let Some(g) = &solid.gravity {
             c.check_len("solid.gravity", g)?;
         }
+        Ok(())
+    }
+
+    /// Each `[[solid.bodies]]` entry: its shape, divisions and links.
+    fn validate_bodies(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let solid = self;
+        let dim = c.dim;
         for (k, body) in solid.bodies.iter().enumerate() {
             let base = format!("solid.bodies[{k}]");
             match &body.shape {
@@ -464,6 +488,12 @@ impl SolidConfig {
                 })?;
             }
         }
+        Ok(())
+    }
+
+    /// Each `[[solid.constraints]]` entry: its region and motion.
+    fn validate_constraints(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let solid = self;
         for (k, constraint) in solid.constraints.iter().enumerate() {
             for (name, v) in constraint.region.vectors() {
                 c.check_len(&format!("solid.constraints[{k}].region.{name}"), v)?;
@@ -477,6 +507,13 @@ impl SolidConfig {
                 c.check_len(&format!("solid.constraints[{k}].motion.velocity"), v)?;
             }
         }
+        Ok(())
+    }
+
+    /// Each `[[solid.init]]` entry: its region and velocities.
+    fn validate_init(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let solid = self;
+        let dim = c.dim;
         for (k, init) in solid.init.iter().enumerate() {
             let base = format!("solid.init[{k}]");
             for (name, v) in init.region.vectors() {
@@ -507,6 +544,13 @@ impl SolidConfig {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The `[solid.prescribed]` table of the prescribed double.
+    fn validate_prescribed(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let solid = self;
+        let dim = c.dim;
         if let Some(p) = &solid.prescribed {
             c.check_len("solid.prescribed.box.center", &p.r#box.center)?;
             c.check_len("solid.prescribed.box.size", &p.r#box.size)?;
