@@ -20,17 +20,8 @@ struct Allowed {
     reason: &'static str,
 }
 
-const BROKEN_ELSEWHERE: &str = "issue 34: being broken on another branch";
-
 /// The circles that may stand. Remove an entry once its circle is gone (the test says which).
-const ALLOWED: &[Allowed] = &[Allowed {
-    files: &[
-        "coupler-node/src/coupler_replay.rs",
-        "coupler-node/src/launch.rs",
-        "coupler-node/src/replay.rs",
-    ],
-    reason: BROKEN_ELSEWHERE,
-}];
+const ALLOWED: &[Allowed] = &[];
 
 /// The source folders whose files form one module tree: (crate root file, folder).
 const CRATES: &[(&str, &str)] = &[
