@@ -1,8 +1,9 @@
 //! Time-step agreement (DESIGN §3 step 1): the minimum of the nodes' proposals, the scene's cap,
 //! and what is left to the next output time.
 //!
-//! The step travels as one named type on each leg: a node's `DtProposal` on the wire becomes
-//! a [`Proposal`] in the coupler, [`agree`] turns the proposals into an [`Agreed`] step, the
+//! The step travels as one named type on each leg: a node's model gives its
+//! `protocol::session::StepLimit`, which goes on the wire as a `DtProposal` and becomes a
+//! [`Proposal`] in the coupler, [`agree`] turns the proposals into an [`Agreed`] step, the
 //! coupler keeps that until the step is done and announces it as a `StepPlan`. The end of the
 //! step is [`Agreed::end`] on the coupler's side and `StepPlan::t_end` on the nodes'.
 

@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use protocol::scene::PressureField;
-use protocol::session::NodeModel;
+use protocol::session::{NodeModel, StepLimit};
 use protocol::wire::{ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::Error;
@@ -137,8 +137,8 @@ impl NodeModel for PressureDouble {
         "pressure"
     }
 
-    fn dt_max(&self) -> (f64, String) {
-        (f64::INFINITY, "none".into())
+    fn dt_max(&self) -> StepLimit {
+        StepLimit::none()
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {

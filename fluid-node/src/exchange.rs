@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
-use protocol::session::NodeModel;
+use protocol::session::{NodeModel, StepLimit};
 use protocol::vtk::Series;
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, n_rot,
@@ -144,24 +144,27 @@ impl NodeModel for RealFluid {
         "real"
     }
 
-    fn dt_max(&self) -> (f64, String) {
+    fn dt_max(&self) -> StepLimit {
         let cfl = self.solver.max_dt();
         match &self.embedded {
-            Some(e) if e.one_cell_dt() < cfl => (e.one_cell_dt(), "one-cell".into()),
+            Some(e) if e.one_cell_dt() < cfl => StepLimit {
+                dt_max: e.one_cell_dt(),
+                limiter: "one-cell".into(),
+            },
             _ => {
                 // The cell that limits the step, so that a collapsing step names it.
                 let grid = self.solver.global_grid();
                 let ijk = grid.ijk(self.solver.limiting_cell());
                 let centre = grid.cell_center(ijk);
                 let dim = grid.dim;
-                (
-                    cfl,
-                    format!(
+                StepLimit {
+                    dt_max: cfl,
+                    limiter: format!(
                         "cfl at cell {:?} (centre {:?})",
                         &ijk[..dim],
                         &centre[..dim]
                     ),
-                )
+                }
             }
         }
     }

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use protocol::session::{NodeModel, fail, run_node, unexpected};
+use protocol::session::{NodeModel, StepLimit, fail, run_node, unexpected};
 use protocol::transport::Link;
 use protocol::wire::{ConservedTotals, Decision, Message, NodeKind, SolidState, Stamp, StepPlan};
 
@@ -24,7 +24,7 @@ impl NodeModel for FluidSide<'_> {
         self.model.implementation()
     }
 
-    fn dt_max(&self) -> (f64, String) {
+    fn dt_max(&self) -> StepLimit {
         self.model.dt_max()
     }
 

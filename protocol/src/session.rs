@@ -20,7 +20,7 @@ pub trait NodeModel {
     /// `"real"` or the double's name, sent in the hello.
     fn implementation(&self) -> &'static str;
     /// Largest stable step and what limits it.
-    fn dt_max(&self) -> (f64, String);
+    fn dt_max(&self) -> StepLimit;
     /// Conserved totals after the last step.
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals;
     /// Node-private state bytes.
@@ -235,16 +235,33 @@ impl NodeError {
     }
 }
 
+/// A node's largest stable step and what limits it: the proposal it sends for a step
+/// ([`DtProposal`]), and what the coupler's agreement (`coupler-node`'s `dt::Proposal`) names.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepLimit {
+    /// Largest stable time step \[s\]; `f64::INFINITY` when the node sets no limit.
+    pub dt_max: f64,
+    /// What limits it (for example `"cfl at cell [3, 4]"`, `"one-cell"`), for the diagnostics
+    /// and the report of a step that collapses.
+    pub limiter: String,
+}
+
+impl StepLimit {
+    /// No limit from this node.
+    pub fn none() -> StepLimit {
+        StepLimit {
+            dt_max: f64::INFINITY,
+            limiter: "none".into(),
+        }
+    }
+}
+
 /// Sends this node's time-step proposal for `step`.
-pub fn propose(
-    link: &mut Link<'_>,
-    step: u64,
-    (dt_max, limiter): (f64, String),
-) -> Result<(), NodeError> {
+pub fn propose(link: &mut Link<'_>, step: u64, limit: StepLimit) -> Result<(), NodeError> {
     link.send(&Message::DtProposal(DtProposal {
         stamp: Stamp::step(step),
-        dt_max,
-        limiter,
+        dt_max: limit.dt_max,
+        limiter: limit.limiter,
     }))?;
     Ok(())
 }

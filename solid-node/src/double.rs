@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use protocol::scene::{PrescribedConfig, PrescribedMotion};
-use protocol::session::NodeModel;
+use protocol::session::{NodeModel, StepLimit};
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
 };
@@ -140,18 +140,19 @@ impl NodeModel for PrescribedDouble {
         "prescribed"
     }
 
-    fn dt_max(&self) -> (f64, String) {
+    fn dt_max(&self) -> StepLimit {
         match self.motion() {
             // NOTE: velocity Verlet is stable for ω dt < 2; a 40th of the period keeps its
             // energy error near (ω dt)²/4 ≈ 6e-3 of the oscillator's energy.
-            PrescribedMotion::Spring { mass, stiffness } => (
-                2.0 * std::f64::consts::PI * (mass / stiffness).sqrt() / 40.0,
-                "spring-period".into(),
-            ),
-            PrescribedMotion::Sinusoid { frequency, .. } => {
-                (0.02 / frequency, "sinusoid-period".into())
-            }
-            _ => (f64::INFINITY, "none".into()),
+            PrescribedMotion::Spring { mass, stiffness } => StepLimit {
+                dt_max: 2.0 * std::f64::consts::PI * (mass / stiffness).sqrt() / 40.0,
+                limiter: "spring-period".into(),
+            },
+            PrescribedMotion::Sinusoid { frequency, .. } => StepLimit {
+                dt_max: 0.02 / frequency,
+                limiter: "sinusoid-period".into(),
+            },
+            _ => StepLimit::none(),
         }
     }
 

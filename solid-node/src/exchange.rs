@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::Path;
 
 use protocol::scene::{OutputFormat, Scene};
-use protocol::session::NodeModel;
+use protocol::session::{NodeModel, StepLimit};
 use protocol::vtk::Series;
 use protocol::wire::{
     ConservedTotals, InterfaceLoads, NodeKind, SolidState, Stamp, StepPlan, WetSurface,
@@ -130,7 +130,7 @@ impl NodeModel for RealSolid {
         "real"
     }
 
-    fn dt_max(&self) -> (f64, String) {
+    fn dt_max(&self) -> StepLimit {
         let dt = self.solid.max_dt(self.displacement_cap);
         // Which particle limits the step, so that a collapsing step names it.
         let (elastic, particle) = self.solid.elastic_dt_limit();
@@ -139,7 +139,10 @@ impl NodeModel for RealSolid {
         } else {
             "dem motion bound (a particle moves or turns fast)".to_string()
         };
-        (dt, why)
+        StepLimit {
+            dt_max: dt,
+            limiter: why,
+        }
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {

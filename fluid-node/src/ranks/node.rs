@@ -11,7 +11,7 @@
 
 use std::path::{Path, PathBuf};
 
-use protocol::session::NodeModel;
+use protocol::session::{NodeModel, StepLimit};
 use protocol::wire::{ConservedTotals, InterfaceLoads, SolidState, Stamp, StepPlan};
 
 use crate::Error;
@@ -73,7 +73,7 @@ impl NodeModel for Leader<'_> {
         self.inner.implementation()
     }
 
-    fn dt_max(&self) -> (f64, String) {
+    fn dt_max(&self) -> StepLimit {
         self.announce(&Call::DtMax);
         self.inner.dt_max()
     }

@@ -21,7 +21,10 @@ const MAX_FN_LINES: usize = 150;
 
 /// What an allow-list entry lets exceed its limit.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[allow(dead_code, reason = "the allow-list is empty since issue 34 split the last long items")]
+#[allow(
+    dead_code,
+    reason = "the allow-list is empty since issue 34 split the last long items"
+)]
 enum Item {
     /// The whole file (over [`MAX_FILE_LINES`]).
     File,
