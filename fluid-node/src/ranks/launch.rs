@@ -17,7 +17,7 @@ const SCENE: &[u8] = b"scene\n";
 
 /// Runs this process's rank of a fluid of `ranks` ranks (`fluid.ranks` of the scene).
 pub fn serve_ranks(opts: &ServeOptions, ranks: u32) -> anyhow::Result<()> {
-    let (_universe, comm) = MpiComm::init().map_err(anyhow::Error::msg)?;
+    let (_universe, comm) = MpiComm::init()?;
     let calls = comm.duplicate();
     let rank = comm.rank();
     anyhow::ensure!(

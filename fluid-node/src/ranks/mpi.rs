@@ -29,6 +29,17 @@ pub struct MpiComm {
     clock: Arc<HaloClock>,
 }
 
+/// Why MPI could not be set up for the fluid.
+#[derive(Debug, thiserror::Error)]
+pub enum MpiInitError {
+    /// `MPI_Init` ran before in this process.
+    #[error("MPI was already initialised")]
+    AlreadyInitialised,
+    /// The library's thread level (its name) is below `Serialized`.
+    #[error("the MPI library gives thread level {0}, the fluid needs Serialized")]
+    ThreadLevel(String),
+}
+
 // SAFETY: the communicator handle is only used through `&self` by one thread at a time (the
 // node loop owns the solver that owns this `Comm`; `MpiComm` is not `Sync`), and MPI is
 // initialised with at least `Threading::Serialized` (checked in `MpiComm::init`), which allows
@@ -38,13 +49,11 @@ unsafe impl Send for MpiComm {}
 impl MpiComm {
     /// Initialises MPI (once per process) and returns the universe (MPI is finalised when it
     /// drops: keep it until the end of `main`) and this rank's communicator.
-    pub fn init() -> Result<(Universe, MpiComm), String> {
+    pub fn init() -> Result<(Universe, MpiComm), MpiInitError> {
         let (universe, threading) = mpi::initialize_with_threading(mpi::Threading::Serialized)
-            .ok_or("MPI was already initialised")?;
+            .ok_or(MpiInitError::AlreadyInitialised)?;
         if threading < mpi::Threading::Serialized {
-            return Err(format!(
-                "the MPI library gives thread level {threading:?}, the fluid needs Serialized"
-            ));
+            return Err(MpiInitError::ThreadLevel(format!("{threading:?}")));
         }
         let world = universe.world();
         Ok((
