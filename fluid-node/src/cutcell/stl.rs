@@ -66,7 +66,7 @@ pub enum SurfaceFileError {
     /// Neither a binary STL of the right size nor text.
     #[error("not a binary STL (size {size} != 84 + 50 × count) and not UTF-8 text")]
     NotStl {
-        /// The file's size [bytes].
+        /// The file's size \[bytes\].
         size: usize,
     },
     /// Text without the ASCII STL header.
