@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+pub mod corpus;
+
 use coupler_node::driver::{self, Abort, DriverConfig, RecordSink, SinkError, Summary};
 use coupler_node::scheme::{Coupler, CouplerConfig};
 use protocol::scene::Scene;
