@@ -4,7 +4,9 @@
 //! their reason. `CORPUS_OUT` (default a folder under the system's temporary folder) holds the
 //! cases' outputs.
 //!
-//! `cargo bench -p cosim-tests --bench corpus` (env `CORPUS_N=2000` for the long corpus).
+//! `cargo bench -p cosim-tests --bench corpus` (env `CORPUS_N=2000` for the long corpus;
+//! `CORPUS_PRINT=SEED` prints that case's scene instead). A failing case's folder keeps its
+//! `scene.toml`.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -20,6 +22,12 @@ fn env_u64(name: &str, default: u64) -> u64 {
 }
 
 fn main() {
+    if let Ok(seed) = std::env::var("CORPUS_PRINT") {
+        // One case's scene, to run it with `coupler-node run`.
+        let seed = seed.parse().expect("CORPUS_PRINT=SEED");
+        print!("{}", corpus::generate(seed).toml);
+        return;
+    }
     let n = env_u64("CORPUS_N", 200);
     let from = env_u64("CORPUS_FROM", 0);
     let out = std::env::var_os("CORPUS_OUT")
@@ -49,6 +57,7 @@ fn main() {
             .entry(category)
             .or_default() += 1;
         if outcome != Outcome::Ok {
+            let _ = std::fs::write(dir.join("scene.toml"), &case.toml);
             failures.push((
                 seed,
                 format!("{kind} Mach {:.2} {:?}", case.mach, case.kept),
