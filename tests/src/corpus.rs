@@ -11,7 +11,8 @@
 //! - the rest state kept where nothing moves (gas at rest, a body at rest, no fracture): the
 //!   fluid's velocity and pressure deviation at the end ≤ 1e-12 of the sound speed and pressure;
 //! - the free stream kept where the body moves with the flow (a periodic box, one rigid
-//!   particle carried at the flow's velocity): the same bound on the deviation from the stream;
+//!   particle carried at the flow's velocity, the semi-implicit scheme): the same bound on the
+//!   deviation from the stream;
 //! - the energy error against the energy exchanged bounded (≤ [`ENERGY_BOUND`]).
 
 use std::fmt::Write as _;
@@ -406,7 +407,9 @@ fn scene_text(
         "name = \"corpus-{seed}\"\n\n[run]\nt_end = {:?}\nmax_steps = {}\ndt_max = {dt:?}\nscheme = \"{}\"\nrecord = \"diagnostics\"\nmass_tolerance = 1e-6\n",
         dt * STEPS as f64,
         4 * STEPS,
-        if rng.chance(0.5) {
+        // NOTE: only the semi-implicit scheme keeps a stream past a moving body (paper 003
+        // §4.2): the explicit one takes the solid flux on `F^n`, the apertures on `F^{n+1}`.
+        if kept == Kept::Stream || rng.chance(0.5) {
             "semi-implicit"
         } else {
             "explicit"
