@@ -241,7 +241,7 @@ impl NodeError {
 pub struct StepLimit {
     /// Largest stable time step \[s\]; `f64::INFINITY` when the node sets no limit.
     pub dt_max: f64,
-    /// What limits it (for example `"cfl at cell [3, 4]"`, `"one-cell"`), for the diagnostics
+    /// What limits it (for example `"cfl at cell [3, 4]"`, `"ghost states beside the moving body ..."`), for the diagnostics
     /// and the report of a step that collapses.
     pub limiter: String,
 }

@@ -132,7 +132,7 @@ pub struct DtProposal {
     pub stamp: Stamp,
     /// Largest stable time step \[s\]; `f64::INFINITY` when the node sets no limit.
     pub dt_max: f64,
-    /// What limits it (for example `"cfl"`, `"elastic"`, `"one-cell"`), for the diagnostics.
+    /// What limits it (for example `"cfl"`, `"elastic"`, `"ghost states beside the moving body ..."`), for the diagnostics.
     pub limiter: String,
 }
 

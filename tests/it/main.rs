@@ -1,5 +1,6 @@
 //! End-to-end and cross-crate tests (one test binary).
 
+mod corpus;
 mod coupled;
 mod doubles;
 mod e2e;
