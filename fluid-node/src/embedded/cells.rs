@@ -218,3 +218,8 @@ pub(super) fn part_of(
     }
     part
 }
+
+/// The largest `|x|` of `values` (0 for none); exact in any order.
+pub(super) fn max_abs(values: &[f64]) -> f64 {
+    values.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}

@@ -5,7 +5,7 @@
 //! rings of free cells. Every sum over a group's members is independent of their order.
 
 use super::cells::{
-    CellKind, face_neighbours, fluid_part, offsets, oriented, part_of, shifted, sum_parts,
+    CellKind, face_neighbours, fluid_part, max_abs, offsets, oriented, part_of, shifted, sum_parts,
 };
 use super::state::Config;
 use super::{
@@ -103,7 +103,8 @@ impl Embedded {
         solver: &mut FluidSolver,
         report: &mut CorrectReport,
     ) -> Result<Mixed, EmbeddedError> {
-        let sources = self.mix_sources(report);
+        let near_scale = max_abs(&self.near.saved);
+        let sources = self.mix_sources(report, near_scale);
         let normal = self.wall_normals();
         let grid = &self.config.grid;
         let nvar = grid.dim + 2;
@@ -120,7 +121,7 @@ impl Embedded {
             sources: &sources,
             normal,
             span: offsets(grid.dim, 1),
-            near_scale: self.near.saved.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+            near_scale,
             nvar,
         };
         let kind = &mut self.scratch.kind;
@@ -167,13 +168,12 @@ impl Embedded {
     /// The near slots to mix, ascending: covered cells left with content, cells the solid
     /// uncovers, small cells and cells whose update is not physical. A cell of a crack that
     /// nothing has reached yet is left vacuum.
-    fn mix_sources(&mut self, report: &mut CorrectReport) -> Vec<usize> {
+    fn mix_sources(&mut self, report: &mut CorrectReport, near_scale: f64) -> Vec<usize> {
         let nvar = self.config.grid.dim + 2;
         let new_lambda = &self.scratch.trial.solid_fraction;
         let old_lambda = &self.state.geom.solid_fraction;
         let alpha = |c: usize| fluid_part(new_lambda[c]);
         let saved = &self.near.saved;
-        let near_scale = saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let content = &mut self.scratch.content;
         let mut sources: Vec<usize> = Vec::new();
         for (k, &c) in self.near.cells.iter().enumerate() {
@@ -192,13 +192,9 @@ impl Embedded {
                 // below 1e-13 of its state's scale (or of the near cells', for a cell whose
                 // `U^n` is vacuum) it is dropped (a covered cell beside a wall may have no fluid
                 // to mix into). What is dropped is reported.
-                let scale = saved[k * nvar..(k + 1) * nvar]
-                    .iter()
-                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                let scale = max_abs(&saved[k * nvar..(k + 1) * nvar]);
                 let scale = if scale > 0.0 { scale } else { near_scale };
-                let residue = content[k][..nvar]
-                    .iter()
-                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                let residue = max_abs(&content[k][..nvar]);
                 if residue <= 1e-13 * scale {
                     report.dropped = report.dropped.max(residue);
                     continue;
@@ -214,9 +210,7 @@ impl Embedded {
             // vacuum; what is dropped is reported, as for the covered cells.
             if !covered {
                 let was_vacuum = saved[k * nvar..(k + 1) * nvar].iter().all(|&x| x == 0.0);
-                let residue = content[k][..nvar]
-                    .iter()
-                    .fold(0.0f64, |m, x| m.max(x.abs()));
+                let residue = max_abs(&content[k][..nvar]);
                 if residue == 0.0 || (was_vacuum && residue <= 1e-13 * near_scale) {
                     report.dropped = report.dropped.max(residue);
                     content[k] = [0.0; NQ];
@@ -376,7 +370,7 @@ impl Mixing<'_> {
         }
         let nvar = self.nvar;
         let saved = &self.saved[(kp - 1) * nvar..kp * nvar];
-        let scale = saved.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let scale = max_abs(saved);
         let scale = if scale > 0.0 { scale } else { self.near_scale };
         self.content[kp - 1][..nvar]
             .iter()
