@@ -5,6 +5,7 @@ use protocol::sum::odd_sum;
 
 use super::COVERED_TOLERANCE;
 use crate::cutcell::SubFace;
+use crate::fv::BoundaryKind;
 use crate::fv::euler::NQ;
 use crate::grid::Grid;
 
@@ -180,6 +181,28 @@ pub(super) fn offsets(dim: usize, r: isize) -> Vec<[isize; 3]> {
         }
     }
     out
+}
+
+/// The face neighbour of cell `c` along `axis`, below (`side` 0) or above (1): across a periodic
+/// side too, `None` beyond a wall or an open side.
+pub(super) fn across(
+    grid: &Grid,
+    boundary: &[[BoundaryKind; 2]; 3],
+    c: usize,
+    axis: usize,
+    side: usize,
+) -> Option<usize> {
+    let ijk = grid.ijk(c);
+    let stride: usize = grid.cells[..axis].iter().product();
+    let n = grid.cells[axis];
+    let periodic = boundary[axis][side] == BoundaryKind::Periodic;
+    match side {
+        0 if ijk[axis] > 0 => Some(c - stride),
+        0 if periodic && n > 1 => Some(c + (n - 1) * stride),
+        1 if ijk[axis] + 1 < n => Some(c + stride),
+        1 if periodic && n > 1 => Some(c - (n - 1) * stride),
+        _ => None,
+    }
 }
 
 /// `ijk + d` if inside the grid.

@@ -7,7 +7,9 @@ use protocol::sum::OddSum;
 use serde::{Deserialize, Serialize};
 
 use super::beyond::sweep_beyond;
-use super::cells::{CellKind, domain_face, fluid_part, full_state, overlap_scale, touches_gas};
+use super::cells::{
+    CellKind, across, domain_face, fluid_part, full_state, overlap_scale, touches_gas,
+};
 use super::error::Reach;
 use super::loads::{add_loads, push_moment};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
@@ -315,7 +317,6 @@ impl Embedded {
         let mut faces = [[0.0f64; 2]; 3];
         for a in 0..grid.dim {
             let face_area = volume / grid.dx[a];
-            let stride: usize = grid.cells[..a].iter().product();
             let lo = face_index(grid, a, ijk);
             let mut up = ijk;
             up[a] += 1;
@@ -333,9 +334,12 @@ impl Embedded {
             // A fluid cell beside a crack that opens: its face to the crack takes the
             // Lax–Friedrichs flux (`crack_flux`), which the cell must give up too.
             if cracking {
-                let beside = |q: usize| self.near.slot(q).is_some_and(|kq| opening[kq]);
-                touched |= (ijk[a] > 0 && beside(c - stride))
-                    || (ijk[a] + 1 < grid.cells[a] && beside(c + stride));
+                let beside = |side: usize| {
+                    across(grid, &self.config.boundary, c, a, side)
+                        .and_then(|q| self.near.slot(q))
+                        .is_some_and(|kq| opening[kq])
+                };
+                touched |= beside(0) || beside(1);
             }
         }
         touched.then_some(faces)
@@ -354,7 +358,6 @@ impl Embedded {
     ) -> Option<([f64; NQ], [f64; NQ])> {
         let grid = &self.config.grid;
         let ijk = grid.ijk(c);
-        let stride: usize = grid.cells[..a].iter().product();
         let sigma = dt / grid.dx[a];
         let lo = face_index(grid, a, ijk);
         let mut up = ijk;
@@ -364,17 +367,21 @@ impl Embedded {
         else {
             return None;
         };
-        let below = (ijk[a] > 0).then(|| c - stride);
-        let above = (ijk[a] + 1 < grid.cells[a]).then(|| c + stride);
+        let below = across(grid, &self.config.boundary, c, a, 0);
+        let above = across(grid, &self.config.boundary, c, a, 1);
         let (fl, fr) = if cracking {
-            (
-                below
-                    .and_then(|q| self.crack_flux(a, q, c, opening, sigma))
-                    .unwrap_or(fl),
-                above
-                    .and_then(|q| self.crack_flux(a, c, q, opening, sigma))
-                    .unwrap_or(fr),
-            )
+            // A domain side of a cell that holds vacuum at t^n carries nothing: a wall mirrors
+            // the vacuum, an open side extrapolates it.
+            let vacuum = self.near.slot(c).is_some_and(|k| opening[k]);
+            let side = |q: Option<usize>, f: [f64; NQ], left: bool| match q {
+                Some(q) => {
+                    let (l, r) = if left { (q, c) } else { (c, q) };
+                    self.crack_flux(a, l, r, opening, sigma).unwrap_or(f)
+                }
+                None if vacuum => [0.0; NQ],
+                None => f,
+            };
+            (side(below, fl, true), side(above, fr, false))
         } else {
             (fl, fr)
         };

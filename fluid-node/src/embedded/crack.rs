@@ -1,7 +1,7 @@
 //! Cracks (paper 000 §3.2): the cells a crack opens in a step hold vacuum, and the faces
 //! between them and the fluid take the Lax–Friedrichs flux of that fluid against vacuum.
 
-use super::cells::{domain_face, dominant_axis, fluid_part, full_state, shifted};
+use super::cells::{across, domain_face, dominant_axis, fluid_part, full_state, shifted};
 use super::{COVERED_TOLERANCE, Embedded, SolidFrame};
 use crate::cutcell::{CutGeometry, SubFace};
 use crate::fv::euler::NQ;
@@ -10,11 +10,33 @@ impl Embedded {
     /// Whether a sub-face of `frame` belongs to a face that becomes wet in this step (a link
     /// broke) and lies in a cell covered at `t^n`: the crack behind it is vacuum, and the state
     /// the sweeps left in that cell is not the fluid's, so it carries no pressure.
+    ///
+    /// So is a sub-face in a [sealed](Embedded::sealed) cell: whatever the solid uncovers
+    /// there is vacuum.
     pub(super) fn opening(&self, s: &SubFace, frame: &SolidFrame) -> bool {
         let e = s.element as usize;
-        frame.wet[e]
-            && !self.state.current.wet.get(e).copied().unwrap_or(true)
-            && self.state.geom.solid_fraction[s.cell as usize] >= 1.0 - COVERED_TOLERANCE
+        let c = s.cell as usize;
+        self.sealed(c)
+            || (frame.wet[e]
+                && !self.state.current.wet.get(e).copied().unwrap_or(true)
+                && self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE)
+    }
+
+    /// Whether cell `c` was covered at t^n with no gas beside it: each face neighbour (across a
+    /// periodic side too) covered as well, or beyond a wall or an open side. Nothing can have
+    /// reached such a cell during the step, so the part of it the solid uncovers is vacuum
+    /// (paper 000 §3.2 for a crack; the same holds for a body leaving a wall it was flush
+    /// against, or uncovering a cell of its interior). Its ghost state mirrors gas it has no
+    /// contact with, and carries no pressure.
+    pub(super) fn sealed(&self, c: usize) -> bool {
+        let lambda = &self.state.geom.solid_fraction;
+        let covered = |q: usize| lambda[q] >= 1.0 - COVERED_TOLERANCE;
+        let grid = &self.config.grid;
+        covered(c)
+            && (0..grid.dim).all(|a| {
+                (0..2)
+                    .all(|side| across(grid, &self.config.boundary, c, a, side).is_none_or(covered))
+            })
     }
 
     /// The near cells (by slot) in which a crack opens in this step, with the accepted surface
@@ -49,6 +71,16 @@ impl Embedded {
                 {
                     opening[k] = true;
                 }
+            }
+        }
+        // A sealed cell the solid uncovers holds vacuum, as a crack does.
+        for (k, &c) in self.near.cells.iter().enumerate() {
+            let c = c as usize;
+            if !opening[k]
+                && fluid_part(self.scratch.trial.solid_fraction[c]) > COVERED_TOLERANCE
+                && self.sealed(c)
+            {
+                opening[k] = true;
             }
         }
         for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {

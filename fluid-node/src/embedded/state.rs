@@ -10,7 +10,7 @@ use super::{EmbeddedError, Loads, SolidFrame};
 use crate::cutcell::{CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
-use crate::fv::{FluidSolver, SplitHooks};
+use crate::fv::{BoundaryKind, FluidSolver, SplitHooks};
 use crate::grid::Grid;
 use protocol::sum::OddSum;
 
@@ -45,6 +45,8 @@ pub(super) struct Config {
     pub(super) gamma: f64,
     /// The vacuum thresholds `(ρ, p)` of `fluid.vacuum`.
     pub(super) vacuum: (f64, f64),
+    /// The domain's sides, `[axis][low, high]`.
+    pub(super) boundary: [[BoundaryKind; 2]; 3],
 }
 
 /// What persists from one step to the next (and what a checkpoint restores).
@@ -157,6 +159,7 @@ impl Embedded {
                 ng: params.ghost_cells(),
                 gamma: params.gamma,
                 vacuum: (params.vacuum_rho, params.vacuum_p),
+                boundary: params.boundary,
                 grid,
             },
             state: State {
