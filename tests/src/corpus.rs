@@ -13,7 +13,21 @@
 //! - the free stream kept where the body moves with the flow (a periodic box, one rigid
 //!   particle carried at the flow's velocity, the semi-implicit scheme): the same bound on the
 //!   deviation from the stream;
-//! - the energy error against the energy exchanged bounded (≤ [`ENERGY_BOUND`]).
+//! - energy, as three balances from the ledger of every step (from the end of step 0 on: the
+//!   balance before it is not recorded):
+//!   - the fluid's: its energy plus the work it gave through the interface stays constant to
+//!     round-off (≤ [`FLUID_ENERGY_BOUND`] of its energy; the boxes are closed or periodic);
+//!   - the exchange's: the work the fluid gave and the work the solid received agree
+//!     (≤ [`EXCHANGE_BOUND`] of the largest of them);
+//!   - the solid's: its energy plus what it dissipated less the work it received stays within
+//!     [`SOLID_ENERGY_BOUND`] of the largest of its energies (the time integrator's error);
+//!
+//!   both last two taken against [`ROUND_OFF_FLOOR`] of the fluid's energy at least, below which
+//!   an exchange or a solid energy is round-off itself.
+//!
+//!   The ledger's single ratio of the total error to the largest exchange is not used: bodies at
+//!   rest and carried streams exchange nothing, and the ratio then measures round-off against
+//!   round-off.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -22,8 +36,18 @@ use protocol::scene::Scene;
 
 use crate::{InProcess, run_in_process_to};
 
-/// Largest energy error against the energy exchanged that [`check`] accepts.
-pub const ENERGY_BOUND: f64 = 1e-3;
+/// Largest drift of the fluid's energy plus the work it gave, relative to its energy.
+pub const FLUID_ENERGY_BOUND: f64 = 1e-12;
+/// Largest difference of the work the fluid gave and the work the solid received, relative to
+/// the largest of them.
+pub const EXCHANGE_BOUND: f64 = 1e-6;
+/// Exchanges and solid energies below this fraction of the fluid's energy are round-off (a body
+/// at rest, a carried stream): the exchange's and the solid's balances are taken relative to it
+/// instead.
+pub const ROUND_OFF_FLOOR: f64 = 1e-9;
+/// Largest drift of the solid's energy plus what it dissipated less the work it received,
+/// relative to the largest of its energies.
+pub const SOLID_ENERGY_BOUND: f64 = 1e-2;
 /// Largest relative mass error that [`check`] accepts (round-off).
 pub const MASS_BOUND: f64 = 1e-12;
 /// Largest deviation of a kept state (rest, free stream), relative to the sound speed for
@@ -143,8 +167,12 @@ pub enum Outcome {
     Mass(f64),
     /// The kept state drifted: the largest relative deviation.
     Drift(f64),
-    /// The energy error against the exchange exceeded [`ENERGY_BOUND`].
-    Energy(f64),
+    /// The fluid's energy balance broke: its relative drift (see [`FLUID_ENERGY_BOUND`]).
+    FluidEnergy(f64),
+    /// The two sides of the exchange disagree (see [`EXCHANGE_BOUND`]).
+    Exchange(f64),
+    /// The solid's energy balance drifted (see [`SOLID_ENERGY_BOUND`]).
+    SolidEnergy(f64),
 }
 
 impl Outcome {
@@ -157,7 +185,9 @@ impl Outcome {
             Outcome::Stopped(_) => "stopped",
             Outcome::Mass(_) => "mass",
             Outcome::Drift(_) => "drift",
-            Outcome::Energy(_) => "energy",
+            Outcome::FluidEnergy(_) => "fluid-energy",
+            Outcome::Exchange(_) => "exchange",
+            Outcome::SolidEnergy(_) => "solid-energy",
         }
     }
 }
@@ -581,22 +611,76 @@ pub fn check(case: &Case, out: &Path) -> Outcome {
     judge(case, &run, out)
 }
 
-fn judge(case: &Case, run: &InProcess, out: &Path) -> Outcome {
+/// The three energy balances of a run (see the module docs), each as a relative error.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Balances {
+    /// The fluid's energy plus the work it gave: largest drift over its energy.
+    pub fluid: f64,
+    /// Largest difference of the two sides' works over the largest work.
+    pub exchange: f64,
+    /// The solid's energy plus dissipated less received: largest drift over its energies.
+    pub solid: f64,
+}
+
+/// The largest relative mass error and the energy balances over the ledger of every step.
+fn balances(run: &InProcess) -> (f64, Balances) {
     let mut mass: f64 = 0.0;
-    let mut energy: f64 = 0.0;
+    let field = |l: &serde_json::Value, k: &str| l[k].as_f64().unwrap_or(0.0);
+    // Per step: fluid energy + work it gave, solid energy + dissipated − work received, and
+    // the scales.
+    let mut fluid: Vec<f64> = Vec::new();
+    let mut solid: Vec<f64> = Vec::new();
+    let (mut fluid_scale, mut work_scale, mut solid_scale, mut mismatch) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for d in &run.sink.diagnostics {
         let Ok(v) = serde_json::from_slice::<serde_json::Value>(d) else {
             continue;
         };
-        let ledger = &v["ledger"];
-        mass = mass.max(ledger["mass_rel_err"].as_f64().unwrap_or(0.0).abs());
-        energy = energy.max(
-            ledger["energy_err_vs_exchange"]
-                .as_f64()
-                .unwrap_or(0.0)
-                .abs(),
+        let l = &v["ledger"];
+        if l.is_null() {
+            continue;
+        }
+        mass = mass.max(field(l, "mass_rel_err").abs());
+        let (ef, es, ks) = (
+            field(l, "fluid_energy"),
+            field(l, "solid_energy"),
+            field(l, "solid_kinetic"),
         );
+        let (wf, ws, ds) = (
+            field(l, "work_fluid"),
+            field(l, "work_solid"),
+            field(l, "solid_dissipated"),
+        );
+        fluid.push(ef + wf);
+        solid.push(es + ds - ws);
+        fluid_scale = fluid_scale.max(ef.abs());
+        work_scale = work_scale.max(wf.abs()).max(ws.abs());
+        solid_scale = solid_scale
+            .max(ks.abs())
+            .max((es - ks).abs())
+            .max(ws.abs())
+            .max(ds.abs());
+        mismatch = mismatch.max((wf - ws).abs());
     }
+    let drift = |v: &[f64]| {
+        v.first().map_or(0.0, |&a| {
+            v.iter().fold(0.0f64, |m, &x| m.max((x - a).abs()))
+        })
+    };
+    let ratio = |x: f64, scale: f64| if scale > 0.0 { x / scale } else { x };
+    let b = Balances {
+        fluid: ratio(drift(&fluid), fluid_scale),
+        exchange: ratio(mismatch, work_scale.max(ROUND_OFF_FLOOR * fluid_scale)),
+        solid: ratio(
+            drift(&solid),
+            solid_scale.max(ROUND_OFF_FLOOR * fluid_scale),
+        ),
+    };
+    (mass, b)
+}
+
+fn judge(case: &Case, run: &InProcess, out: &Path) -> Outcome {
+    let (mass, energy) = balances(run);
     let error = run
         .error
         .clone()
@@ -626,8 +710,14 @@ fn judge(case: &Case, run: &InProcess, out: &Path) -> Outcome {
             Err(e) => return Outcome::Stopped(e),
         }
     }
-    if energy > ENERGY_BOUND {
-        return Outcome::Energy(energy);
+    if energy.fluid > FLUID_ENERGY_BOUND {
+        return Outcome::FluidEnergy(energy.fluid);
+    }
+    if energy.exchange > EXCHANGE_BOUND {
+        return Outcome::Exchange(energy.exchange);
+    }
+    if energy.solid > SOLID_ENERGY_BOUND {
+        return Outcome::SolidEnergy(energy.solid);
     }
     Outcome::Ok
 }
