@@ -8,7 +8,9 @@ use super::near_wall::{
 };
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::face_index;
-use crate::fv::{FluidSolver, GhostFill, StepReport, Wall, WallRun};
+use crate::fv::euler::NQ;
+use crate::fv::sweep::{frame, from_local, to_local};
+use crate::fv::{FluidSolver, GhostFill, StepReport, Wall, WallRun, mirror};
 
 impl Embedded {
     /// Step 1 of paper 003 §3.4: the split sweeps, keeping what the correct needs.
@@ -220,33 +222,96 @@ impl Embedded {
         }
     }
 
-    /// `U^n` of the near cells, with the ghosts of the first sweep in the covered ones.
+    /// `U^n` of the near cells, with the ghosts of the first sweep in the covered ones (of a
+    /// later sweep where the first gives none).
     fn save_states(&mut self, solver: &mut FluidSolver) {
         let dim = self.config.grid.dim;
-        let near = &mut self.near;
-        let first = crate::fv::sweep_order(dim, solver.steps())[0];
-        solver.apply_ghosts(first, &near.hooks.ghosts[first]);
-        solver.apply_vacuum(&near.hooks.vacuum);
+        let order = crate::fv::sweep_order(dim, solver.steps());
+        let first = order[0];
+        solver.apply_ghosts(first, &self.near.hooks.ghosts[first]);
+        solver.apply_vacuum(&self.near.hooks.vacuum);
         let nvar = dim + 2;
-        let u = solver.cells_at(&near.cells);
-        // NOTE: a covered cell the first sweep gives no ghost keeps a stale state (the interior
-        // of a solid, farther than the stencil from any fluid along that axis); its `U^n` is
-        // vacuum, so that a crack opening there in this step (its faces are wet only at
-        // `t^{n+1}`) starts empty rather than with that state.
-        let mut ghosted: Vec<u32> = near.hooks.ghosts[first].iter().map(|g| g.cell).collect();
+        let u = solver.cells_at(&self.near.cells);
+        let mut ghosted: Vec<u32> = (self.near.hooks.ghosts[first].iter())
+            .map(|g| g.cell)
+            .collect();
         ghosted.sort_unstable();
+        // NOTE: a covered cell the first sweep gives no ghost (farther than the stencil from
+        // any fluid along that axis) keeps a stale state. The solid can uncover it in this step
+        // (a face parallel to that axis retreating): its `U^n` is then its content and the
+        // source of the prisms reaching into it, and 0 there broke a uniform flow carried past
+        // a box 12 cells long in 2-D by 3e-2 of its state. It takes the ghost of a later sweep
+        // instead, which is the flow itself for a uniform flow at the wall's velocity. Where
+        // cracks may open it is vacuum, so that a crack opening there in this step (its faces
+        // are wet only at `t^{n+1}`) starts empty (as its faces to cells covered at `t^n` carry
+        // nothing then, see `face_fluxes`).
+        let later = if self.config.fracture {
+            Vec::new()
+        } else {
+            self.later_ghosts(solver, &order[1..], &ghosted)
+        };
         let lambda = &self.state.geom.solid_fraction;
+        let near = &mut self.near;
         near.saved.clear();
         for (k, &c) in near.cells.iter().enumerate() {
             let stale =
                 lambda[c as usize] >= 1.0 - COVERED_TOLERANCE && ghosted.binary_search(&c).is_err();
-            if stale {
-                near.saved.extend(std::iter::repeat_n(0.0, nvar));
-            } else {
+            if !stale {
                 near.saved.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
+            } else if let Ok(i) = later.binary_search_by_key(&c, |g| g.0) {
+                near.saved.extend_from_slice(&later[i].1[..nvar]);
+            } else {
+                near.saved.extend(std::iter::repeat_n(0.0, nvar));
             }
         }
     }
+
+    /// The ghost state of each covered near cell that the first sweep leaves without one, from
+    /// the first of the later sweeps (`axes`, in order) that gives it one, by cell (collective:
+    /// the mirrored cells may lie on other ranks).
+    fn later_ghosts(
+        &self,
+        solver: &FluidSolver,
+        axes: &[usize],
+        ghosted: &[u32],
+    ) -> Vec<(u32, [f64; NQ])> {
+        let dim = self.config.grid.dim;
+        let lambda = &self.state.geom.solid_fraction;
+        let stale = |c: u32| {
+            lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
+                && self.near.slot_of[c as usize] > 0
+                && ghosted.binary_search(&c).is_err()
+        };
+        // (cell, axis, fill) of the first later fill of each such cell.
+        let mut picked: Vec<(u32, usize, &GhostFill)> = Vec::new();
+        for &axis in axes {
+            for g in &self.near.hooks.ghosts[axis] {
+                if stale(g.cell) {
+                    picked.push((g.cell, axis, g));
+                }
+            }
+        }
+        picked.sort_by_key(|p| p.0);
+        picked.dedup_by_key(|p| p.0);
+        let mut sources: Vec<u32> = picked.iter().map(|p| p.2.mirror_of).collect();
+        sources.sort_unstable();
+        sources.dedup();
+        let values = solver.cells_at(&sources);
+        let nvar = dim + 2;
+        picked
+            .iter()
+            .map(|&(cell, axis, g)| {
+                let k = sources.binary_search(&g.mirror_of).expect("a source");
+                let fr = frame(dim, axis);
+                let local = to_local(&values[k * nvar..(k + 1) * nvar], dim, &fr);
+                let ghost = mirror(&local, &g.wall.in_frame(&fr));
+                let mut state = [0.0; NQ];
+                from_local(&ghost, dim, &fr, &mut state[..nvar]);
+                (cell, state)
+            })
+            .collect()
+    }
+
     /// The ghost states of the covered near cells for the sweep along `axis`, and the walls
     /// thinner than `2 ng` cells where that sweep cuts its pencils.
     fn ghost_fills(&mut self, axis: usize) {

@@ -442,6 +442,68 @@ fn wall_runs_in_a_decomposed_lines_ghost_cells_give_one_rank_fluxes() {
     assert_eq!(bits(&one[8 * nvar..16 * nvar]), bits(&rank), "own cells");
 }
 
+/// The faces inside a wall run carry the two-point flux between the run's ghost states (kept
+/// for the correct, where a face the solid uncovers takes it): a uniform flow with the walls at
+/// its velocity gives its own flux there, as at the run's ends (they carried none before, and
+/// a uniform flow carried past a thin box in 3-D lost its uniformity where such faces opened).
+/// A run of vacuum ghosts gives finite fluxes (Lax–Friedrichs).
+#[test]
+fn faces_inside_a_wall_run_carry_the_flux_of_its_ghost_states() {
+    use crate::fv::line::{FluxKind, LineScratch};
+    use crate::fv::state::{BoundaryKind, FluidParams};
+    use crate::fv::sweep::{FaceTap, PencilOut, SlabHalo, Wall, WallRun, sweep_axis};
+    use crate::grid::Grid;
+    use std::sync::Mutex;
+
+    let n = 20;
+    let grid = Grid::new(&[0.0], &[1.0], &[n]).expect("grid");
+    let params = FluidParams {
+        gamma: 1.4,
+        cfl: 0.5,
+        flux: FluxKind::Osmp(3),
+        boundary: [[BoundaryKind::Periodic; 2]; 3],
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+    };
+    let (rho, vel, p) = (1.4, 0.4, 1.0);
+    let e = p / 0.4 + 0.5 * rho * vel * vel;
+    let exact = [rho * vel, rho * vel * vel + p, 0.0, 0.0, vel * (e + p)];
+    let mut wall = Wall::at_rest(0);
+    wall.velocity[0] = vel;
+    let walls = [WallRun {
+        pencil: 0,
+        lo: 8,
+        hi: 11,
+        walls: [wall; 2],
+    }];
+    let scratch = vec![Mutex::new(LineScratch::default())];
+    for ghost in [[rho, rho * vel, e], [0.0; 3]] {
+        let mut u: Vec<f64> = (0..n).flat_map(|_| [rho, rho * vel, e]).collect();
+        for i in 8..11 {
+            u[i * 3..i * 3 + 3].copy_from_slice(&ghost);
+        }
+        let mut out = vec![0.0; u.len()];
+        let mut reports = vec![PencilOut::default(); 1];
+        let mut tap = FaceTap::default();
+        tap.clear(1);
+        tap.positions = vec![8, 9, 10, 11];
+        tap.pencil_offsets[1] = 4;
+        let (halo, dt) = (SlabHalo::none(n), 0.5 / n as f64);
+        let (reports, tapped) = (&mut reports, Some(&mut tap));
+        sweep_axis(
+            &grid, &params, 0, dt, &u, &mut out, &scratch, reports, tapped, &walls, &halo,
+        );
+        for (face, f) in (8..=11).zip(&tap.flux) {
+            assert!(f.iter().all(|x| x.is_finite()), "face {face}: {f:?}");
+            let err = (0..5).map(|q| (f[q] - exact[q]).abs()).fold(0.0, f64::max);
+            assert!(
+                ghost[0] == 0.0 || err <= 1e-14,
+                "face {face}: {f:?}, exact {exact:?}"
+            );
+        }
+    }
+}
+
 /// The same pencil cut into 5 slabs of 8 cells, with wall runs that start at a cut (cells
 /// 16–17, the first of rank 2) and end at one (22–23, before rank 3): every rank's cells get
 /// the one-rank states, and the face counters summed over the ranks are the one-rank ones
