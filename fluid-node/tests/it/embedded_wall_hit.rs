@@ -5,7 +5,7 @@
 
 use crate::embedded_support;
 
-use embedded_support::{at_rest_in_unit_box, polygon_2d, solver};
+use embedded_support::{at_rest_in_unit_box, box_3d, polygon_2d, rotation, solver};
 use fluid_node::embedded::{Embedded, SolidFrame};
 
 /// The 2-D frame moved rigidly over `dt` at its velocity and angular velocity (about its
@@ -80,5 +80,44 @@ fn a_square_squeezing_gas_against_a_wall_conserves_mass() {
             let err = through_the_wall(v, 0.0, fracture);
             assert!(err < 1e-14, "mass error {err:e}");
         }
+    }
+}
+
+/// The same in 3-D (16^3 cells): a cube of side 0.2 from (0.75, 0.5, 0.5), turning about a
+/// tilted axis or flat against the wall, until it is out through x = 1 (the turning cube lost
+/// 9.3e-7 of the mass before the fix).
+#[test]
+fn a_cube_driven_out_through_a_wall_conserves_mass() {
+    let axis = [0.0, 0.6, 0.8];
+    for (v, omega) in [([0.5, 0.1, 0.05], 2.0), ([0.5, 0.0, 0.0], 0.0)] {
+        let at = |t: f64| {
+            let c = [0.75 + v[0] * t, 0.5 + v[1] * t, 0.5 + v[2] * t];
+            let mut f = box_3d(c, [0.1; 3], rotation(axis, omega * t), v);
+            f.angular_velocity = axis.iter().map(|a| a * omega).collect();
+            f
+        };
+        let mut solver = solver(&at_rest_in_unit_box("wall-3d", &[16, 16, 16]));
+        let mut embedded = Embedded::new(&solver, at(0.0)).expect("embedded");
+        let m0 = embedded.totals(&solver).mass;
+        let (mut worst, mut step, mut t) = (0.0f64, 0, 0.0);
+        while embedded
+            .surface()
+            .vertices
+            .chunks_exact(3)
+            .any(|x| x[0] < 1.0)
+        {
+            let dt = 0.5 * solver.max_dt().min(embedded.one_cell_dt());
+            let report = embedded.predict(&mut solver, dt);
+            assert!(report.ok(), "step {step}: {:?}", report.troubles);
+            t += dt;
+            embedded
+                .correct(&mut solver, dt, at(t), step, false)
+                .unwrap_or_else(|e| panic!("step {step}: {e}"));
+            let mass = embedded.totals(&solver).mass;
+            worst = worst.max((mass - m0).abs() / m0);
+            step += 1;
+        }
+        println!("v {v:?}, omega {omega}: out after {step} steps, mass error {worst:e}");
+        assert!(worst < 1e-14, "mass error {worst:e}");
     }
 }
