@@ -509,7 +509,7 @@ fn issue_14_a_crack_opens_into_a_near_vacuum() {
 
 /// Item 7, a thin shell burst by a pressure ratio of 1e4 (`scenes/burst-shell-2d.toml`): the
 /// links break and the run either goes on with physical states or stops with a report that
-/// names the step, the cell and its values (today it stops: see the scene), never a NaN or a
+/// names the step, the cell and its values (it now runs to t_end: see the scene), never a NaN or a
 /// hang. Either way both nodes' probe files hold a row per step they completed: a node that
 /// fails still writes the history it has (it wrote none before).
 #[test]

@@ -277,7 +277,13 @@ impl Embedded {
     }
 
     /// Marks the cells holding sub-faces of `F^{n+1}` (and, explicit, of `F^n`) updated; each
-    /// must be a near cell.
+    /// must be a near cell. So are the cells holding pieces of prisms beyond the domain.
+    ///
+    /// NOTE: such a piece stays in the cell it lies in (see [`Embedded::swept_amounts`]), which
+    /// may hold no sub-face at either time: a body leaving through a wall uncovers a boundary
+    /// cell from beyond it (Λ from 0.3 to 0). Left predicted, the cell kept the sweeps' state
+    /// over its whole volume and the piece went nowhere: a square turning out through a wall
+    /// gained 2.3e-5 of the box's mass (issue 35 item 3, the fragments of `burst-shell-2d`).
     fn mark_surface_cells(&mut self, step: u64, explicit: bool) -> Result<(), EmbeddedError> {
         let flux_subfaces = if explicit {
             &self.state.geom.subfaces[..]
@@ -287,6 +293,12 @@ impl Embedded {
         for s in self.scratch.trial.subfaces.iter().chain(flux_subfaces) {
             match self.near.slot(s.cell as usize) {
                 None => return Err(self.outside_near(Some(step), Reach::AcceptedSurface, s.cell)),
+                Some(k) => self.scratch.kind[k] = CellKind::Updated,
+            }
+        }
+        for &(cell, _) in &self.scratch.beyond {
+            match self.near.slot(cell as usize) {
+                None => return Err(self.outside_near(Some(step), Reach::SweptPrism, cell)),
                 Some(k) => self.scratch.kind[k] = CellKind::Updated,
             }
         }

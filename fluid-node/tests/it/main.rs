@@ -16,6 +16,7 @@ mod embedded_piston;
 mod embedded_rest;
 mod embedded_support;
 mod embedded_uniform;
+mod embedded_wall_hit;
 mod embedded_withdrawn;
 mod fv_accuracy;
 mod fv_characteristic;
