@@ -4,13 +4,14 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::beyond::outside_domain;
 use super::cells::{CellKind, fluid_part, full_state};
 use super::near_wall::NearWall;
 use super::{EmbeddedError, Loads, SolidFrame};
 use crate::cutcell::{CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
-use crate::fv::{FluidSolver, SplitHooks};
+use crate::fv::{BoundaryKind, FluidSolver, SplitHooks};
 use crate::grid::Grid;
 use protocol::sum::OddSum;
 
@@ -45,6 +46,9 @@ pub(super) struct Config {
     pub(super) gamma: f64,
     /// The vacuum thresholds `(ρ, p)` of `fluid.vacuum`.
     pub(super) vacuum: (f64, f64),
+    /// The domain's sides (a body must stay off the periodic ones: `beyond::outside_domain`;
+    /// the gas it pushes out of the open ones leaves).
+    pub(super) boundary: [[BoundaryKind; 2]; 3],
 }
 
 /// What persists from one step to the next (and what a checkpoint restores).
@@ -157,6 +161,7 @@ impl Embedded {
                 ng: params.ghost_cells(),
                 gamma: params.gamma,
                 vacuum: (params.vacuum_rho, params.vacuum_p),
+                boundary: params.boundary,
                 grid,
             },
             state: State {
@@ -199,6 +204,7 @@ impl Embedded {
                 fluid: grid.dim,
             });
         }
+        outside_domain(grid, &self.config.boundary, &solid.surface())?;
         compute(grid, &solid.surface(), &mut self.state.geom);
         self.state.current = solid;
         Ok(())
