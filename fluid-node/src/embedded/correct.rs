@@ -6,7 +6,7 @@
 use protocol::sum::OddSum;
 use serde::{Deserialize, Serialize};
 
-use super::beyond::sweep_beyond;
+use super::beyond::{outside_domain, sweep_beyond};
 use super::cells::{
     CellKind, across, domain_face, fluid_part, full_state, overlap_scale, touches_gas,
 };
@@ -14,9 +14,9 @@ use super::error::Reach;
 use super::loads::{add_loads, push_moment};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{Surface, compute, face_index, subface_swept_volumes};
-use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
+use crate::fv::{BoundaryKind, FluidSolver};
 
 /// What one [`Embedded::correct`] did (diagnostics).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -67,7 +67,7 @@ impl Embedded {
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();
-        self.fluid_fluxes(dt, step, explicit, &opening, &mut report)?;
+        let leaving = self.fluid_fluxes(dt, step, explicit, &opening, &mut report)?;
         // What the solid flux and the swept amounts add to each near cell's content (slots
         // `k NQ + q`), summed apart from the sub-faces' order.
         let mut gained = std::mem::take(&mut self.scratch.odd_content);
@@ -89,6 +89,11 @@ impl Embedded {
             budget.impulse_given[a] -= exchanged.impulse[a];
         }
         self.check_written(step, &mixed.written)?;
+        let mut leaving = leaving;
+        for q in 0..NQ {
+            leaving[q] += mixed.leaving[q];
+        }
+        solver.add_outflow(&leaving);
         std::mem::swap(&mut self.state.geom, &mut self.scratch.trial);
         self.state.current = accepted;
         Ok(report)
@@ -117,6 +122,8 @@ impl Embedded {
                 element_particle: &accepted.element_particle,
             }
         };
+        outside_domain(grid, &self.config.boundary, &accepted.surface())
+            .map_err(|e| e.at_step(step))?;
         let scratch = &mut self.scratch;
         compute(grid, &accepted.surface(), &mut scratch.trial);
         subface_swept_volumes(
@@ -210,7 +217,13 @@ impl Embedded {
     }
 
     /// Content `(1 − Λ^{n+1}) U^n` plus the fluid fluxes of every near cell the solid touches
-    /// (eq. 12–13); marks those cells [`CellKind::Updated`].
+    /// (eq. 12–13); marks those cells [`CellKind::Updated`]. Returns what those weights change
+    /// in what left through the open sides (see [`FluidSolver::add_outflow`]).
+    ///
+    /// NOTE: the sweeps count the whole flux through a domain face as leaving; a body at rest
+    /// against an outflow side (its face flush with it, gas streaming out past it) lost 1.3e-4
+    /// of the mass in the ledger at its first step, the correct applying that flux times the
+    /// face's fluid part (0 where the body covers it).
     fn fluid_fluxes(
         &mut self,
         dt: f64,
@@ -218,7 +231,8 @@ impl Embedded {
         explicit: bool,
         opening: &[bool],
         report: &mut CorrectReport,
-    ) -> Result<(), EmbeddedError> {
+    ) -> Result<[f64; NQ], EmbeddedError> {
+        let mut leaving = [0.0; NQ];
         let n_near = self.near.cells.len();
         self.scratch.content.clear();
         self.scratch.content.resize(n_near, [0.0; NQ]);
@@ -238,6 +252,7 @@ impl Embedded {
             let ijk = grid.ijk(c);
             let nvar = grid.dim + 2;
             let alpha = fluid_part(self.scratch.trial.solid_fraction[c]);
+            let covered_at_n = self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE;
             let u0 = self.near.saved(k, nvar);
             let mut acc = [0.0; NQ];
             for q in 0..nvar {
@@ -249,6 +264,19 @@ impl Embedded {
                 };
                 let sigma = dt / grid.dx[a];
                 let (wl, wr) = (fluid_part(faces[a][0]), fluid_part(faces[a][1]));
+                let open = self.config.boundary[a]
+                    .map(|b| !matches!(b, BoundaryKind::Wall | BoundaryKind::Periodic));
+                // (The sweeps counted the flux of a cell that was not covered at t^n.)
+                let counted = f64::from(u8::from(!covered_at_n));
+                let volume = grid.cell_volume();
+                for q in 0..NQ {
+                    if ijk[a] == 0 && open[0] {
+                        leaving[q] -= (wl - counted) * fl[q] * sigma * volume;
+                    }
+                    if ijk[a] + 1 == grid.cells[a] && open[1] {
+                        leaving[q] += (wr - counted) * fr[q] * sigma * volume;
+                    }
+                }
                 let dim = grid.dim;
                 acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
                 for b in 0..dim {
@@ -258,7 +286,7 @@ impl Embedded {
             }
             self.scratch.content[k] = acc;
         }
-        Ok(())
+        Ok(leaving)
     }
 
     /// Solid faces flush against the domain boundary: `(cell, 2 axis + side, area)`, sorted.
@@ -323,6 +351,8 @@ impl Embedded {
             &self.scratch.trial.solid_fraction,
             &self.state.geom.solid_fraction,
         );
+        // (A cell holding a piece of a prism beyond the domain is `Updated` already, see
+        // `mark_surface_cells`: a wall or an open side, the same leak.)
         let mut touched = self.scratch.kind[k] == CellKind::Updated
             || new_lambda[c] > 0.0
             || old_lambda[c] >= 1.0 - COVERED_TOLERANCE;

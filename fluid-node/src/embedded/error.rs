@@ -65,6 +65,21 @@ pub enum EmbeddedError {
         /// The cell's centre \[m\].
         center: [f64; 3],
     },
+    /// The surface reaches a periodic side (the geometry does not wrap across it).
+    #[error(
+        "{}the wet surface reaches the periodic side {side} of the domain: particle {particle}, a vertex at {vertex:?}; a body must stay inside the domain at periodic sides (the geometry does not wrap across them)",
+        at(*step)
+    )]
+    OutsideDomain {
+        /// The step, where known (none: the surface at the start).
+        step: Option<u64>,
+        /// The side: `"x-"`, `"x+"`, … `"z+"`.
+        side: &'static str,
+        /// The particle of an element with that vertex.
+        particle: u32,
+        /// The vertex at or beyond the side \[m\].
+        vertex: [f64; 3],
+    },
     /// Sub-faces without a swept prism: the swept amounts would miss volume.
     #[error(
         "step {step}: {count} sub-faces of the wet surface have no swept prism (non-finite or inconsistent vertices)"
@@ -163,7 +178,8 @@ impl EmbeddedError {
         match &mut self {
             EmbeddedError::ElementsChanged { step: s, .. }
             | EmbeddedError::VertexFromTwo { step: s, .. }
-            | EmbeddedError::OutsideNear { step: s, .. } => {
+            | EmbeddedError::OutsideNear { step: s, .. }
+            | EmbeddedError::OutsideDomain { step: s, .. } => {
                 s.get_or_insert(step);
             }
             _ => {}

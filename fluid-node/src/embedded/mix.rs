@@ -13,8 +13,8 @@ use super::{
     WIDEN_RINGS,
 };
 use crate::cutcell::face_index;
-use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
+use crate::fv::{BoundaryKind, FluidSolver};
 use crate::grid::Grid;
 
 use super::CorrectReport;
@@ -25,6 +25,8 @@ pub(super) struct Mixed {
     pub(super) cells: usize,
     /// The values written, one per cell (the last), by cell.
     pub(super) written: Vec<(u32, [f64; NQ])>,
+    /// What left through open sides from pockets of covered cells there \[kg, kg m/s, J\].
+    pub(super) leaving: [f64; NQ],
 }
 
 /// Where the walk to a target looks without a large neighbour, within this many cells.
@@ -88,6 +90,8 @@ struct Writes {
     claimed: Vec<usize>,
     /// Source cells mixed.
     mixed: usize,
+    /// What left through open sides (see [`Mixed::leaving`]).
+    leaving: [f64; NQ],
 }
 
 impl Embedded {
@@ -162,6 +166,7 @@ impl Embedded {
         Ok(Mixed {
             cells: out.mixed,
             written: writes,
+            leaving: out.leaving,
         })
     }
 
@@ -619,6 +624,23 @@ impl Mixing<'_> {
             }
         }
         let (mut sum, mut vol) = sum_parts(&parts, self.nvar);
+        if vol <= 0.0 && self.at_open_side(root, &merged_roots, members_of) {
+            // NOTE: covered cells at an open side that still hold gas: a body moving out of the
+            // domain covered them in this step, and the gas between its face and the side left
+            // through the side (a rigid box leaving by an outflow side stopped here on a closed
+            // pocket). What they hold is counted as leaving; they keep their ghost states.
+            let (volume, d) = (grid.cell_volume(), grid.dim);
+            out.leaving[0] += sum[0] * volume;
+            for a in 0..d {
+                out.leaving[1 + a] += sum[1 + a] * volume;
+            }
+            out.leaving[4] += sum[d + 1] * volume;
+            for g in members_of {
+                kind[g.1] = CellKind::Mixed;
+                out.mixed += 1;
+            }
+            return Ok(());
+        }
         if vol <= 0.0 || vol.is_nan() {
             return Err(EmbeddedError::ClosedPocket {
                 cell: grid.ijk(root),
@@ -689,6 +711,31 @@ impl Mixing<'_> {
             }
         }
         Ok(())
+    }
+
+    /// Whether a cell of a mixing group (its `root`, `merged` roots and `members`) lies at an
+    /// open side of the domain (outflow, characteristic).
+    fn at_open_side(&self, root: usize, merged: &[usize], members: &[(usize, usize)]) -> bool {
+        let grid = self.grid;
+        let boundary = &self.config.boundary;
+        let open = |a: usize, side: usize| {
+            !matches!(
+                boundary[a][side],
+                BoundaryKind::Wall | BoundaryKind::Periodic
+            )
+        };
+        let cells = std::iter::once(root)
+            .chain(merged.iter().copied())
+            .chain(members.iter().map(|g| self.near[g.1] as usize));
+        for c in cells {
+            let ijk = grid.ijk(c);
+            for a in 0..grid.dim {
+                if (ijk[a] == 0 && open(a, 0)) || (ijk[a] + 1 == grid.cells[a] && open(a, 1)) {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// The next ring of free cells around a group's `members` and the `extra` cells it took

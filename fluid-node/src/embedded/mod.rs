@@ -47,7 +47,7 @@
 //! near-surface data and the scratch, apart), `frame` (the solid as the core sees it), `cells`
 //! (per-cell helpers every stage uses), `near_wall` (the wall in a near cell, for the ghost
 //! states), `predict` (step 1), `loads` (step 2), `crack` (cells a crack opens), `correct`
-//! (eq. 12 and the solid flux), `mix` (small-cell mixing), `beyond` (elements beyond a wall),
+//! (eq. 12 and the solid flux), `mix` (small-cell mixing), `beyond` (elements beyond the domain),
 //! `memory` (heap bytes by part) and `error`.
 
 // Index loops over the axes read like the formulas they implement.

@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::beyond::outside_domain;
 use super::cells::{CellKind, fluid_part, full_state};
 use super::near_wall::NearWall;
 use super::{EmbeddedError, Loads, SolidFrame};
@@ -45,7 +46,8 @@ pub(super) struct Config {
     pub(super) gamma: f64,
     /// The vacuum thresholds `(ρ, p)` of `fluid.vacuum`.
     pub(super) vacuum: (f64, f64),
-    /// The domain's sides, `[axis][low, high]`.
+    /// The domain's sides, `[axis][low, high]` (a body must stay off the periodic ones:
+    /// `beyond::outside_domain`; the gas it pushes out of the open ones leaves).
     pub(super) boundary: [[BoundaryKind; 2]; 3],
 }
 
@@ -202,6 +204,7 @@ impl Embedded {
                 fluid: grid.dim,
             });
         }
+        outside_domain(grid, &self.config.boundary, &solid.surface())?;
         compute(grid, &solid.surface(), &mut self.state.geom);
         self.state.current = solid;
         Ok(())

@@ -219,6 +219,20 @@ impl FluidSolver {
         let mut summary = SweepSummary::default();
         let reps = &self.pencil_out[..count];
         let slab = &self.slab;
+        // NOTE: a covered cell at the open end of a pencil holds a ghost state, not gas: the
+        // flux through its domain face is not what left (a square at rest flush against an
+        // outflow side lost 1.5e-3 of the mass in 10 steps through the covered cells there
+        // that are not near its cut cells). The embedded solid counts the faces of the near
+        // cells (`add_outflow`).
+        let pencils = Pencils::new(&self.grid, axis);
+        let sides = self.params.boundary[axis];
+        let ends_in_gas = |p: usize, side: usize| {
+            matches!(sides[side], BoundaryKind::Wall | BoundaryKind::Periodic)
+                || covered.is_none_or(|covered| {
+                    let c = pencils.base(p) + side * (pencils.n - 1) * pencils.stride;
+                    !covered(slab.to_global(c))
+                })
+        };
         // Outflow partials, each a sum in pencil order (see `SweepSummary::partials`).
         let (per_plane, first_pencil) = if axis == slab.axis {
             (count, 0)
@@ -235,20 +249,31 @@ impl FluidSolver {
             for side in 0..2 {
                 if mine[side] {
                     let mut acc = [0.0; NQ];
-                    for rep in reps {
-                        for q in 0..NQ {
-                            acc[q] += area * rep.outflow[side][q];
+                    for (p, rep) in reps.iter().enumerate() {
+                        if ends_in_gas(p, side) {
+                            for q in 0..NQ {
+                                acc[q] += area * rep.outflow[side][q];
+                            }
                         }
                     }
                     summary.partials.push(acc);
                 }
             }
         } else {
-            for plane in reps.chunks(per_plane) {
+            for (i, plane) in reps.chunks(per_plane).enumerate() {
                 let mut acc = [0.0; NQ];
-                for rep in plane {
+                for (j, rep) in plane.iter().enumerate() {
+                    let p = i * per_plane + j;
+                    let ends = [ends_in_gas(p, 0), ends_in_gas(p, 1)];
                     for q in 0..NQ {
-                        acc[q] += area * (rep.outflow[0][q] + rep.outflow[1][q]);
+                        let out = |side: usize| {
+                            if ends[side] {
+                                rep.outflow[side][q]
+                            } else {
+                                0.0
+                            }
+                        };
+                        acc[q] += area * (out(0) + out(1));
                     }
                 }
                 summary.partials.push(acc);

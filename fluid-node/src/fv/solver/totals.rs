@@ -24,6 +24,16 @@ impl FluidSolver {
         self.totals_by(Some(solid_fraction))
     }
 
+    /// Adds `amount` (mass, momentum per axis, energy) to what left through the open sides
+    /// since the start: the embedded solid's correct applies the sweeps' flux through a domain
+    /// face of a cut cell times the face's fluid part, and counts the difference here. Every
+    /// rank adds the same amount (the correct runs on the whole grid on every rank).
+    pub fn add_outflow(&mut self, amount: &[f64; NQ]) {
+        for q in 0..NQ {
+            self.outflow[q] += amount[q];
+        }
+    }
+
     fn totals_by(&self, solid_fraction: Option<&[f64]>) -> Totals {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
