@@ -9,8 +9,8 @@ use super::cells::{
 };
 use super::state::Config;
 use super::{
-    COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, POCKET_ROUND_OFF,
-    WIDEN_RINGS,
+    COVERED_TOLERANCE, Embedded, EmbeddedError, MAX_WIDEN_RINGS, MERGE_ROUNDS, MIX_BELOW,
+    POCKET_ROUND_OFF, WIDEN_RINGS,
 };
 use crate::cutcell::face_index;
 use crate::fv::euler::NQ;
@@ -64,6 +64,38 @@ struct Predicted {
 }
 
 impl Predicted {
+    /// Reads the cells of `cells` not read yet (collective: every rank computes every group in
+    /// the same order, so every rank asks for the same cells).
+    fn extend(&mut self, solver: &mut FluidSolver, cells: &[usize]) {
+        let mut missing: Vec<u32> = cells
+            .iter()
+            .map(|&c| c as u32)
+            .filter(|c| self.reads.binary_search(c).is_err())
+            .collect();
+        if missing.is_empty() {
+            return;
+        }
+        missing.sort_unstable();
+        missing.dedup();
+        let read = solver.cells_at(&missing);
+        let nvar = self.nvar;
+        let (mut reads, mut values) = (Vec::new(), Vec::new());
+        let (mut i, mut j) = (0, 0);
+        while i < self.reads.len() || j < missing.len() {
+            if j == missing.len() || (i < self.reads.len() && self.reads[i] < missing[j]) {
+                reads.push(self.reads[i]);
+                values.extend_from_slice(&self.values[i * nvar..(i + 1) * nvar]);
+                i += 1;
+            } else {
+                reads.push(missing[j]);
+                values.extend_from_slice(&read[j * nvar..(j + 1) * nvar]);
+                j += 1;
+            }
+        }
+        self.reads = reads;
+        self.values = values;
+    }
+
     fn u(&self, c: usize, q: usize) -> f64 {
         let k = self
             .reads
@@ -131,7 +163,7 @@ impl Embedded {
         let kind = &mut self.scratch.kind;
         let mut groups: Vec<(usize, usize)> = sources.iter().map(|&k| (m.root(k), k)).collect();
         groups.sort_unstable();
-        let predicted = m.predicted(solver, &groups);
+        let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
         let mut out = Writes::default();
         // Updated, unmixed cells: U = content / α.
@@ -154,7 +186,14 @@ impl Embedded {
         while i < groups.groups.len() {
             let root = groups.groups[i].0;
             let j = i + groups.groups[i..].partition_point(|g| g.0 == root);
-            m.mix_group(&groups, i..j, kind, &predicted, &mut out, report)?;
+            m.mix_group(
+                &groups,
+                i..j,
+                kind,
+                (&mut predicted, solver),
+                &mut out,
+                report,
+            )?;
             i = j;
         }
         let mut writes = out.writes;
@@ -593,7 +632,7 @@ impl Mixing<'_> {
         groups: &Groups,
         range: std::ops::Range<usize>,
         kind: &mut [CellKind],
-        predicted: &Predicted,
+        (predicted, solver): (&mut Predicted, &mut FluidSolver),
         out: &mut Writes,
         report: &mut CorrectReport,
     ) -> Result<(), EmbeddedError> {
@@ -661,12 +700,14 @@ impl Mixing<'_> {
         members.dedup();
         let mut extra: Vec<usize> = Vec::new();
         let mut rings = 0;
-        while !self.config.physical(&sum, vol) && rings < WIDEN_RINGS {
+        while !self.config.physical(&sum, vol) && rings < MAX_WIDEN_RINGS {
             rings += 1;
             let ring = self.ring(&members, &extra, &groups.roots, &out.claimed);
             if ring.is_empty() {
                 break;
             }
+            // (The first `WIDEN_RINGS` rings were read with the groups.)
+            predicted.extend(solver, &ring);
             for &q in &ring {
                 parts.push((self.part(kind, predicted, q), self.alpha(q)));
             }
