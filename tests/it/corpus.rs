@@ -35,3 +35,48 @@ fn bodies_reaching_the_walls_keep_every_invariant() {
         assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
     }
 }
+
+/// What the sample tolerates today (issue 35, open, `docs/corpus.md`): a rigid body at rest flush
+/// against walls drifts into them (its flush faces take no pressure and nothing holds it
+/// there); gas trapped between two touching lattices is a closed pocket; the solid's contact
+/// lets two particles overlap too deep. Every other outcome is a failure.
+fn open_defect(case: &corpus::Case, outcome: &Outcome) -> bool {
+    use corpus::{Kept, Placement};
+    match outcome {
+        Outcome::Drift(_) => {
+            case.kept == Kept::Rest && matches!(case.placement, Placement::Wall | Placement::Corner)
+        }
+        Outcome::Stopped(e) => {
+            (case.placement == Placement::Touching && e.contains("closed pocket"))
+                || e.contains("deep contact")
+        }
+        _ => false,
+    }
+}
+
+/// A fixed sample of the generator, seeds nobody looked at while the fixes were made (2000 to
+/// 2063): no case stops on a non-physical state, loses mass or breaks an energy balance, and
+/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 60
+/// of 64 keep every invariant; 2 drift, 2 stop).
+#[test]
+fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
+    let (mut ok, mut open, mut failed) = (0, Vec::new(), Vec::new());
+    for seed in 2000..2064 {
+        let (outcome, _) = outcome(seed);
+        let case = corpus::generate(seed);
+        if outcome == Outcome::Ok {
+            ok += 1;
+        } else if open_defect(&case, &outcome) {
+            open.push((seed, outcome));
+        } else {
+            failed.push((seed, outcome));
+        }
+    }
+    println!("{ok} of 64 keep every invariant; open defects: {open:?}");
+    assert!(
+        failed.is_empty(),
+        "{} cases failed: {failed:?}",
+        failed.len()
+    );
+    assert!(ok >= 60, "{ok} of 64 keep every invariant");
+}
