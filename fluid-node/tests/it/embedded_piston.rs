@@ -10,6 +10,7 @@ use embedded_support::*;
 use fluid_node::embedded::Embedded;
 
 const GAMMA: f64 = 1.4;
+/// The gas at rest of `channel` (ρ = p = 1).
 const RHO0: f64 = 1.0;
 const P0: f64 = 1.0;
 /// Piston speed [m/s].
@@ -79,27 +80,7 @@ struct Outcome {
 fn run(axis: usize, n: usize) -> Outcome {
     let clock = std::time::Instant::now();
     let across = 1 - axis;
-    let mut upper = [0.0; 2];
-    upper[axis] = LENGTH;
-    upper[across] = WIDTH;
-    let mut cells = [0; 2];
-    cells[axis] = n;
-    cells[across] = N_ACROSS;
-    let scene = format!(
-        r#"
-        name = "piston"
-        [fluid]
-        lower = [0.0, 0.0]
-        upper = [{}, {}]
-        cells = [{}, {}]
-        boundary = {{ x = ["wall", "wall"], y = ["wall", "wall"] }}
-        [[fluid.init]]
-        region = "all"
-        rho = {RHO0}
-        p = {P0}
-        "#,
-        upper[0], upper[1], cells[0], cells[1]
-    );
+    let scene = channel(axis, LENGTH, WIDTH, n, N_ACROSS);
     let mut solver = solver(&scene);
     // NOTE: the piston sticks out of the domain behind and on both sides of the channel, so that
     // its only wet face inside the domain is the one pushing the gas (the geometry drops the

@@ -9,6 +9,7 @@ use embedded_support::*;
 use fluid_node::embedded::Embedded;
 
 const GAMMA: f64 = 1.4;
+/// The gas at rest of `channel` (ρ = p = 1).
 const RHO0: f64 = 1.0;
 const P0: f64 = 1.0;
 /// Channel length and width \[m\].
@@ -74,20 +75,7 @@ fn run(v: f64, n: usize, t_end: f64) -> Result<Outcome, String> {
 }
 
 fn run_with(v: f64, n: usize, t_end: f64, back: f64, lo: f64, hi: f64) -> Result<Outcome, String> {
-    let scene = format!(
-        r#"
-        name = "withdrawn"
-        [fluid]
-        lower = [0.0, 0.0]
-        upper = [{LENGTH}, {WIDTH}]
-        cells = [{n}, {N_ACROSS}]
-        boundary = {{ x = ["wall", "wall"], y = ["wall", "wall"] }}
-        [[fluid.init]]
-        region = "all"
-        rho = {RHO0}
-        p = {P0}
-        "#
-    );
+    let scene = channel(0, LENGTH, WIDTH, n, N_ACROSS);
     let mut solver = solver(&scene);
     let body = polygon_2d(
         &[[back, lo], [X_P0, lo], [X_P0, hi], [back, hi]],

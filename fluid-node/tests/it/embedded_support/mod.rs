@@ -46,6 +46,32 @@ p = 1.0
     )
 }
 
+/// The scene text of gas at rest (ρ = p = 1) in a 2-D channel with slip walls, `length` along
+/// `axis` on `n` cells and `width` across on `n_across` cells.
+pub fn channel(axis: usize, length: f64, width: f64, n: usize, n_across: usize) -> String {
+    let across = 1 - axis;
+    let (mut upper, mut cells) = ([0.0; 2], [0; 2]);
+    upper[axis] = length;
+    upper[across] = width;
+    cells[axis] = n;
+    cells[across] = n_across;
+    format!(
+        r#"
+        name = "channel"
+        [fluid]
+        lower = [0.0, 0.0]
+        upper = [{}, {}]
+        cells = [{}, {}]
+        boundary = {{ x = ["wall", "wall"], y = ["wall", "wall"] }}
+        [[fluid.init]]
+        region = "all"
+        rho = 1.0
+        p = 1.0
+        "#,
+        upper[0], upper[1], cells[0], cells[1]
+    )
+}
+
 /// A rigid 2-D polygon (counter-clockwise vertices) as one particle with its wet loop.
 pub fn polygon_2d(vertices: &[[f64; 2]], velocity: [f64; 2], omega: f64) -> SolidFrame {
     let n = vertices.len();
