@@ -38,26 +38,23 @@ fn bodies_reaching_the_walls_keep_every_invariant() {
 
 /// What the sample tolerates today (issue 35, open, `docs/corpus.md`): a rigid body at rest flush
 /// against walls drifts into them (its flush faces take no pressure and nothing holds it
-/// there); gas trapped between two touching lattices is a closed pocket; the solid's contact
-/// lets two particles overlap too deep. Every other outcome is a failure.
+/// there); the solid's contact lets two particles overlap too deep. Every other outcome is a
+/// failure.
 fn open_defect(case: &corpus::Case, outcome: &Outcome) -> bool {
     use corpus::{Kept, Placement};
     match outcome {
         Outcome::Drift(_) => {
             case.kept == Kept::Rest && matches!(case.placement, Placement::Wall | Placement::Corner)
         }
-        Outcome::Stopped(e) => {
-            (case.placement == Placement::Touching && e.contains("closed pocket"))
-                || e.contains("deep contact")
-        }
+        Outcome::Stopped(e) => e.contains("deep contact"),
         _ => false,
     }
 }
 
 /// A fixed sample of the generator, seeds nobody looked at while the fixes were made (2000 to
 /// 2063): no case stops on a non-physical state, loses mass or breaks an energy balance, and
-/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 60
-/// of 64 keep every invariant; 2 drift, 2 stop).
+/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 61
+/// of 64 keep every invariant; 2 drift, 1 stops on a deep contact).
 #[test]
 fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
     let (mut ok, mut open, mut failed) = (0, Vec::new(), Vec::new());
@@ -78,5 +75,24 @@ fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
         "{} cases failed: {failed:?}",
         failed.len()
     );
-    assert!(ok >= 60, "{ok} of 64 keep every invariant");
+    assert!(ok >= 61, "{ok} of 64 keep every invariant");
+}
+
+/// Two touching lattices, with and without fracture, at rest or moving: the gap between them
+/// opens and closes again, and the gas it took in is squeezed to no volume. That closed pocket
+/// of covered cells stopped the run ("no fluid volume to mix"); it now goes to the nearest gas
+/// across the solid, as the gas would have escaped along the closing gap. (Seed 227 of the same
+/// kind now runs to its end too, but its solid's energy balance drifts by 1.5 % of its energies,
+/// the contact springs' time error: open, `docs/corpus.md`.)
+#[test]
+fn touching_bodies_closing_a_gap_keep_every_invariant() {
+    let mut failed = Vec::new();
+    for seed in [29, 38, 67, 261, 379, 565, 593, 643, 712, 729, 906, 2048] {
+        let (outcome, _) = outcome(seed);
+        println!("seed {seed}: {outcome:?}");
+        if outcome != Outcome::Ok {
+            failed.push((seed, outcome));
+        }
+    }
+    assert!(failed.is_empty(), "{failed:?}");
 }

@@ -102,7 +102,3 @@ pub const SWEPT_TOLERANCE: f64 = 1e-10;
 
 /// A cell is covered (a ghost cell) when its solid fraction is at least `1 − COVERED_TOLERANCE`.
 pub const COVERED_TOLERANCE: f64 = 1e-12;
-
-/// Largest content of a closed pocket of covered cells, relative to the state's scale, that is
-/// round-off (mixed across the solid) rather than trapped gas (a stop).
-pub const POCKET_ROUND_OFF: f64 = 1e-9;
