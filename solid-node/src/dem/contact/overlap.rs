@@ -304,10 +304,15 @@ fn weights(side: Side) -> (f64, f64) {
     }
 }
 
-/// The point where the segment from `inside` (signed distance `d_in ≤ 0`) to `outside`
-/// (`d_out > 0`) crosses the plane, computed from the inside end (same bits from either face).
+/// The point where the segment from `inside` (signed distance `d_in ≤ tol`) to `outside`
+/// (`d_out > tol`) crosses the plane, computed from the inside end (same bits from either face).
+/// An inside end within `tol` outside the plane counts as on it and is the cut point itself:
+/// the segment does not cross the plane between its ends, and `t = d_in / (d_in − d_out)` would
+/// be negative, of size `d_in / (d_out − d_in)` ≫ 1 when the segment is nearly parallel to the
+/// plane (a face tilted by more than `tol` across it), throwing the point far behind the inside
+/// end: the 3-D cap then no longer closes the polytope and its volume is anything.
 fn cut(inside: Vector3<f64>, d_in: f64, outside: Vector3<f64>, d_out: f64) -> Vector3<f64> {
-    let t = d_in / (d_in - d_out);
+    let t = d_in.min(0.0) / (d_in - d_out);
     inside + (outside - inside) * t
 }
 
