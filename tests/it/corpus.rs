@@ -38,23 +38,18 @@ fn bodies_reaching_the_walls_keep_every_invariant() {
 
 /// What the sample tolerates today (issue 35, open, `docs/corpus.md`): a rigid body at rest flush
 /// against walls drifts into them (its flush faces take no pressure and nothing holds it
-/// there); the solid's contact lets two particles overlap too deep. Every other outcome is a
-/// failure.
+/// there). Every other outcome is a failure.
 fn open_defect(case: &corpus::Case, outcome: &Outcome) -> bool {
     use corpus::{Kept, Placement};
-    match outcome {
-        Outcome::Drift(_) => {
-            case.kept == Kept::Rest && matches!(case.placement, Placement::Wall | Placement::Corner)
-        }
-        Outcome::Stopped(e) => e.contains("deep contact"),
-        _ => false,
-    }
+    matches!(outcome, Outcome::Drift(_))
+        && case.kept == Kept::Rest
+        && matches!(case.placement, Placement::Wall | Placement::Corner)
 }
 
 /// A fixed sample of the generator, seeds nobody looked at while the fixes were made (2000 to
 /// 2063): no case stops on a non-physical state, loses mass or breaks an energy balance, and
-/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 61
-/// of 64 keep every invariant; 2 drift, 1 stops on a deep contact).
+/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 62
+/// of 64 keep every invariant; 2 drift).
 #[test]
 fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
     let (mut ok, mut open, mut failed) = (0, Vec::new(), Vec::new());
@@ -75,7 +70,7 @@ fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
         "{} cases failed: {failed:?}",
         failed.len()
     );
-    assert!(ok >= 61, "{ok} of 64 keep every invariant");
+    assert!(ok >= 62, "{ok} of 64 keep every invariant");
 }
 
 /// Two touching lattices, with and without fracture, at rest or moving: the gap between them
@@ -95,4 +90,15 @@ fn touching_bodies_closing_a_gap_keep_every_invariant() {
         }
     }
     assert!(failed.is_empty(), "{failed:?}");
+}
+
+/// Lattices of boxes in 3-D, with and without fracture: edge-adjacent boxes, whose true overlap
+/// is 0, stopped the run on a "deep contact" (a third of a box's volume, from step 0): the clip
+/// of the contact's overlap extrapolated a cut point behind an end within its tolerance.
+#[test]
+fn lattices_of_touching_boxes_keep_every_invariant() {
+    for seed in [42, 70, 116, 181, 488, 688, 765] {
+        let (outcome, toml) = outcome(seed);
+        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
+    }
 }
