@@ -41,7 +41,11 @@
 //! - Mixing target (paper 000 §3.3): among the neighbours (faces, edges and corners) with
 //!   fluid fraction ≥ 1/2, the one best aligned with the wall normal `Σ A ν` of the cell; if
 //!   there is none, the face neighbour with the largest aperture, recursively, until a large
-//!   cell is found or the walk cycles (then the smallest cell index of the cycle).
+//!   cell is found or the walk cycles (then the nearest target through open faces; for a closed
+//!   pocket of covered cells, across the solid).
+//! - Vacuum where nothing can reach (paper 000 §3.2 extended): a cell covered at t^n whose face
+//!   neighbours are all covered or beyond the domain is sealed; what the solid uncovers of it
+//!   holds vacuum, as a crack does (`crack.rs`, docs/cut-cells.md).
 //!
 //! The files follow the step: `state` (configuration, what persists between steps, the step's
 //! near-surface data and the scratch, apart), `frame` (the solid as the core sees it), `cells`
