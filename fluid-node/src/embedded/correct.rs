@@ -67,7 +67,7 @@ impl Embedded {
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();
-        let leaving = self.fluid_fluxes(dt, step, explicit, &opening, &mut report)?;
+        let mut leaving = self.fluid_fluxes(dt, step, explicit, &opening, &mut report)?;
         // What the solid flux and the swept amounts add to each near cell's content (slots
         // `k NQ + q`), summed apart from the sub-faces' order.
         let mut gained = std::mem::take(&mut self.scratch.odd_content);
@@ -89,7 +89,6 @@ impl Embedded {
             budget.impulse_given[a] -= exchanged.impulse[a];
         }
         self.check_written(step, &mixed.written)?;
-        let mut leaving = leaving;
         for q in 0..NQ {
             leaving[q] += mixed.leaving[q];
         }
@@ -233,6 +232,7 @@ impl Embedded {
         report: &mut CorrectReport,
     ) -> Result<[f64; NQ], EmbeddedError> {
         let mut leaving = [0.0; NQ];
+        let volume = self.config.grid.cell_volume();
         let n_near = self.near.cells.len();
         self.scratch.content.clear();
         self.scratch.content.resize(n_near, [0.0; NQ]);
@@ -264,16 +264,16 @@ impl Embedded {
                 };
                 let sigma = dt / grid.dx[a];
                 let (wl, wr) = (fluid_part(faces[a][0]), fluid_part(faces[a][1]));
-                let open = self.config.boundary[a]
-                    .map(|b| !matches!(b, BoundaryKind::Wall | BoundaryKind::Periodic));
                 // (The sweeps counted the flux of a cell that was not covered at t^n.)
                 let counted = f64::from(u8::from(!covered_at_n));
-                let volume = grid.cell_volume();
-                for q in 0..NQ {
-                    if ijk[a] == 0 && open[0] {
+                let open = self.config.boundary[a].map(BoundaryKind::is_open);
+                if ijk[a] == 0 && open[0] {
+                    for q in 0..NQ {
                         leaving[q] -= (wl - counted) * fl[q] * sigma * volume;
                     }
-                    if ijk[a] + 1 == grid.cells[a] && open[1] {
+                }
+                if ijk[a] + 1 == grid.cells[a] && open[1] {
+                    for q in 0..NQ {
                         leaving[q] += (wr - counted) * fr[q] * sigma * volume;
                     }
                 }

@@ -13,8 +13,8 @@ use super::{
     WIDEN_RINGS,
 };
 use crate::cutcell::face_index;
+use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
-use crate::fv::{BoundaryKind, FluidSolver};
 use crate::grid::Grid;
 
 use super::CorrectReport;
@@ -735,12 +735,7 @@ impl Mixing<'_> {
     fn at_open_side(&self, root: usize, merged: &[usize], members: &[(usize, usize)]) -> bool {
         let grid = self.grid;
         let boundary = &self.config.boundary;
-        let open = |a: usize, side: usize| {
-            !matches!(
-                boundary[a][side],
-                BoundaryKind::Wall | BoundaryKind::Periodic
-            )
-        };
+        let open = |a: usize, side: usize| boundary[a][side].is_open();
         let cells = std::iter::once(root)
             .chain(merged.iter().copied())
             .chain(members.iter().map(|g| self.near[g.1] as usize));

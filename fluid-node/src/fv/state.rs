@@ -55,6 +55,14 @@ pub enum BoundaryKind {
     },
 }
 
+impl BoundaryKind {
+    /// Whether gas may leave through the side (outflow, characteristic): what crosses it is
+    /// counted as leaving the domain.
+    pub fn is_open(self) -> bool {
+        !matches!(self, BoundaryKind::Wall | BoundaryKind::Periodic)
+    }
+}
+
 impl From<Boundary> for BoundaryKind {
     /// The scene's kind; a characteristic side gets σ = `CHARACTERISTIC_SIGMA` (the scene's
     /// `fluid.characteristic.sigma` replaces it in [`from_scene`](crate::fv::from_scene)) and

@@ -227,7 +227,7 @@ impl FluidSolver {
         let pencils = Pencils::new(&self.grid, axis);
         let sides = self.params.boundary[axis];
         let ends_in_gas = |p: usize, side: usize| {
-            matches!(sides[side], BoundaryKind::Wall | BoundaryKind::Periodic)
+            !sides[side].is_open()
                 || covered.is_none_or(|covered| {
                     let c = pencils.base(p) + side * (pencils.n - 1) * pencils.stride;
                     !covered(slab.to_global(c))
