@@ -73,6 +73,33 @@ impl From<NodeArg> for NodeKind {
     }
 }
 
+/// `--fluid VALUE`: a fluid node implementation, checked where it is given (a misspelt one was
+/// blamed on the scene's `fluid.node`).
+fn parse_fluid_node(value: &str) -> Result<String, String> {
+    protocol::scene::node_impl(value, &protocol::scene::FLUID_NODES)
+        .map(|()| value.to_string())
+        .map_err(|e| format!("expected {e}"))
+}
+
+/// `--solid VALUE`: a solid node implementation (see [`parse_fluid_node`]).
+fn parse_solid_node(value: &str) -> Result<String, String> {
+    protocol::scene::node_impl(value, &protocol::scene::SOLID_NODES)
+        .map(|()| value.to_string())
+        .map_err(|e| format!("expected {e}"))
+}
+
+/// `--export VALUE`, with the nearest format suggested (clap's own suggestion misses a
+/// transposition such as `cvs`).
+fn parse_export(value: &str) -> Result<ExportArg, String> {
+    ExportArg::from_str(value, true).map_err(|_| {
+        let names = ["json", "csv"];
+        format!(
+            "expected one of {names:?}{}",
+            protocol::suggest::did_you_mean(value, &names)
+        )
+    })
+}
+
 /// `inspect --export`: the export format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ExportArg {
@@ -106,10 +133,10 @@ pub enum Command {
         #[arg(long)]
         overwrite: bool,
         /// Fluid implementation: `real`, `pressure` or `replay:FILE.mcap` (default: the scene's).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_fluid_node)]
         fluid: Option<String>,
         /// Solid implementation: `real`, `prescribed` or `replay:FILE.mcap` (default: the scene's).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_solid_node)]
         solid: Option<String>,
         /// Deadline for any one message, in seconds.
         #[arg(long, default_value = "120", value_parser = protocol::session::parse_timeout_s, allow_negative_numbers = true)]
@@ -136,10 +163,10 @@ pub enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
         /// Check with this fluid implementation (as `run --fluid`).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_fluid_node)]
         fluid: Option<String>,
         /// Check with this solid implementation (as `run --solid`).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_solid_node)]
         solid: Option<String>,
     },
     /// Re-run one node (or the coupler) on the recorded inputs up to step N and compare its
@@ -169,8 +196,8 @@ pub enum Command {
         /// step).
         #[arg(long)]
         step: Option<u64>,
-        /// Export format (default with `--step`: json).
-        #[arg(long, value_enum)]
+        /// Export format, `json` or `csv` (default with `--step`: json).
+        #[arg(long, value_parser = parse_export)]
         export: Option<ExportArg>,
         /// Rewrite a killed or damaged record into FILE.recovered.mcap: keeps every chunk that
         /// verifies, says what it dropped, and lists the recovered record.
@@ -477,4 +504,44 @@ fn read_for_inspection(
         if fixed.dropped.len() == 1 { "" } else { "s" }
     );
     Ok(fixed.recording)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The error clap prints for `args`.
+    fn refusal(args: &[&str]) -> String {
+        let err = Args::try_parse_from(args).expect_err("refused");
+        err.to_string()
+    }
+
+    #[test]
+    fn misspelt_values_name_the_option_and_the_nearest_value() {
+        let e = refusal(&["coupler-node", "inspect", "x.mcap", "--export", "cvs"]);
+        assert!(
+            e.contains("invalid value 'cvs' for '--export <EXPORT>'")
+                && e.contains("(did you mean `csv`?)"),
+            "{e}"
+        );
+        let e = refusal(&["coupler-node", "run", "s.toml", "--fluid", "pressur"]);
+        assert!(
+            e.contains("invalid value 'pressur' for '--fluid <FLUID>'")
+                && e.contains("(did you mean `pressure`?)"),
+            "{e}"
+        );
+        let e = refusal(&["coupler-node", "check", "s.toml", "--solid", "prescibed"]);
+        assert!(
+            e.contains("'--solid <SOLID>'") && e.contains("(did you mean `prescribed`?)"),
+            "{e}"
+        );
+        // Valid values still parse, replay records included.
+        for ok in [
+            vec!["coupler-node", "inspect", "x.mcap", "--export", "csv"],
+            vec!["coupler-node", "run", "s.toml", "--fluid", "replay:f.mcap"],
+            vec!["coupler-node", "run", "s.toml", "--solid", "prescribed"],
+        ] {
+            assert!(Args::try_parse_from(&ok).is_ok(), "{ok:?}");
+        }
+    }
 }

@@ -7,6 +7,7 @@
 //! - [`session`]: what the two node loops share (config, errors, proposals, failure reports).
 //! - [`transport`]: the transport trait the loops are written against, and an in-memory one.
 //! - [`sum`]: order-independent, mirror-exact sums (both nodes' numerics).
+//! - [`suggest`]: "did you mean" for misspelt keys and values.
 //! - [`topics`]: topic names and log-time convention of the MCAP record.
 //! - [`vtk`]: VTK XML files for ParaView (`.vti`, `.vtp`, `.pvd`) built in memory, and read back.
 //! - `bus` (feature `bus`): the only module that touches iceoryx2.
@@ -27,6 +28,7 @@
 pub mod codec;
 pub mod scene;
 pub mod session;
+pub mod suggest;
 pub mod sum;
 pub mod topics;
 pub mod transport;

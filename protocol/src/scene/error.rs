@@ -77,16 +77,29 @@ pub(super) fn check_node_impl(
     known: &[&str],
     file: &str,
 ) -> Result<(), SceneError> {
+    node_impl(value, known).map_err(|expected| SceneError::Invalid {
+        file: file.to_string(),
+        path: path.to_string(),
+        expected,
+        found: format!("{value:?}"),
+    })
+}
+
+/// The fluid node's implementations besides `replay:FILE.mcap` (`fluid.node`, `run --fluid`).
+pub const FLUID_NODES: [&str; 2] = ["real", "pressure"];
+/// The solid node's implementations besides `replay:FILE.mcap` (`solid.node`, `run --solid`).
+pub const SOLID_NODES: [&str; 2] = ["real", "prescribed"];
+
+/// Whether `value` names a node implementation: one of `known` or `replay:FILE`; else what was
+/// expected, with the nearest name suggested.
+pub fn node_impl(value: &str, known: &[&str]) -> Result<(), String> {
     if known.contains(&value) || value.strip_prefix("replay:").is_some_and(|f| !f.is_empty()) {
-        Ok(())
-    } else {
-        Err(SceneError::Invalid {
-            file: file.to_string(),
-            path: path.to_string(),
-            expected: format!("one of {known:?} or \"replay:FILE.mcap\""),
-            found: format!("{value:?}"),
-        })
+        return Ok(());
     }
+    Err(format!(
+        "one of {known:?} or \"replay:FILE.mcap\"{}",
+        crate::suggest::did_you_mean(value, known)
+    ))
 }
 
 /// Longest quoted value or message line in an error, in bytes.
@@ -111,11 +124,15 @@ pub(super) fn quote_list<T: std::fmt::Debug>(list: &[T]) -> String {
 }
 
 /// A message with every line longer than [`QUOTE_MAX`] cut (the TOML parser quotes the line of
-/// the error, which can be megabytes long).
+/// the error, which can be megabytes long); serde's "unknown field" and "unknown variant" lines
+/// get a "did you mean" and keep their whole list of valid names (see [`explain_unknown`]).
 pub(super) fn shorten_lines(message: &str) -> String {
     message
         .lines()
         .map(|line| {
+            if let Some(explained) = explain_unknown(line) {
+                return explained;
+            }
             if line.len() <= QUOTE_MAX {
                 return line.to_string();
             }
@@ -127,4 +144,34 @@ pub(super) fn shorten_lines(message: &str) -> String {
         })
         .collect::<Vec<_>>()
         .join("\n")
+}
+
+/// serde's `unknown field `x`, expected one of `a`, `b`` (or `unknown variant`) with the
+/// nearest valid name suggested and the list kept whole: it is the schema's, a few hundred
+/// bytes at most (cut, a misspelt key's message ended mid-list), while the misspelt name, the
+/// user's, is cut to [`QUOTE_MAX`].
+fn explain_unknown(line: &str) -> Option<String> {
+    let (what, rest) = ["unknown field `", "unknown variant `"]
+        .into_iter()
+        .find_map(|p| line.strip_prefix(p).map(|rest| (&p[..p.len() - 2], rest)))?;
+    let (name, expected) = rest.split_once("`, expected ")?;
+    let valid: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+    if valid.is_empty() {
+        return None;
+    }
+    let shown = if name.len() > QUOTE_MAX {
+        let cut = (0..=QUOTE_MAX)
+            .rev()
+            .find(|&i| name.is_char_boundary(i))
+            .unwrap_or(0);
+        format!("{}...", &name[..cut])
+    } else {
+        name.to_string()
+    };
+    let list: Vec<String> = valid.iter().map(|v| format!("`{v}`")).collect();
+    Some(format!(
+        "{what} `{shown}`{}; valid here: {}",
+        crate::suggest::did_you_mean(name, &valid),
+        list.join(", ")
+    ))
 }

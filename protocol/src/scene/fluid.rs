@@ -301,7 +301,12 @@ impl FluidConfig {
     fn validate_grid(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let fluid = self;
         let dim = c.dim;
-        check_node_impl("fluid.node", &fluid.node, &["real", "pressure"], c.file)?;
+        check_node_impl(
+            "fluid.node",
+            &fluid.node,
+            &super::error::FLUID_NODES,
+            c.file,
+        )?;
         c.check_len("fluid.upper", &fluid.upper)?;
         c.check_len("fluid.lower", &fluid.lower)?;
         if fluid.cells.len() != dim || fluid.cells.contains(&0) {

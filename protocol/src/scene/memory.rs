@@ -99,10 +99,15 @@ impl Scene {
             ));
             if checkpoints {
                 let frame = n_cells.saturating_mul(nvar * 8);
+                // (Named by the grid, which sets its size: an oversized grid was blamed on
+                // `run.checkpoint_every`.)
                 parts.push((
-                    "run.checkpoint_every".to_string(),
+                    "fluid.cells".to_string(),
                     frame.saturating_mul(BUS_SLOTS),
-                    format!("{BUS_SLOTS} shared-memory slots of a {frame} B fluid checkpoint"),
+                    format!(
+                        "{BUS_SLOTS} shared-memory slots of a {frame} B fluid checkpoint, taken \
+                         with `run.checkpoint_every` or `run.record = \"all\"`"
+                    ),
                 ));
             }
         }

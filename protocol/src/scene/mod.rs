@@ -19,7 +19,7 @@ mod solid;
 
 use serde::{Deserialize, Serialize};
 
-pub use error::SceneError;
+pub use error::{FLUID_NODES, SOLID_NODES, SceneError, node_impl};
 pub use fluid::{
     Boundary, BoundaryConfig, CharacteristicConfig, DEFAULT_CHARACTERISTIC_SIGMA, FluidConfig,
     FluxConfig, FluxScheme, InitEntry, PressureField, Profile, VacuumConfig,

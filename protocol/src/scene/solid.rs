@@ -347,7 +347,12 @@ impl SolidConfig {
     /// The node and, for the real solid, its material and at least one body.
     fn validate_material(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let solid = self;
-        check_node_impl("solid.node", &solid.node, &["real", "prescribed"], c.file)?;
+        check_node_impl(
+            "solid.node",
+            &solid.node,
+            &super::error::SOLID_NODES,
+            c.file,
+        )?;
         if solid.node == "real" {
             for (path, v) in [
                 ("solid.density", solid.density),

@@ -224,3 +224,50 @@ fn the_characteristic_table_is_checked() {
     let e = err(scene(ch, "{ p = 1.0 }"));
     assert!(e.contains("p"), "{e}");
 }
+
+/// A misspelt key or value gets the nearest valid name and the whole list of valid names (the
+/// list used to be cut mid-way: "... (14 more bytes)").
+#[test]
+fn a_misspelt_key_or_value_gets_a_suggestion_and_the_whole_list() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/sod.toml"))
+        .expect("scenes/sod.toml");
+    let parse = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        match Scene::from_toml_str(&text.replacen(from, to, 1), "sod.toml") {
+            Err(SceneError::Parse { path, message, .. }) => (path, message),
+            other => panic!("expected a Parse error, got {other:?}"),
+        }
+    };
+    let (path, message) = parse("\ngamma = ", "\ngama = ");
+    assert_eq!(path, "fluid.gama");
+    assert!(
+        message.contains(
+            "unknown field `gama` (did you mean `gamma`?); valid here: `node`, `gamma`, `cfl`"
+        ),
+        "{message}"
+    );
+    assert!(message.trim_end().ends_with("`ranks`"), "{message}");
+    assert!(!message.contains("more bytes"), "{message}");
+    let (path, message) = parse("scheme = \"osmp\"", "scheme = \"osnp\"");
+    assert_eq!(path, "fluid.flux.scheme");
+    assert!(
+        message.contains("unknown variant `osnp` (did you mean `osmp`?)"),
+        "{message}"
+    );
+    // Nothing near: no suggestion, the list still whole.
+    let (_, message) = parse("\ngamma = ", "\nzzzzzzzz = ");
+    assert!(!message.contains("did you mean"), "{message}");
+    assert!(message.contains("valid here: `node`"), "{message}");
+    // A misspelt node implementation.
+    let fluid = text.replacen("[fluid]\n", "[fluid]\nnode = \"pressur\"\n", 1);
+    match Scene::from_toml_str(&fluid, "sod.toml") {
+        Err(SceneError::Invalid { path, expected, .. }) => {
+            assert_eq!(path, "fluid.node");
+            assert!(
+                expected.ends_with("(did you mean `pressure`?)"),
+                "{expected}"
+            );
+        }
+        other => panic!("expected an Invalid error, got {other:?}"),
+    }
+}
