@@ -199,6 +199,13 @@ pub enum Command {
         /// Export format, `json` or `csv` (default with `--step`: json).
         #[arg(long, value_parser = parse_export)]
         export: Option<ExportArg>,
+        /// `--export csv`: only these steps, `FROM..TO` (both included), `FROM..` or `..TO`.
+        #[arg(long, value_parser = parse_steps, conflicts_with = "step")]
+        steps: Option<std::ops::RangeInclusive<u64>>,
+        /// `--export csv`: only this channel (`/fluid-to-coupler`, `/diagnostics`, ...;
+        /// repeat for several).
+        #[arg(long)]
+        channel: Vec<String>,
         /// Rewrite a killed or damaged record into FILE.recovered.mcap: keeps every chunk that
         /// verifies, says what it dropped, and lists the recovered record.
         #[arg(long)]
@@ -346,8 +353,23 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             file,
             step,
             export,
+            steps,
+            channel,
             recover,
-        } => inspect(&file, step, export, recover),
+        } => {
+            if export == Some(ExportArg::Csv) && !recover {
+                let steps = step.map(|s| s..=s).or(steps).unwrap_or(0..=u64::MAX);
+                let filter = crate::inspect::TableFilter {
+                    steps,
+                    channels: channel,
+                };
+                return export_csv(&file, step, &filter);
+            }
+            if steps.is_some() || !channel.is_empty() {
+                anyhow::bail!("--steps and --channel filter --export csv");
+            }
+            inspect(&file, step, export, recover)
+        }
     }
 }
 
@@ -470,6 +492,60 @@ fn inspect(
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `inspect FILE --export csv`: the tidy table of the messages `filter` keeps, streamed from the
+/// file to standard output in bounded memory; `step`: the one step asked for, which must be
+/// there.
+fn export_csv(
+    file: &std::path::Path,
+    step: Option<u64>,
+    filter: &crate::inspect::TableFilter,
+) -> anyhow::Result<ExitCode> {
+    let input =
+        std::fs::File::open(file).with_context(|| format!("reading record {}", file.display()))?;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let summary = crate::inspect::stream_table(input, filter, &mut out).with_context(|| {
+        format!(
+            "exporting record {} (--recover keeps what verifies)",
+            file.display()
+        )
+    })?;
+    if let Some(end) = crate::inspect::describe_end(&summary.end) {
+        tracing::warn!("{}: {end}", file.display());
+    }
+    if summary.messages == 0 {
+        let held = summary.steps.map_or_else(
+            || "no steps".to_string(),
+            |(first, last)| format!("steps {first} to {last}"),
+        );
+        match step {
+            Some(step) => anyhow::bail!("step {step} is not in the recording (it holds {held})"),
+            None => tracing::warn!("no message matched the filter (the record holds {held})"),
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--steps FROM..TO` (both included), `FROM..`, `..TO`.
+fn parse_steps(value: &str) -> Result<std::ops::RangeInclusive<u64>, String> {
+    let (from, to) = value
+        .split_once("..")
+        .ok_or_else(|| format!("expected FROM..TO, FROM.. or ..TO, found {value:?}"))?;
+    let bound = |text: &str, default: u64| -> Result<u64, String> {
+        let text = text.trim_start_matches('=');
+        if text.is_empty() {
+            Ok(default)
+        } else {
+            text.parse()
+                .map_err(|e| format!("{text:?} is not a step number: {e}"))
+        }
+    };
+    let (from, to) = (bound(from, 0)?, bound(to, u64::MAX)?);
+    if from > to {
+        return Err(format!("the range {value:?} is empty ({from} > {to})"));
+    }
+    Ok(from..=to)
 }
 
 /// The record `file`; with `recover`, what of it verifies, also written beside it as

@@ -270,27 +270,141 @@ pub fn export_table(rec: &Recording, step: Option<u64>) -> Result<String, Record
 }
 
 fn table(messages: &[&Recorded]) -> Result<String, RecordError> {
-    let mut out = String::from(TABLE_HEADER);
-    out.push('\n');
+    let mut out = Vec::from(TABLE_HEADER);
+    out.push(b'\n');
     for m in messages {
-        let (iteration, fields) = if m.topic == DIAGNOSTICS_TOPIC {
-            let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
-            (0, value)
-        } else if is_frame_topic(&m.topic) {
-            let (header, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
-            let fields = message_fields(&msg).map_err(|e| decode_err(m, e))?;
-            (header.stamp.iteration, fields)
-        } else {
-            continue;
-        };
-        let prefix = format!("{},{iteration},{}", m.step, m.topic);
-        table_rows(&mut out, &prefix, "", &fields);
+        message_rows(&mut out, m).map_err(|e| RecordError::Io(e.to_string()))??;
     }
-    Ok(out)
+    Ok(String::from_utf8(out).expect("the rows are UTF-8"))
 }
 
-/// Appends `prefix,field,index,value` rows for the numeric scalars in `value`.
-fn table_rows(out: &mut String, prefix: &str, name: &str, value: &Value) {
+/// Writes the rows of one message to `out` (outer error: writing; inner: decoding).
+fn message_rows(
+    out: &mut impl std::io::Write,
+    m: &Recorded,
+) -> std::io::Result<Result<(), RecordError>> {
+    match message_fields_of(m) {
+        Ok(Some((iteration, fields))) => {
+            let prefix = format!("{},{iteration},{}", m.step, m.topic);
+            table_rows(out, &prefix, "", &fields).map(Ok)
+        }
+        Ok(None) => Ok(Ok(())),
+        Err(e) => Ok(Err(e)),
+    }
+}
+
+/// The iteration and fields of a frame or diagnostics message (`None` for another topic).
+fn message_fields_of(m: &Recorded) -> Result<Option<(u32, Value)>, RecordError> {
+    if m.topic == DIAGNOSTICS_TOPIC {
+        let value: Value = serde_json::from_slice(&m.data).map_err(|e| decode_err(m, e))?;
+        Ok(Some((0, value)))
+    } else if is_frame_topic(&m.topic) {
+        let (header, msg) = codec::decode(&m.data).map_err(|e| decode_err(m, e))?;
+        let fields = message_fields(&msg).map_err(|e| decode_err(m, e))?;
+        Ok(Some((header.stamp.iteration, fields)))
+    } else {
+        Ok(None)
+    }
+}
+
+/// Which messages [`stream_table`] exports.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TableFilter {
+    /// Steps, both ends included.
+    pub steps: std::ops::RangeInclusive<u64>,
+    /// Topics (`/fluid-to-coupler`, `/diagnostics`, ...); empty: every one.
+    pub channels: Vec<String>,
+}
+
+impl Default for TableFilter {
+    fn default() -> TableFilter {
+        TableFilter {
+            steps: 0..=u64::MAX,
+            channels: Vec::new(),
+        }
+    }
+}
+
+/// What [`stream_table`] read and wrote.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TableSummary {
+    /// Messages whose rows were written.
+    pub messages: usize,
+    /// Steps seen in the record (every message, filtered or not): first and last.
+    pub steps: Option<(u64, u64)>,
+    /// How the record ends.
+    pub end: End,
+}
+
+/// [`export_table`] as a stream: reads the record from `input` piece by piece
+/// ([`protocol::mcap_read::Stream`]) and writes each message's rows to `out` as it is read,
+/// so a record of any size goes through in bounded memory (the largest chunk plus one
+/// message's rows). Only the messages `filter` keeps; the same rows, in the same order, as
+/// [`export_table`]. A read or write error of the streams is [`RecordError::Io`].
+pub fn stream_table(
+    mut input: impl std::io::Read,
+    filter: &TableFilter,
+    out: &mut impl std::io::Write,
+) -> Result<TableSummary, RecordError> {
+    let io = |what: &'static str| move |e: std::io::Error| RecordError::Io(format!("{what}: {e}"));
+    let mut stream = protocol::mcap_read::Stream::new();
+    let mut piece = vec![0u8; 1 << 20];
+    let mut summary = TableSummary {
+        messages: 0,
+        steps: None,
+        end: End::Unfinished,
+    };
+    let mut checked: Vec<u16> = Vec::new();
+    writeln!(out, "{TABLE_HEADER}").map_err(io("writing"))?;
+    loop {
+        let n = input.read(&mut piece).map_err(io("reading"))?;
+        if n == 0 {
+            break;
+        }
+        stream.feed(&piece[..n])?;
+        for m in stream.take_messages() {
+            let channel = &stream.channels()[&m.channel_id];
+            if !checked.contains(&m.channel_id) {
+                let version = stream
+                    .metadata()
+                    .iter()
+                    .find(|(name, _)| name == "run")
+                    .and_then(|(_, run)| run.get("protocol_version"))
+                    .map(String::as_str);
+                if let Some(why) =
+                    protocol::topics::legacy_layout([channel.topic.as_str()], version)
+                {
+                    return Err(RecordError::Layout(why));
+                }
+                checked.push(m.channel_id);
+            }
+            let m = crate::record::recorded(channel, m)?;
+            summary.steps = Some(
+                summary
+                    .steps
+                    .map_or((m.step, m.step), |(a, b)| (a.min(m.step), b.max(m.step))),
+            );
+            if !filter.steps.contains(&m.step)
+                || !(filter.channels.is_empty() || filter.channels.contains(&m.topic))
+            {
+                continue;
+            }
+            message_rows(out, &m).map_err(io("writing"))??;
+            summary.messages += 1;
+        }
+    }
+    out.flush().map_err(io("writing"))?;
+    summary.end = stream.finish();
+    Ok(summary)
+}
+
+/// Writes `prefix,field,index,value` rows for the numeric scalars in `value`.
+fn table_rows(
+    out: &mut impl std::io::Write,
+    prefix: &str,
+    name: &str,
+    value: &Value,
+) -> std::io::Result<()> {
     let number = |v: &Value| match v {
         Value::Number(n) => Some(n.to_string()),
         Value::Bool(b) => Some(u8::from(*b).to_string()),
@@ -304,27 +418,28 @@ fn table_rows(out: &mut String, prefix: &str, name: &str, value: &Value) {
                 } else {
                     format!("{name}.{key}")
                 };
-                table_rows(out, prefix, &child, v);
+                table_rows(out, prefix, &child, v)?;
             }
         }
         Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
             for (i, v) in items.iter().enumerate() {
                 if let Some(x) = number(v) {
-                    writeln!(out, "{prefix},{name},{i},{x}").expect("writing to a String");
+                    writeln!(out, "{prefix},{name},{i},{x}")?;
                 }
             }
         }
         Value::Array(items) => {
             for (i, v) in items.iter().enumerate() {
-                table_rows(out, prefix, &format!("{name}[{i}]"), v);
+                table_rows(out, prefix, &format!("{name}[{i}]"), v)?;
             }
         }
         scalar => {
             if let Some(x) = number(scalar) {
-                writeln!(out, "{prefix},{name},0,{x}").expect("writing to a String");
+                writeln!(out, "{prefix},{name},0,{x}")?;
             }
         }
     }
+    Ok(())
 }
 
 /// The fields of a message as JSON, with checkpoint bytes replaced by their length.

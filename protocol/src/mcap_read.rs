@@ -19,12 +19,17 @@
 //! a record that does not parse is damage, not a kill: [`Mode::Strict`] refuses it with the
 //! chunk index and byte offset, [`Mode::Salvage`] drops what does not verify, says what it
 //! dropped ([`Dropped`]) and reads on from the next chunk that verifies.
+//!
+//! [`Stream`] is the same strict reader fed piece by piece, in bounded memory.
 
 use std::collections::BTreeMap;
 
 use mcap::McapError;
 use mcap::records::{ChunkHeader, Record, op};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+
+mod stream;
+pub use stream::Stream;
 
 /// What the recorder writes after every completed step, and overwrites with the next one: a
 /// data-end record without CRC, a footer without summary, and the end magic. A file that ends
@@ -343,29 +348,6 @@ impl State {
             reason,
         };
         match opcode {
-            op::CHUNK => {
-                let index = self.n_chunks;
-                self.n_chunks += 1;
-                match read_chunk(&bytes[offset..next], offset, index) {
-                    Ok(records) => {
-                        for record in records {
-                            self.take(record, offset)?;
-                        }
-                    }
-                    Err(err) if self.mode == Mode::Salvage => {
-                        self.dropped.push(Dropped {
-                            what: format!("chunk {index}"),
-                            offset,
-                            len: next - offset,
-                            reason: err.to_string(),
-                        });
-                    }
-                    Err(err) => return Err(err),
-                }
-            }
-            // NOTE: message indexes only speed up seeking, which this reader does not do; the
-            // data-end CRC covers their bytes.
-            op::MESSAGE_INDEX => {}
             op::DATA_END => {
                 let record =
                     mcap::parse_record(opcode, body).map_err(|e| corrupt(e.to_string()))?;
@@ -404,12 +386,6 @@ impl State {
                 });
                 return Ok(Step::Done);
             }
-            op::HEADER | op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => {
-                let record =
-                    mcap::parse_record(opcode, body).map_err(|e| corrupt(e.to_string()))?;
-                self.take(record, offset)?;
-            }
-            op::ATTACHMENT => {}
             // A footer before any data end: a file from an older writer (no data end) or damage.
             op::FOOTER if rest.len() == 9 + 20 + 8 && ends_with_magic => {
                 self.end = Some(End::Finished {
@@ -417,13 +393,62 @@ impl State {
                 });
                 return Ok(Step::Done);
             }
+            _ => self.data_record(opcode, body, &bytes[offset..next], offset)?,
+        }
+        Ok(Step::Next(next))
+    }
+
+    /// A record of the data section other than the data end and the footer: `record` is the
+    /// whole record (opcode, length, `body`) at `offset`.
+    fn data_record(
+        &mut self,
+        opcode: u8,
+        body: &[u8],
+        record: &[u8],
+        offset: usize,
+    ) -> Result<(), ScanError> {
+        let corrupt = |reason: String| ScanError::Record {
+            offset,
+            opcode,
+            reason,
+        };
+        match opcode {
+            op::CHUNK => {
+                let index = self.n_chunks;
+                self.n_chunks += 1;
+                match read_chunk(record, offset, index) {
+                    Ok(records) => {
+                        for record in records {
+                            self.take(record, offset)?;
+                        }
+                    }
+                    Err(err) if self.mode == Mode::Salvage => {
+                        self.dropped.push(Dropped {
+                            what: format!("chunk {index}"),
+                            offset,
+                            len: record.len(),
+                            reason: err.to_string(),
+                        });
+                    }
+                    Err(err) => return Err(err),
+                }
+            }
+            // NOTE: message indexes only speed up seeking, which this reader does not do; the
+            // data-end CRC covers their bytes.
+            op::MESSAGE_INDEX => {}
+            op::HEADER | op::SCHEMA | op::CHANNEL | op::MESSAGE | op::METADATA => {
+                let record =
+                    mcap::parse_record(opcode, body).map_err(|e| corrupt(e.to_string()))?;
+                self.take(record, offset)?;
+            }
+            op::ATTACHMENT => {}
             _ => {
                 return Err(corrupt(
                     "not a record of the data section (opcode unknown or misplaced)".into(),
                 ));
             }
         }
-        Ok(Step::Next(next))
+        Ok(())
     }
 
     fn take(&mut self, record: Record<'_>, offset: usize) -> Result<(), ScanError> {

@@ -27,6 +27,9 @@ pub enum RecordError {
         /// The decoder's message.
         reason: String,
     },
+    /// Reading or writing a stream failed (`inspect --export csv`).
+    #[error("{0}")]
+    Io(String),
     /// The requested step is not in the recording.
     #[error("step {step} is not in the recording (it holds {n_steps} steps, {first} to {last})")]
     NoSuchStep {

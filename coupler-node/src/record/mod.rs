@@ -70,6 +70,7 @@ pub use channels::{
     FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_topic,
 };
 pub use error::RecordError;
+pub(crate) use reader::recorded;
 pub use reader::{Recorded, Recording, read_recording};
 pub use recover::{Recovered, recover};
 pub use writer::Recorder;

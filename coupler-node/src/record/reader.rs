@@ -107,22 +107,27 @@ fn payload_step(topic: &str, data: &[u8], log_time: u64) -> Result<u64, RecordEr
     })
 }
 
+/// A scanned message of `channel` as a [`Recorded`] (its step read from the payload).
+pub(crate) fn recorded(
+    channel: &mcap_read::ScannedChannel,
+    m: mcap_read::ScannedMessage,
+) -> Result<Recorded, RecordError> {
+    Ok(Recorded {
+        step: payload_step(&channel.topic, &m.data, m.log_time)?,
+        topic: channel.topic.clone(),
+        log_time: m.log_time,
+        publish_time: m.publish_time,
+        sequence: m.sequence,
+        data: m.data,
+    })
+}
+
 pub(crate) fn recording(scan: Scan) -> Result<Recording, RecordError> {
     check_layout(&scan)?;
     let messages = scan
         .messages
         .into_iter()
-        .map(|m| {
-            let topic = scan.channels[&m.channel_id].topic.clone();
-            Ok(Recorded {
-                step: payload_step(&topic, &m.data, m.log_time)?,
-                topic,
-                log_time: m.log_time,
-                publish_time: m.publish_time,
-                sequence: m.sequence,
-                data: m.data,
-            })
-        })
+        .map(|m| recorded(&scan.channels[&m.channel_id], m))
         .collect::<Result<_, RecordError>>()?;
     Ok(Recording {
         messages,

@@ -7,7 +7,10 @@ use std::cell::RefCell;
 use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::rc::Rc;
 
-use coupler_node::inspect::{ExportFormat, TABLE_HEADER, export_step, export_table, list_steps};
+use coupler_node::inspect::{
+    ExportFormat, TABLE_HEADER, TableFilter, TableSummary, export_step, export_table, list_steps,
+    stream_table,
+};
 use coupler_node::ledger::LedgerEntry;
 use coupler_node::record::{
     DIAGNOSTICS_TOPIC, Diagnostics, RecordError, Recorder, Recording, diagnostics_schema,
