@@ -6,7 +6,7 @@ use std::io::Write;
 
 use protocol::vtk::{DataArray, ImageData, Values, image_data};
 
-use crate::embedded::{Loads, SolidFrame};
+use crate::embedded::{COVERED_TOLERANCE, Loads, SolidFrame};
 use crate::fv::FluidState;
 use crate::grid::Grid;
 
@@ -53,8 +53,10 @@ pub fn write_fluid_csv(
 
 /// The fluid as VTK XML image data (`.vti` bytes, compressed binary): cell data `rho`
 /// [kg/m³], `p` \[Pa\], `alpha` (fluid fraction [-], 1 when `alpha` is `None`) and the vector
-/// `velocity` [m/s] (3 components, inactive axes 0); inactive axes are one cell thick. The same
-/// arrays as [`write_fluid_vtk`].
+/// `velocity` [m/s] (3 components, inactive axes 0), the arrays of [`write_fluid_vtk`]; and,
+/// with `alpha`, VTK's `vtkGhostType` marking the cells the solid covers hidden (32), so that
+/// ParaView shows the solid through them without a filter. Inactive axes are flat: a 2-D fluid
+/// is an image in the plane z = 0, the 2-D solid's plane.
 pub fn fluid_vti(
     grid: &Grid,
     state: &FluidState,
@@ -72,14 +74,28 @@ pub fn fluid_vti(
         p.push(pressure);
         velocity.extend_from_slice(&v);
     }
+    // vtkDataSetAttributes::HIDDENCELL: not drawn, not picked, left out by filters.
+    const HIDDEN_CELL: u8 = 32;
+    let ghost = alpha.map(|a| {
+        a.iter()
+            .map(|&f| {
+                if f <= COVERED_TOLERANCE {
+                    HIDDEN_CELL
+                } else {
+                    0
+                }
+            })
+            .collect()
+    });
     let alpha = match alpha {
         Some(a) => a.to_vec(),
         None => vec![1.0; n],
     };
-    let image = ImageData {
+    let flat = |a: usize| a >= grid.dim;
+    let mut image = ImageData {
         cells: grid.cells,
-        origin: grid.lower,
-        spacing: grid.dx,
+        origin: std::array::from_fn(|a| if flat(a) { 0.0 } else { grid.lower[a] }),
+        spacing: std::array::from_fn(|a| if flat(a) { 0.0 } else { grid.dx[a] }),
         cell_data: vec![
             DataArray::scalar("rho", Values::Float64(rho)),
             DataArray::scalar("p", Values::Float64(p)),
@@ -87,6 +103,11 @@ pub fn fluid_vti(
             DataArray::vector("velocity", velocity),
         ],
     };
+    if let Some(ghost) = ghost {
+        image
+            .cell_data
+            .push(DataArray::scalar("vtkGhostType", Values::UInt8(ghost)));
+    }
     image_data(&image, title)
 }
 

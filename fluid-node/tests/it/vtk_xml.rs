@@ -26,7 +26,16 @@ fn words(text: &str) -> Vec<f64> {
 fn check(s: &FluidSolver) -> usize {
     let grid = s.grid();
     let n = grid.n_cells();
-    let alpha: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) / n as f64).collect();
+    // Every third cell covered (fluid fraction 0): hidden by `vtkGhostType`.
+    let alpha: Vec<f64> = (0..n)
+        .map(|i| {
+            if i % 3 == 0 {
+                0.0
+            } else {
+                (i as f64 + 0.5) / n as f64
+            }
+        })
+        .collect();
     let file =
         read::parse(&fluid_vti(grid, s.state(), GAMMA, Some(&alpha), "test")).expect("decodes");
     assert_eq!(file.kind, "ImageData");
@@ -34,8 +43,12 @@ fn check(s: &FluidSolver) -> usize {
         .split(' ')
         .map(|w| w.parse().expect("extent"))
         .collect();
-    let cells = [extent[1], extent[3], extent[5]];
+    // Inactive axes are flat: one layer of points (extent 0 0), one cell.
+    let cells = [extent[1].max(1), extent[3].max(1), extent[5].max(1)];
     assert_eq!(cells, grid.cells);
+    for a in grid.dim..3 {
+        assert_eq!(extent[2 * a + 1], 0, "axis {a} is flat");
+    }
     assert_eq!(cells.iter().product::<usize>(), n);
     let (origin, spacing) = (
         words(&file.dataset["Origin"]),
@@ -52,7 +65,21 @@ fn check(s: &FluidSolver) -> usize {
         get("alpha", 1),
         get("velocity", 3),
     );
+    let ghost = match &file
+        .array("CellData", "vtkGhostType")
+        .expect("ghost")
+        .values
+    {
+        protocol::vtk::Values::UInt8(g) => g.clone(),
+        other => panic!("vtkGhostType is {}", other.type_name()),
+    };
     for idx in 0..n {
+        // vtkDataSetAttributes::HIDDENCELL where the solid covers the cell, else a plain cell.
+        assert_eq!(
+            ghost[idx],
+            if idx % 3 == 0 { 32 } else { 0 },
+            "ghost of cell {idx}"
+        );
         let (r, v, pressure) = s.state().primitive(idx, GAMMA);
         assert_eq!(rho[idx].to_bits(), r.to_bits(), "rho of cell {idx}");
         assert_eq!(p[idx].to_bits(), pressure.to_bits(), "p of cell {idx}");

@@ -15,7 +15,7 @@ pub struct OutputConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub every: Option<f64>,
     /// File formats: `"csv"`, `"vtk"` (VTK XML: `.vti`, `.vtp` and a `.pvd` series per kind),
-    /// `"vtk-legacy"` (legacy ASCII `.vtk`) (default csv).
+    /// `"vtk-legacy"` (legacy ASCII `.vtk`) (default csv and vtk: a run opens in ParaView).
     #[serde(default = "default_formats")]
     pub formats: Vec<OutputFormat>,
     /// Probes.
@@ -24,7 +24,7 @@ pub struct OutputConfig {
 }
 
 fn default_formats() -> Vec<OutputFormat> {
-    vec![OutputFormat::Csv]
+    vec![OutputFormat::Csv, OutputFormat::Vtk]
 }
 
 impl Default for OutputConfig {

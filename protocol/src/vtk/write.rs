@@ -88,6 +88,8 @@ impl DataArray {
 }
 
 /// A uniform grid of `cells` cells (one along an inactive axis) from `origin` with `spacing`.
+/// An axis of one cell with a spacing of 0 is flat: the image has no thickness along it (a
+/// 2-D fluid lies in the plane z = origin, so a top view shows the solid drawn in that plane).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImageData {
     /// Cells per axis.
@@ -170,16 +172,17 @@ impl PolyData {
 pub fn image_data(image: &ImageData, comment: &str) -> Vec<u8> {
     let n_cells: usize = image.cells.iter().product();
     let mut file = XmlFile::new("ImageData", comment);
-    let extent = format!(
-        "0 {} 0 {} 0 {}",
-        image.cells[0], image.cells[1], image.cells[2]
-    );
+    // A flat axis has one layer of points (extent 0 0), whose spacing VTK never uses: 1.
+    let flat = |a: usize| image.cells[a] == 1 && image.spacing[a] == 0.0;
+    let points = |a: usize| if flat(a) { 0 } else { image.cells[a] };
+    let extent = format!("0 {} 0 {} 0 {}", points(0), points(1), points(2));
+    let spacing = std::array::from_fn(|a| if flat(a) { 1.0 } else { image.spacing[a] });
     let triple = |v: [f64; 3]| format!("{} {} {}", v[0], v[1], v[2]);
     let _ = writeln!(
         file.xml,
         "  <ImageData WholeExtent=\"{extent}\" Origin=\"{}\" Spacing=\"{}\">",
         triple(image.origin),
-        triple(image.spacing)
+        triple(spacing)
     );
     let _ = writeln!(file.xml, "    <Piece Extent=\"{extent}\">");
     file.xml.push_str("      <CellData>\n");
