@@ -72,4 +72,4 @@ pub use channels::{
 pub use error::RecordError;
 pub use reader::{Recorded, Recording, read_recording};
 pub use recover::{Recovered, recover};
-pub use writer::Recorder;
+pub use writer::{Recorder, cut_back};
