@@ -43,6 +43,7 @@ pub fn check(
         .check_memory(crate::preflight::available_memory()?)
         .with_context(|| path.display().to_string())?;
     crate::preflight::check_replay_doubles(&scene)?;
+    crate::preflight::check_fluid_ranks(&scene, None)?;
     Ok(summarize(&scene))
 }
 

@@ -27,6 +27,12 @@ pub enum SinkError {
     /// The MCAP record failed.
     #[error(transparent)]
     Record(#[from] crate::record::RecordError),
+    /// A write of the record failed: the message names the file, the error and what was kept.
+    #[error("{0}")]
+    Write(String),
+    /// `run.record_max_bytes` is reached: the run ends cleanly after this step.
+    #[error("{0}")]
+    Limit(String),
     /// A CSV file of the run (`ledger.csv`, `links_broken.csv`) could not be written.
     #[error("writing {}: {source}", path.display())]
     Csv {
@@ -197,6 +203,17 @@ pub enum DriverError {
     /// A node's process ended or the supervisor asked to stop.
     #[error("{0}")]
     Aborted(String),
+    /// No message came from the node(s) waited for within the deadline, though their
+    /// processes live (stopped, hung, or busy far beyond the deadline).
+    #[error("{who} node stopped answering: no message within {timeout:?} at step {step}")]
+    Silent {
+        /// The node or nodes waited for (`fluid`, `fluid and solid`).
+        who: String,
+        /// The deadline.
+        timeout: Duration,
+        /// The step.
+        step: u64,
+    },
     /// A node limited the step to less than `run.dt_min`: a run without progress.
     #[error(
         "the time step collapsed at step {step}, t = {t:.4e} s: {node} limits dt to {dt:.4e} s ({why}), below run.dt_min = {dt_min:.4e} s{}",
@@ -280,9 +297,13 @@ pub fn drive(
     let (status, error) = match result {
         Ok(Finish::Completed) => ("completed".to_string(), None),
         Ok(Finish::MaxSteps) => ("max_steps".to_string(), None),
+        // `run.record_max_bytes`: a clean end after a complete step, like `max_steps`.
+        Err(DriverError::Record(SinkError::Limit(status))) => {
+            shut_down(transport, coupler, sink, ShutdownReason::Completed);
+            (status, None)
+        }
         Err(err) => {
             let reason = err.to_string();
-            let stamp = Stamp::step(coupler.step());
             if let DriverError::Coupler(crate::scheme::CouplerError::NotConverged {
                 step,
                 t,
@@ -309,32 +330,12 @@ pub fn drive(
                     tracing::warn!("the record lacks the failed step's diagnostics: {err}");
                 }
             }
-            let t = coupler.time();
-            for node in [NodeKind::Fluid, NodeKind::Solid] {
-                let present = match node {
-                    NodeKind::Fluid => coupler.config().fluid,
-                    _ => coupler.config().solid,
-                };
-                if present {
-                    let frame = codec::encode(
-                        NodeKind::Coupler,
-                        &Message::Shutdown(Shutdown {
-                            stamp,
-                            reason: ShutdownReason::Failure(reason.clone()),
-                        }),
-                    );
-                    tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step);
-                    if let Err(err) = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame) {
-                        tracing::warn!(
-                            "the record lacks the shutdown sent to the {node} node: {err}"
-                        );
-                    }
-                    let _ = transport.send(node, &frame);
-                }
-            }
-            if let Err(err) = sink.end_step() {
-                tracing::warn!("the record's last step is not flushed: {err}");
-            }
+            shut_down(
+                transport,
+                coupler,
+                sink,
+                ShutdownReason::Failure(reason.clone()),
+            );
             (reason, Some(err))
         }
     };
@@ -362,6 +363,41 @@ pub fn drive(
         outputs,
     };
     (summary, error)
+}
+
+/// Sends the nodes a shutdown with `reason` (recorded too), and makes the record's last step
+/// durable.
+fn shut_down(
+    transport: &mut dyn Transport,
+    coupler: &Coupler,
+    sink: &mut dyn RecordSink,
+    reason: ShutdownReason,
+) {
+    let stamp = Stamp::step(coupler.step());
+    let t = coupler.time();
+    for node in [NodeKind::Fluid, NodeKind::Solid] {
+        let present = match node {
+            NodeKind::Fluid => coupler.config().fluid,
+            _ => coupler.config().solid,
+        };
+        if present {
+            let frame = codec::encode(
+                NodeKind::Coupler,
+                &Message::Shutdown(Shutdown {
+                    stamp,
+                    reason: reason.clone(),
+                }),
+            );
+            tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step);
+            if let Err(err) = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame) {
+                tracing::warn!("the record lacks the shutdown sent to the {node} node: {err}");
+            }
+            let _ = transport.send(node, &frame);
+        }
+    }
+    if let Err(err) = sink.end_step() {
+        tracing::warn!("the record's last step is not flushed: {err}");
+    }
 }
 
 /// A sink that counts the seconds spent in it (`Summary::record_s`).
@@ -555,6 +591,12 @@ fn receive(
     };
     let (from, frame) = loop {
         if let Some(reason) = abort.check() {
+            // A node that reported its failure before it exited: its report, not its exit.
+            if let Ok((from, frame)) = transport.recv(None, Duration::ZERO)
+                && codec::decode_header(&frame).is_ok_and(|h| h.kind == MessageKind::Failure)
+            {
+                break (from, frame);
+            }
             return Err(DriverError::Aborted(reason));
         }
         match transport.recv(expected, slice) {
@@ -562,12 +604,11 @@ fn receive(
             Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
             Err(TransportError::Timeout { .. }) => {
                 let who: Vec<&str> = coupler.waiting_for().iter().map(|n| n.name()).collect();
-                return Err(DriverError::Aborted(format!(
-                    "{} node stopped answering: no message within {:?} at step {}",
-                    who.join(" and "),
-                    cfg.timeout,
-                    coupler.step()
-                )));
+                return Err(DriverError::Silent {
+                    who: who.join(" and "),
+                    timeout: cfg.timeout,
+                    step: coupler.step(),
+                });
             }
             Err(err) => return Err(err.into()),
         }

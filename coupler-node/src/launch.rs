@@ -138,11 +138,45 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             node_binary(*node, explicit)
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
+    // Before anything is written there, and held to the end of the run.
+    let _out_lock = crate::out_folder::lock(&opts.out)?;
     crate::out_folder::prepare(
         &opts.out,
         opts.overwrite,
         opts.restart.as_ref().map(|(file, _)| file.as_path()),
     )?;
+    crate::preflight::check_record_space(&scene, &opts.out)?;
+    reserve_summary(&scene, &opts.out)?;
+    let mut written = false;
+    let result = run_reserved(opts, &scene, resume, &nodes, &binaries, &mut written);
+    if let Err(err) = &result
+        && !written
+    {
+        // A run that failed before its end still leaves a summary that says why.
+        let summary = Summary {
+            scene: scene.name.clone(),
+            status: format!("{err:#}"),
+            ..Summary::default()
+        };
+        if let Err(lost) = write_summary(&summary, &opts.out) {
+            tracing::error!("{lost:#}");
+        }
+    }
+    result
+}
+
+/// [`run`] once the output folder is locked, prepared and its summary reserved; `written` is
+/// set once the final summary is written.
+fn run_reserved(
+    opts: &RunOptions,
+    scene: &Scene,
+    resume: Option<Resume>,
+    nodes: &[(NodeKind, String)],
+    binaries: &[PathBuf],
+    written: &mut bool,
+) -> anyhow::Result<Summary> {
+    let scene = scene.clone();
+    let nodes = nodes.to_vec();
     let resolved = opts.out.join("scene.toml");
     std::fs::write(&resolved, scene.to_toml())
         .with_context(|| format!("writing {}", resolved.display()))?;
@@ -166,7 +200,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     let mut bus = protocol::bus::Bus::open(&run_id, NodeKind::Coupler, &peers)
         .with_context(|| format!("opening the bus for run {run_id}"))?;
 
-    let children = node_commands(opts, &scene, &nodes, &binaries, &resolved, &run_id)?;
+    let children = node_commands(opts, &scene, &nodes, binaries, &resolved, &run_id)?;
     let abort = Abort::default();
     let hung_up = Arc::new(AtomicBool::new(false));
     let supervisor = Supervisor::start(children, abort.clone(), hung_up.clone())?;
@@ -192,6 +226,7 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
     for (node, exit) in &exits {
         tracing::debug!("the {node} node ended: {}", exit.text);
     }
+    let last_words = last_words(&mut bus);
     drop(bus);
     let _ = protocol::bus::cleanup_run(&run_id);
     let interrupted = hung_up.load(Ordering::SeqCst)
@@ -200,34 +235,132 @@ pub fn run(opts: &RunOptions) -> anyhow::Result<Summary> {
             Some(driver::DriverError::Transport(TransportError::Interrupted))
         );
     // A node that died explains a lost peer better than the transport does (but a node that
-    // ended after the coupler was interrupted is no cause).
+    // ended after the coupler was interrupted is no cause, nor one the coupler killed at the
+    // end, nor one that only lost its exchange with the coupler: exit code 4).
     if !interrupted
         && matches!(
             error,
             Some(driver::DriverError::Transport(_) | driver::DriverError::Aborted(_))
         )
-        && let Some((node, status)) = exits.iter().find(|(_, s)| !s.success)
+        && let Some((node, status)) = exits.iter().find(|(_, s)| is_cause(s))
     {
         summary.status = format!("{node} node died ({}): {}", status.text, summary.status);
+    }
+    let mut failed = error.is_some();
+    let mut fail = |summary: &mut Summary, status: String| {
+        if failed {
+            tracing::error!("{status}");
+        } else {
+            summary.status = status;
+            failed = true;
+        }
+    };
+    if !interrupted && error.is_none() {
+        // A node that failed after the last step (its probe files): its report, else its exit.
+        if let Some((node, report)) = last_words.first() {
+            fail(
+                &mut summary,
+                format!("{node} node failed at the end of the run: {report}"),
+            );
+        } else if let Some((node, status)) = exits.iter().find(|(_, s)| !s.success) {
+            fail(
+                &mut summary,
+                format!(
+                    "{node} node failed at the end of the run ({}): its outputs may be incomplete (its report is on stderr)",
+                    status.text
+                ),
+            );
+        }
+    }
+    if let Err(err) = finished {
+        fail(&mut summary, format!("finishing the record: {err:#}"));
     }
     for (node, implementation) in &nodes {
         summary
             .nodes
             .insert(node.name().to_string(), implementation.clone());
     }
-    write_run_files(&scene, &summary, &opts.out)?;
-    finished.context("finishing the record")?;
+    if let Err(err) = write_outputs_table(&scene, &summary, &opts.out) {
+        fail(&mut summary, format!("{err:#}"));
+    }
+    write_summary(&summary, &opts.out)?;
+    *written = true;
     if interrupted {
         return Err(Interrupted(summary.status).into());
     }
-    if error.is_some() {
+    if failed {
         anyhow::bail!("{}", summary.status);
     }
     Ok(summary)
 }
 
-/// `OUT/outputs.csv` (the output times) and `OUT/summary.json`.
-fn write_run_files(scene: &Scene, summary: &Summary, out: &Path) -> anyhow::Result<()> {
+/// Whether a node's end explains a lost peer: not a success, not killed by the coupler after
+/// the grace period, not exit code 4 (its exchange with the coupler failed: a consequence).
+fn is_cause(exit: &ExitInfo) -> bool {
+    !exit.success && !exit.text.starts_with("killed after") && exit.text != "exit code 4"
+}
+
+/// The failure reports the nodes sent after the coupler stopped listening (a probe file that
+/// could not be written at the end), read from the bus after they exited.
+fn last_words(bus: &mut protocol::bus::Bus) -> Vec<(NodeKind, String)> {
+    let mut words = Vec::new();
+    while let Ok((from, frame)) = bus.recv(None, Duration::ZERO) {
+        if let Ok((_, protocol::wire::Message::Failure(f))) = protocol::codec::decode(&frame) {
+            words.push((from, f.report));
+        }
+    }
+    words
+}
+
+/// Bytes kept for `summary.json` from the start of the run, so that it can be written on a
+/// full disk at the end.
+const SUMMARY_RESERVE: usize = 64 << 10;
+
+/// Writes `OUT/summary.json` with status `running`, padded to [`SUMMARY_RESERVE`] bytes with
+/// spaces (JSON whitespace): the final summary overwrites it in place.
+fn reserve_summary(scene: &Scene, out: &Path) -> anyhow::Result<()> {
+    let path = out.join("summary.json");
+    let mut text = serde_json::to_string_pretty(&Summary {
+        scene: scene.name.clone(),
+        status: "running".into(),
+        ..Summary::default()
+    })
+    .expect("summary serializes");
+    text.push('\n');
+    let pad = SUMMARY_RESERVE.saturating_sub(text.len());
+    text.extend(std::iter::repeat_n(' ', pad));
+    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// `OUT/summary.json`, over the space [`reserve_summary`] kept (a status too long for it is
+/// shortened), then cut to its length.
+fn write_summary(summary: &Summary, out: &Path) -> anyhow::Result<()> {
+    use std::io::{Seek, Write};
+    let path = out.join("summary.json");
+    let mut summary = summary.clone();
+    if summary.status.len() > SUMMARY_RESERVE / 2 {
+        let cut = (0..=SUMMARY_RESERVE / 2)
+            .rev()
+            .find(|&i| summary.status.is_char_boundary(i))
+            .unwrap_or(0);
+        summary.status.truncate(cut);
+        summary.status.push_str("...");
+    }
+    let json = serde_json::to_string_pretty(&summary).expect("summary serializes") + "\n";
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .with_context(|| format!("opening {}", path.display()))?;
+    file.seek(std::io::SeekFrom::Start(0))
+        .and_then(|_| file.write_all(json.as_bytes()))
+        .and_then(|()| file.set_len(json.len() as u64))
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+/// `OUT/outputs.csv`: the output times.
+fn write_outputs_table(scene: &Scene, summary: &Summary, out: &Path) -> anyhow::Result<()> {
     let mut table = String::from("k,t\n");
     // Output 0 is the initial state when the scene asks for t = 0; the steps' outputs follow.
     let first_planned = u32::from(scene.initial_output());
@@ -237,11 +370,12 @@ fn write_run_files(scene: &Scene, summary: &Summary, out: &Path) -> anyhow::Resu
     for (k, t) in &summary.outputs {
         table.push_str(&format!("{},{t:e}\n", k + first_planned));
     }
-    std::fs::write(out.join("outputs.csv"), table)
-        .with_context(|| format!("writing {}", out.join("outputs.csv").display()))?;
-    let json = serde_json::to_string_pretty(summary).expect("summary serializes");
-    std::fs::write(out.join("summary.json"), json + "\n")
-        .with_context(|| format!("writing {}", out.join("summary.json").display()))?;
+    let path = out.join("outputs.csv");
+    if let Err(err) = std::fs::write(&path, table) {
+        // Nothing half-written is left: a table without its last rows would read as complete.
+        let _ = std::fs::remove_file(&path);
+        return Err(err).with_context(|| format!("writing {}", path.display()));
+    }
     Ok(())
 }
 
@@ -256,6 +390,7 @@ fn resolve(opts: &RunOptions) -> anyhow::Result<(Scene, Option<Resume>)> {
         .check_memory(available_memory()?)
         .with_context(|| opts.scene.display().to_string())?;
     crate::preflight::check_replay_doubles(&scene)?;
+    crate::preflight::check_fluid_ranks(&scene, opts.fluid_bin.as_deref())?;
     let resume = match &opts.restart {
         Some((file, step)) => Some(crate::restart::load(file, *step, &scene)?),
         None => None,
@@ -302,7 +437,7 @@ fn node_commands(
             .arg("--double")
             .arg(implementation)
             .arg("--timeout-s")
-            .arg(opts.timeout.as_secs_f64().to_string())
+            .arg(node_timeout(opts.timeout).as_secs_f64().to_string())
             .args(opts.verbosity.to_args())
             .stdin(Stdio::null())
             // NOTE: a group of its own, so that Ctrl-C or a terminal hangup reaches the coupler
@@ -310,6 +445,7 @@ fn node_commands(
             // as a node death).
             .process_group(0)
             .kill_on_drop(true);
+        die_with_coupler(&mut cmd);
         let ranks = match node {
             NodeKind::Fluid if mpirun.is_some() => {
                 // The launcher's report names a rank that died (read from its stderr).
@@ -321,6 +457,36 @@ fn node_commands(
         children.push((*node, cmd, ranks));
     }
     Ok(children)
+}
+
+/// The deadline the nodes get: the coupler's, plus a quarter of it and at least 1 s, so that
+/// the coupler, which sees which node is silent, speaks first when a node stops answering (a
+/// node waiting for the coupler then is not the one to blame).
+pub fn node_timeout(timeout: Duration) -> Duration {
+    let longer = timeout + (timeout / 4).max(Duration::from_secs(1));
+    longer.min(Duration::from_secs_f64(protocol::session::MAX_TIMEOUT_S))
+}
+
+/// Makes the kernel SIGKILL the child when the coupler's thread that starts it ends
+/// (`PR_SET_PDEATHSIG`, set between fork and exec, so `mpirun` gets it too), whatever ended the
+/// coupler; a child whose coupler is already gone does not start.
+fn die_with_coupler(cmd: &mut tokio::process::Command) {
+    let coupler = std::process::id();
+    // SAFETY: the closure runs in the child between fork and exec; it calls only
+    // async-signal-safe functions (prctl with integer arguments, getppid) and allocates
+    // nothing.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            // The coupler died between the fork and the prctl: no signal will come.
+            if std::os::unix::process::parent_id() != coupler {
+                return Err(std::io::Error::from_raw_os_error(libc::ESRCH));
+            }
+            Ok(())
+        });
+    }
 }
 
 /// How a child ended.

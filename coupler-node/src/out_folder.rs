@@ -2,9 +2,102 @@
 //! unless `--overwrite`, which clears the files an earlier run wrote (and only those), so that no
 //! stale output (a `fluid_3.vti` of a run with more outputs) is left beside the new ones.
 
+use std::fs::{File, TryLockError};
 use std::path::Path;
 
 use anyhow::Context;
+
+/// The exclusive lock of an output folder, held for the whole run ([`lock`]); dropped, the
+/// kernel releases it (so does the death of the process).
+#[derive(Debug)]
+pub struct OutLock {
+    _dir: File,
+}
+
+/// Creates `out` when missing and locks it exclusively (`flock` on the directory itself, so no
+/// file is added to it), before the run writes anything there: a second run into the same
+/// folder is refused, naming the process that holds it (pid, command, start time).
+pub fn lock(out: &Path) -> anyhow::Result<OutLock> {
+    if !out.exists() {
+        std::fs::create_dir_all(out)
+            .with_context(|| format!("creating output directory {}", out.display()))?;
+    }
+    anyhow::ensure!(
+        out.is_dir(),
+        "output directory {} is not a directory",
+        out.display()
+    );
+    let dir =
+        File::open(out).with_context(|| format!("opening output directory {}", out.display()))?;
+    match dir.try_lock() {
+        Ok(()) => Ok(OutLock { _dir: dir }),
+        Err(TryLockError::WouldBlock) => anyhow::bail!(
+            "output directory {} is in use by another run ({}); one run per output folder: wait for it to end or choose another --out",
+            out.display(),
+            holder(&dir)
+        ),
+        Err(TryLockError::Error(e)) => {
+            Err(e).with_context(|| format!("locking output directory {}", out.display()))
+        }
+    }
+}
+
+/// Who holds the `flock` of `dir`: pid, command line and start time from `/proc/locks` and
+/// `/proc/PID` (Linux); "holder unknown" elsewhere.
+fn holder(dir: &File) -> String {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(inode) = dir.metadata().map(|m| m.ino()) else {
+        return "holder unknown".into();
+    };
+    let locks = std::fs::read_to_string("/proc/locks").unwrap_or_default();
+    // `1: FLOCK  ADVISORY  WRITE 4242 fd:01:1234567 0 EOF`
+    let pid = locks.lines().find_map(|line| {
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        let (kind, pid, id) = (fields.get(1)?, fields.get(4)?, fields.get(5)?);
+        let ino = id.rsplit(':').next()?.parse::<u64>().ok()?;
+        (*kind == "FLOCK" && ino == inode).then(|| pid.parse::<u32>().ok())?
+    });
+    let Some(pid) = pid else {
+        return "holder unknown".into();
+    };
+    let command = std::fs::read(format!("/proc/{pid}/cmdline"))
+        .map(|b| {
+            let words: Vec<String> = b
+                .split(|&c| c == 0)
+                .filter(|w| !w.is_empty())
+                .map(|w| String::from_utf8_lossy(w).into_owned())
+                .collect();
+            words.join(" ")
+        })
+        .unwrap_or_default();
+    let started = std::fs::metadata(format!("/proc/{pid}"))
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .map_or_else(|| "unknown".to_string(), |d| utc(d.as_secs()));
+    format!("pid {pid}, started {started}: {command}")
+}
+
+/// `YYYY-MM-DD HH:MM:SS UTC` of a UNIX time (civil from days, Howard Hinnant's algorithm).
+fn utc(secs: u64) -> String {
+    let days = (secs / 86_400) as i64;
+    let rem = secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02} UTC",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
 
 /// Makes `out` ready for a run: creates it when missing; an empty folder is used as it is. A
 /// folder with entries is refused unless `overwrite`; with `overwrite` every entry must be one
@@ -123,6 +216,29 @@ pub fn is_run_output(name: &str, is_dir: bool) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn utc_dates() {
+        assert_eq!(utc(0), "1970-01-01 00:00:00 UTC");
+        assert_eq!(utc(951_782_400), "2000-02-29 00:00:00 UTC");
+        assert_eq!(utc(1_796_515_199), "2026-12-05 23:59:59 UTC");
+    }
+
+    #[test]
+    fn a_second_lock_of_a_folder_is_refused_naming_the_holder() {
+        let dir = std::env::temp_dir().join(format!("cosim-lock-{}", std::process::id()));
+        let first = lock(&dir).expect("first lock");
+        let err = lock(&dir).expect_err("second lock").to_string();
+        assert!(err.contains("in use by another run"), "{err}");
+        assert!(
+            err.contains(&format!("pid {}", std::process::id())),
+            "{err}"
+        );
+        drop(first);
+        let again = lock(&dir).expect("lock after release");
+        drop(again);
+        std::fs::remove_dir_all(&dir).expect("clean up");
+    }
 
     #[test]
     fn run_outputs_are_told_from_other_files() {

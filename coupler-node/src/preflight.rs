@@ -93,6 +93,102 @@ pub fn check_replay_doubles(scene: &Scene) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses `fluid.ranks` > 1 when the fluid binary that would run was built without MPI
+/// (`fluid-node --features` does not list `mpi`), naming the key and the binary.
+pub fn check_fluid_ranks(scene: &Scene, fluid_bin: Option<&Path>) -> anyhow::Result<()> {
+    let Some(fluid) = scene
+        .fluid
+        .as_ref()
+        .filter(|f| f.ranks > 1 && f.node == "real")
+    else {
+        return Ok(());
+    };
+    let bin = node_binary(NodeKind::Fluid, fluid_bin)?;
+    let features = std::process::Command::new(&bin)
+        .arg("--features")
+        .output()
+        .with_context(|| format!("asking {} for its features", bin.display()))?;
+    let features = String::from_utf8_lossy(&features.stdout);
+    anyhow::ensure!(
+        features.lines().any(|l| l.trim() == "mpi"),
+        "key `fluid.ranks`: {} ranks need a fluid-node built with MPI, and {} was built without \
+         (cargo build --release -p fluid-node --features mpi)",
+        fluid.ranks,
+        bin.display()
+    );
+    Ok(())
+}
+
+/// Bytes free for an unprivileged user on the file system that holds `dir` (`statvfs`).
+pub fn free_space(dir: &Path) -> std::io::Result<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let path = std::ffi::CString::new(dir.as_os_str().as_bytes())
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
+    let mut stat = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
+    // SAFETY: `path` is a NUL-terminated string that outlives the call, and `stat` points to
+    // writable memory of the size `statvfs` fills.
+    let rc = unsafe { libc::statvfs(path.as_ptr(), stat.as_mut_ptr()) };
+    if rc != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // SAFETY: `statvfs` returned 0, so it filled the struct.
+    let stat = unsafe { stat.assume_init() };
+    Ok(stat.f_bavail.saturating_mul(stat.f_frsize))
+}
+
+/// Compares the record's estimated size ([`Scene::record_estimate`]) with the free space of
+/// `out`'s file system: refuses a run whose steps are known (`run.max_steps`, or `run.t_end`
+/// over `run.dt_max`) and whose record would not fit, unless `run.record_max_bytes` caps it
+/// below the free space; warns, with the figures, when the free space holds fewer than
+/// [`WARN_STEPS`] steps of an open-ended run.
+pub fn check_record_space(scene: &Scene, out: &Path) -> anyhow::Result<()> {
+    let est = scene.record_estimate();
+    if est.per_step == 0 {
+        return Ok(());
+    }
+    let free = free_space(out)
+        .with_context(|| format!("measuring the free space of {}", out.display()))?;
+    let gb = |b: u64| {
+        if b >= 1_000_000_000 {
+            format!("{:.2} GB", b as f64 / 1e9)
+        } else {
+            format!("{:.1} MB", b as f64 / 1e6)
+        }
+    };
+    if let Some(cap) = scene.run.record_max_bytes
+        && cap <= free
+    {
+        return Ok(());
+    }
+    if let Some(steps) = est.steps {
+        let total = steps.saturating_mul(est.per_step);
+        anyhow::ensure!(
+            total <= free,
+            "the record is estimated at {} ({steps} steps x {} B: {}), more than the {} free on the file system of {}; lower run.max_steps, cap it with run.record_max_bytes, or record less (run.record = \"diagnostics\")",
+            gb(total),
+            est.per_step,
+            est.how,
+            gb(free),
+            out.display()
+        );
+        return Ok(());
+    }
+    let fit = free / est.per_step;
+    if fit < WARN_STEPS {
+        tracing::warn!(
+            "the record takes an estimated {} B per step ({}); the {} free on the file system of {} hold about {fit} steps: set run.record_max_bytes to stop the run cleanly before the disk is full",
+            est.per_step,
+            est.how,
+            gb(free),
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// An open-ended run whose record fits fewer steps than this in the free space is warned of.
+pub const WARN_STEPS: u64 = 100_000;
+
 /// The binary of a node: explicit path, `COSIM_<NODE>_BIN`, or beside this executable.
 pub fn node_binary(node: NodeKind, explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
     if let Some(p) = explicit {

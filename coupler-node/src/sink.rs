@@ -21,6 +21,8 @@ use crate::record::Recorder;
 pub struct CsvFile {
     file: File,
     path: std::path::PathBuf,
+    /// Bytes of whole rows in the file.
+    len: u64,
 }
 
 impl CsvFile {
@@ -29,28 +31,63 @@ impl CsvFile {
         use std::io::Write;
         let mut file =
             File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        file.write_all(format!("{header}\n").as_bytes())
+        let line = format!("{header}\n");
+        file.write_all(line.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         Ok(CsvFile {
             file,
             path: path.to_path_buf(),
+            len: line.len() as u64,
         })
     }
 
-    /// Appends `rows` (each with its newline) in one write; nothing for no rows.
+    /// Appends `rows` (each with its newline) in one write; nothing for no rows. A write that
+    /// fails (a full disk) is cut back, so the file ends on a whole row.
     pub fn append(&mut self, rows: &str) -> Result<(), SinkError> {
-        use std::io::Write;
+        use std::io::{Seek, Write};
         if rows.is_empty() {
             return Ok(());
         }
-        self.file
-            .write_all(rows.as_bytes())
-            .map_err(|source| SinkError::Csv {
-                path: self.path.clone(),
-                source,
-            })
+        match self.file.write_all(rows.as_bytes()) {
+            Ok(()) => {
+                self.len += rows.len() as u64;
+                Ok(())
+            }
+            Err(source) => {
+                let _ = self.file.set_len(self.len);
+                let _ = self.file.seek(std::io::SeekFrom::Start(self.len));
+                Err(SinkError::Csv {
+                    path: self.path.clone(),
+                    source,
+                })
+            }
+        }
     }
 }
+
+/// An error and its sources, `: `-separated (the MCAP library's IO error says only "I/O error";
+/// its source says which).
+fn with_sources(err: &dyn std::error::Error) -> String {
+    let mut text = err.to_string();
+    let mut source = err.source();
+    while let Some(s) = source {
+        let next = s.to_string();
+        // The MCAP library's error repeats its source's text after its own prefix.
+        if !text.ends_with(&next) {
+            text.push_str(&format!(": {next}"));
+        }
+        source = s.source();
+    }
+    text
+}
+
+/// Bytes of a record's summary besides its chunk indexes (schemas, channels, statistics,
+/// metadata indexes, footer), an upper estimate.
+const SUMMARY_BASE_BYTES: u64 = 16 << 10;
+
+/// Bytes of one chunk index in a record's summary (its message-index offsets of up to eight
+/// channels included), an upper estimate.
+const SUMMARY_BYTES_PER_CHUNK: u64 = 256;
 
 /// Header line of `links_broken.csv` (DESIGN §7), without the newline.
 pub const LINKS_BROKEN_HEADER: &str = "t,step,a,b";
@@ -69,8 +106,19 @@ pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
 /// `none`), `ledger.csv` (always) and `links_broken.csv` (scenes with `solid.fracture`). One
 /// layer over the files: each call goes straight to the file it concerns.
 pub struct RunSink {
-    /// The MCAP record (`None` at level `none`, and once [`RunSink::finish`]ed).
+    /// The MCAP record (`None` at level `none`, once [`RunSink::finish`]ed, and once a write
+    /// failed).
     record: Option<Recorder<BufWriter<File>>>,
+    /// The record's path and a second handle on it, to cut it back after a failed write.
+    record_file: Option<(std::path::PathBuf, File)>,
+    /// `run.record_max_bytes`.
+    cap: Option<u64>,
+    /// The record's committed bytes at the end of the last step.
+    last_bytes: u64,
+    /// The largest step's bytes so far.
+    largest_step: u64,
+    /// Steps ended.
+    steps: u64,
     /// Frames and checkpoints are recorded (levels `all` and `exchange`).
     frames: bool,
     /// The conservation history, `ledger.csv`.
@@ -83,12 +131,17 @@ impl RunSink {
     /// Creates the run's files in `out`, the record first (with the scene as its metadata).
     pub fn create(out: &Path, scene: &Scene) -> anyhow::Result<RunSink> {
         let level = scene.run.record;
+        let mut record_file = None;
         let record = match level {
             RecordLevel::None => None,
             level => {
                 let path = out.join("exchange.mcap");
                 let file =
                     File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+                let second = file
+                    .try_clone()
+                    .with_context(|| format!("opening {}", path.display()))?;
+                record_file = Some((path.clone(), second));
                 let recorder = Recorder::new(
                     BufWriter::new(file),
                     level,
@@ -102,6 +155,11 @@ impl RunSink {
         };
         Ok(RunSink {
             record,
+            record_file,
+            cap: scene.run.record_max_bytes,
+            last_bytes: 0,
+            largest_step: 0,
+            steps: 0,
             frames: matches!(level, RecordLevel::All | RecordLevel::Exchange),
             ledger: CsvFile::create(&out.join("ledger.csv"), CSV_HEADER)?,
             links_broken: scene
@@ -118,10 +176,57 @@ impl RunSink {
     pub fn finish(&mut self) -> anyhow::Result<()> {
         if let Some(recorder) = self.record.take() {
             use std::io::Write;
-            let mut w = recorder.finish().context("finishing the MCAP record")?;
-            w.flush().context("flushing the MCAP record")?;
+            let committed = recorder.committed();
+            let done = recorder
+                .finish()
+                .map_err(|e| with_sources(&e))
+                .and_then(|mut w| w.flush().map_err(|e| e.to_string()));
+            if let Err(err) = done {
+                anyhow::bail!("{}", self.cut_back(committed, &err));
+            }
         }
         Ok(())
+    }
+
+    /// Runs `call` on the record (nothing without one); a failure cuts the record back to its
+    /// last complete step and ends the recording.
+    fn record_call(
+        &mut self,
+        call: impl FnOnce(&mut Recorder<BufWriter<File>>) -> Result<(), crate::record::RecordError>,
+    ) -> Result<(), SinkError> {
+        let Some(recorder) = self.record.as_mut() else {
+            return Ok(());
+        };
+        match call(recorder) {
+            Ok(()) => Ok(()),
+            Err(err) => {
+                let committed = recorder.committed();
+                // NOTE: dropped, the MCAP writer would try to write its summary after the
+                // failure; forgotten, the bytes it holds stay out of the file.
+                std::mem::forget(self.record.take());
+                Err(SinkError::Write(
+                    self.cut_back(committed, &with_sources(&err)),
+                ))
+            }
+        }
+    }
+
+    /// Cuts the record back to `committed` bytes after `err`; the message names the file, the
+    /// error and what is left.
+    fn cut_back(&mut self, committed: u64, err: &str) -> String {
+        let Some((path, file)) = self.record_file.as_mut() else {
+            return err.to_string();
+        };
+        match crate::record::cut_back(file, committed) {
+            Ok(()) => format!(
+                "writing {}: {err}; the record is cut back to its last complete step ({committed} bytes)",
+                path.display()
+            ),
+            Err(cut) => format!(
+                "writing {}: {err}; cutting it back to its last complete step failed too: {cut}",
+                path.display()
+            ),
+        }
     }
 }
 
@@ -134,12 +239,10 @@ impl RecordSink for RunSink {
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), SinkError> {
-        match &mut self.record {
-            Some(recorder) if self.frames => {
-                Ok(recorder.record_frame(from, to, t, wall_ns, frame)?)
-            }
-            _ => Ok(()),
+        if !self.frames {
+            return Ok(());
         }
+        self.record_call(|r| r.record_frame(from, to, t, wall_ns, frame))
     }
 
     fn checkpoint(
@@ -149,19 +252,14 @@ impl RecordSink for RunSink {
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), SinkError> {
-        match &mut self.record {
-            Some(recorder) if self.frames => {
-                Ok(recorder.record_checkpoint(node, t, wall_ns, frame)?)
-            }
-            _ => Ok(()),
+        if !self.frames {
+            return Ok(());
         }
+        self.record_call(|r| r.record_checkpoint(node, t, wall_ns, frame))
     }
 
     fn diagnostics(&mut self, t: f64, wall_ns: u64, json: &[u8]) -> Result<(), SinkError> {
-        match &mut self.record {
-            Some(recorder) => Ok(recorder.record_diagnostics(t, wall_ns, json)?),
-            None => Ok(()),
-        }
+        self.record_call(|r| r.record_diagnostics(t, wall_ns, json))
     }
 
     fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), SinkError> {
@@ -175,9 +273,25 @@ impl RecordSink for RunSink {
     }
 
     fn end_step(&mut self) -> Result<(), SinkError> {
-        match &mut self.record {
-            Some(recorder) => Ok(recorder.end_step()?),
-            None => Ok(()),
+        self.record_call(|r| r.end_step())?;
+        let (Some(cap), Some(recorder)) = (self.cap, self.record.as_ref()) else {
+            return Ok(());
+        };
+        let bytes = recorder.committed();
+        self.largest_step = self.largest_step.max(bytes.saturating_sub(self.last_bytes));
+        self.last_bytes = bytes;
+        self.steps += 1;
+        // The summary written at the end: a few kB and a chunk index per chunk.
+        let chunks = self.steps + bytes / (4 << 20);
+        let summary = SUMMARY_BASE_BYTES + SUMMARY_BYTES_PER_CHUNK * chunks;
+        let next = self.largest_step;
+        if bytes + next + summary > cap {
+            // Reported once: the run ends here.
+            self.cap = None;
+            return Err(SinkError::Limit(format!(
+                "record_max_bytes: the record holds {bytes} bytes and another step (up to {next} bytes) and its summary (about {summary} bytes) would pass run.record_max_bytes = {cap}"
+            )));
         }
+        Ok(())
     }
 }

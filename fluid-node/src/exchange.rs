@@ -333,7 +333,9 @@ impl NodeModel for RealFluid {
                 let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
                 text.push_str(&format!("{t:e},{rho:e},{},{p:e}\n", vel.join(",")));
             }
-            std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
+            let path = out.join(format!("probe_{}.csv", probe.name));
+            std::fs::write(&path, text)
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
         }
         Ok(())
     }

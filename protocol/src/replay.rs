@@ -12,7 +12,7 @@ use crate::codec;
 use crate::mcap_read::{self, End, Mode, ScanError};
 use crate::topics;
 use crate::transport::{Transport, TransportError};
-use crate::wire::{Message, MessageKind, NodeKind};
+use crate::wire::{Failure, Message, MessageKind, NodeKind, Stamp};
 
 /// Which way a recorded frame went.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -120,14 +120,39 @@ fn describe(frame: &[u8]) -> String {
 }
 
 /// Plays `script` as node `me` over `transport`; returns when the coupler says shutdown or the
-/// script ends with the coupler's shutdown.
+/// script ends with the coupler's shutdown. A script that cannot go on (the record ends, or the
+/// coupler asks for something else) is reported to the coupler as this node's failure, so the
+/// run's status says why, before the error ends the node.
 pub fn play(
     transport: &mut dyn Transport,
     script: &Script,
     timeout: Duration,
 ) -> Result<(), ReplayError> {
+    let mut stamp = Stamp::step(0);
+    let played = play_frames(transport, script, timeout, &mut stamp);
+    if let Err(err @ ReplayError::Mismatch { .. }) = &played {
+        let failure = Message::Failure(Failure {
+            stamp,
+            node: transport.me(),
+            report: err.to_string(),
+        });
+        let _ = transport.send(NodeKind::Coupler, &codec::encode(transport.me(), &failure));
+    }
+    played
+}
+
+/// [`play`] without the report; `stamp` follows the frames played.
+fn play_frames(
+    transport: &mut dyn Transport,
+    script: &Script,
+    timeout: Duration,
+    stamp: &mut Stamp,
+) -> Result<(), ReplayError> {
     let me = transport.me();
     for (dir, frame) in &script.frames {
+        if let Ok(head) = codec::decode_header(frame) {
+            *stamp = head.stamp;
+        }
         match dir {
             Direction::FromNode => transport.send(NodeKind::Coupler, frame)?,
             Direction::ToNode => {

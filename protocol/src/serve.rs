@@ -68,6 +68,7 @@ pub fn serve<M>(
     run: impl FnOnce(M, &mut Link<'_>, &LoopConfig) -> Result<(), NodeError>,
 ) -> Result<(), ServeError> {
     let input = ServeError::Input;
+    crate::bus::die_with_parent().map_err(|e| input(format!("starting: {e}")))?;
     let text = std::fs::read_to_string(&opts.scene)
         .map_err(|e| input(format!("reading scene {}: {e}", opts.scene.display())))?;
     let scene = Scene::from_toml_str(&text, &opts.scene.display().to_string())

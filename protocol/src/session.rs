@@ -59,8 +59,37 @@ pub fn run_node<N: NodeModel + ?Sized>(
             Err(e)
         }
         (Err(e), Ok(())) => Err(e),
-        (Ok(()), probes) => probes,
+        (Ok(()), Err(lost)) => {
+            // The coupler reads it from the bus once this node has exited, so that the run
+            // does not end as completed with a file missing.
+            let _ = link.send(&Message::Failure(Failure {
+                stamp: Stamp::step(0),
+                node: kind,
+                report: lost.to_string(),
+            }));
+            Err(lost)
+        }
+        (Ok(()), Ok(())) => Ok(()),
     }
+}
+
+/// Writes output `k`; a failure is reported to the coupler (its status then names the file and
+/// the error) before it ends the node.
+fn write_output<N: NodeModel + ?Sized>(
+    node: &mut N,
+    link: &mut Link<'_>,
+    out: &Path,
+    (k, step, t): (u32, u64, f64),
+) -> Result<(), NodeError> {
+    node.write_output(k, t, out).map_err(|source| {
+        let err = NodeError::output(out, source);
+        let _ = link.send(&Message::Failure(Failure {
+            stamp: Stamp::step(step),
+            node: link.me(),
+            report: err.to_string(),
+        }));
+        err
+    })
 }
 
 /// [`run_node`] without the probe files.
@@ -98,8 +127,7 @@ fn node_loop<N: NodeModel + ?Sized>(
     // cells by the fluid fraction of the initial wet surface.
     let first_planned = u32::from(cfg.initial_output);
     if let (true, Some(out)) = (cfg.initial_output, &cfg.out) {
-        node.write_output(0, 0.0, out)
-            .map_err(|source| NodeError::output(out, source))?;
+        write_output(node, link, out, (0, 0, 0.0))?;
     }
     link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
     let mut step = 0;
@@ -144,8 +172,7 @@ fn node_loop<N: NodeModel + ?Sized>(
                 let t_end = plan.t_end();
                 node.record_probes(t_end);
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
-                    node.write_output(k + first_planned, t_end, out)
-                        .map_err(|source| NodeError::output(out, source))?;
+                    write_output(node, link, out, (k + first_planned, step, t_end))?;
                     debug!("output {} at t = {t_end:.6e} s", k + first_planned);
                 }
                 debug!(

@@ -266,7 +266,9 @@ impl NodeModel for RealSolid {
                 text.push_str(row);
                 text.push('\n');
             }
-            std::fs::write(out.join(format!("probe_{}.csv", probe.name)), text)?;
+            let path = out.join(format!("probe_{}.csv", probe.name));
+            std::fs::write(&path, text)
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
         }
         Ok(())
     }

@@ -15,7 +15,7 @@ use crate::e2e::{
 };
 
 /// Runs `tests/py/check_mcap.py FILE FLAGS` and returns its stdout; fails unless it succeeds.
-fn python_check(file: &std::path::Path, flags: &[&str]) -> String {
+pub(crate) fn python_check(file: &std::path::Path, flags: &[&str]) -> String {
     let r = Command::new(python())
         .arg(workspace().join("tests/py/check_mcap.py"))
         .arg(file)

@@ -14,5 +14,6 @@ mod issue_15_logs;
 mod issue_16_coupled;
 #[cfg(feature = "mpi")]
 mod issue_16_mpi;
+mod issue_38;
 mod issue_39;
 mod tidy;

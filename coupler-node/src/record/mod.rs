@@ -73,4 +73,4 @@ pub use error::RecordError;
 pub(crate) use reader::recorded;
 pub use reader::{Recorded, Recording, read_recording};
 pub use recover::{Recovered, recover};
-pub use writer::Recorder;
+pub use writer::{Recorder, cut_back};

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::io::{Seek, SeekFrom, Write};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions, Writer};
@@ -32,6 +32,8 @@ pub struct Recorder<W: Write + Seek> {
     /// Set by [`Recorder::close_chunk`] just before it flushes the writer: the next flush of
     /// [`ProvisionalEnd`] writes the provisional end.
     end_due: Arc<AtomicBool>,
+    /// Where the provisional end after the last complete write of a chunk begins (bytes).
+    committed: Arc<AtomicU64>,
     /// Uncompressed bytes written into the open chunk.
     open_chunk_bytes: u64,
     /// Channel id and next sequence number per topic.
@@ -62,6 +64,7 @@ impl<W: Write + Seek> Recorder<W> {
             RecordCompression::Zstd => Some(Compression::Zstd),
         };
         let end_due = Arc::new(AtomicBool::new(false));
+        let committed = Arc::new(AtomicU64::new(0));
         // NOTE: `disable_seeking` makes the writer build each chunk in memory and write it
         // whole, so nothing reaches the file mid-step and the provisional end stays the last
         // thing in it; `chunk_size(None)` leaves closing chunks to `close_chunk`.
@@ -76,6 +79,7 @@ impl<W: Write + Seek> Recorder<W> {
                 pos: 0,
                 len: 0,
                 end_due: end_due.clone(),
+                committed: committed.clone(),
             })?;
         writer.write_metadata(&Metadata {
             name: "scene".into(),
@@ -152,6 +156,7 @@ impl<W: Write + Seek> Recorder<W> {
             writer,
             level,
             end_due,
+            committed,
             open_chunk_bytes: 0,
             channels,
         };
@@ -223,6 +228,12 @@ impl<W: Write + Seek> Recorder<W> {
         self.close_chunk()
     }
 
+    /// Bytes of the record up to its last complete step (the provisional end starts there):
+    /// where [`cut_back`] cuts a record whose writing failed.
+    pub fn committed(&self) -> u64 {
+        self.committed.load(Ordering::Relaxed)
+    }
+
     /// Writes the summary and footer over the provisional end and returns the inner writer.
     pub fn finish(mut self) -> Result<W, RecordError> {
         self.writer.finish()?;
@@ -289,6 +300,19 @@ struct ProvisionalEnd<W: Write + Seek> {
     /// Bytes in the file (`pos`, plus a provisional end after it).
     len: u64,
     end_due: Arc<AtomicBool>,
+    /// `pos` after the last provisional end that reached the file.
+    committed: Arc<AtomicU64>,
+}
+
+/// Cuts a record whose writing failed (a full disk, a write error) back to its last complete
+/// step: the provisional end written at `committed` again, over bytes the file already has (so
+/// no new space is needed), and the file truncated after it. Standard readers then read it up
+/// to that step, as the record of a killed run.
+pub fn cut_back(file: &mut std::fs::File, committed: u64) -> std::io::Result<()> {
+    file.seek(SeekFrom::Start(committed))?;
+    file.write_all(&PROVISIONAL_END)?;
+    file.set_len(committed + PROVISIONAL_END.len() as u64)?;
+    file.sync_data()
 }
 
 impl<W: Write + Seek> Write for ProvisionalEnd<W> {
@@ -304,6 +328,9 @@ impl<W: Write + Seek> Write for ProvisionalEnd<W> {
             self.inner.write_all(&PROVISIONAL_END)?;
             self.len = self.len.max(self.pos + PROVISIONAL_END.len() as u64);
             self.inner.seek(SeekFrom::Start(self.pos))?;
+            self.inner.flush()?;
+            self.committed.store(self.pos, Ordering::Relaxed);
+            return Ok(());
         }
         self.inner.flush()
     }

@@ -35,6 +35,10 @@ pub struct Bus {
     pub(super) pending: VecDeque<(NodeKind, Vec<u8>)>,
     pub(super) last_check: Instant,
     pub(super) send_timeout: Duration,
+    /// A node's parent process at open (the coupler, or `mpirun` for MPI ranks): a wait that
+    /// finds another parent (the coupler died and the node was re-parented) ends with the
+    /// coupler gone. `None` for the coupler.
+    pub(super) parent: Option<u32>,
     /// Dropped after every port.
     pub(super) node: Node<Svc>,
     /// Declared last: released after the node, so a sweep never sees the run unowned while its
@@ -179,6 +183,7 @@ impl Bus {
             pending: VecDeque::new(),
             last_check: Instant::now(),
             send_timeout: DEFAULT_SEND_TIMEOUT,
+            parent: (me != NodeKind::Coupler).then(std::os::unix::process::parent_id),
             node,
             _lock: lock,
         };

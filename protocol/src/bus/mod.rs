@@ -50,3 +50,22 @@ pub use limits::{
     SAMPLES_PER_SEGMENT, SUBSCRIBER_BUFFER,
 };
 pub use run::{cleanup_run, locked_run_ids, run_config, service_name, validate_run_id};
+
+/// Asks the kernel to end this process with SIGKILL when the thread that started it ends (Linux
+/// `PR_SET_PDEATHSIG`; the coupler sets it in its children too), so that a node never outlives a
+/// coupler killed by anything, busy or waiting. Returns an error when the parent is already gone.
+pub fn die_with_parent() -> std::io::Result<()> {
+    let parent = std::os::unix::process::parent_id();
+    // SAFETY: prctl with PR_SET_PDEATHSIG reads only its integer arguments.
+    let rc = unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0) };
+    if rc != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    // The parent died before the prctl: no signal will come.
+    if std::os::unix::process::parent_id() != parent {
+        return Err(std::io::Error::other(
+            "the process that started this node is gone",
+        ));
+    }
+    Ok(())
+}

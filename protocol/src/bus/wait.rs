@@ -182,6 +182,15 @@ impl Bus {
         cap: Duration,
     ) -> Result<(), TransportError> {
         self.check_signal()?;
+        if let Some(parent) = self.parent
+            && std::os::unix::process::parent_id() != parent
+        {
+            // The process that started this node is gone (whatever killed it).
+            for link in &mut self.links {
+                link.dead = true;
+            }
+            return Err(TransportError::PeerDead(NodeKind::Coupler));
+        }
         if self.last_check.elapsed() >= LIVENESS_PERIOD {
             self.refresh_liveness()?;
         }

@@ -11,6 +11,7 @@
 
 mod error;
 mod fluid;
+mod limits;
 mod memory;
 mod output;
 mod region;
@@ -24,12 +25,13 @@ pub use fluid::{
     Boundary, BoundaryConfig, CharacteristicConfig, DEFAULT_CHARACTERISTIC_SIGMA, FluidConfig,
     FluxConfig, FluxScheme, InitEntry, PressureField, Profile, VacuumConfig,
 };
-pub use memory::{MemoryError, MemoryEstimate};
+pub use limits::{MAX_FRAME_BYTES, MAX_MAGNITUDE, MAX_NAME_LEN, MAX_OUTPUTS, MAX_PROBES};
+pub use memory::{MemoryError, MemoryEstimate, RecordEstimate};
 pub use output::{OutputConfig, OutputFormat, ProbeConfig};
 pub use region::Region;
 pub use run::{
-    DT_MIN_OF_T_END, DT_MIN_RELATIVE, Predictor, RecordCompression, RecordLevel, Relaxation,
-    RunConfig, SchemeName,
+    DT_MIN_OF_T_END, DT_MIN_RELATIVE, Predictor, RECORD_MIN_BYTES, RecordCompression, RecordLevel,
+    Relaxation, RunConfig, SchemeName,
 };
 pub use solid::{
     BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FaceInertia, FractureConfig, LinksConfig,
@@ -151,7 +153,9 @@ impl Scene {
             .filter(|t| *t > 0.0 && *t < t_end)
             .collect();
         if let Some(every) = self.output.every {
-            let n = (t_end / every).floor() as u64;
+            // NOTE: validation refuses more than `MAX_OUTPUTS`; the cap keeps an unvalidated
+            // scene from allocating without bound.
+            let n = ((t_end / every).floor() as u64).min(MAX_OUTPUTS);
             for k in 1..=n {
                 let t = k as f64 * every;
                 if t < t_end * (1.0 - 1e-12) {
@@ -212,6 +216,7 @@ impl Scene {
             solid.validate(&c)?;
         }
         self.output
-            .validate(&c, self.fluid.is_some(), self.solid.is_some())
+            .validate(&c, self.fluid.is_some(), self.solid.is_some())?;
+        self.check_bounds(&c)
     }
 }

@@ -57,7 +57,15 @@ pub struct RunConfig {
     /// Largest relative energy error the ledger accepts (default: recorded, not checked).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub energy_tolerance: Option<f64>,
+    /// Optional cap on the size of the record `exchange.mcap` \[bytes\], at least
+    /// [`RECORD_MIN_BYTES`]: the run stops cleanly, with status `record_max_bytes`, at the end of
+    /// the last step whose successor would pass it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record_max_bytes: Option<u64>,
 }
+
+/// Smallest `run.record_max_bytes` (the record's header and the first steps).
+pub const RECORD_MIN_BYTES: u64 = 1 << 16;
 
 impl Default for RunConfig {
     fn default() -> Self {
@@ -80,6 +88,7 @@ impl Default for RunConfig {
             threads: 1,
             mass_tolerance: 1e-9,
             energy_tolerance: None,
+            record_max_bytes: None,
         }
     }
 }
@@ -219,6 +228,15 @@ impl RunConfig {
         }
         if run.threads == 0 || run.threads > 256 {
             return Err(c.invalid("run.threads", "1 to 256", run.threads.to_string()));
+        }
+        if let Some(cap) = run.record_max_bytes
+            && cap < RECORD_MIN_BYTES
+        {
+            return Err(c.invalid(
+                "run.record_max_bytes",
+                &format!("at least {RECORD_MIN_BYTES} bytes"),
+                cap.to_string(),
+            ));
         }
         if run.max_steps == Some(0) {
             return Err(c.invalid("run.max_steps", "at least 1 step", "0".into()));

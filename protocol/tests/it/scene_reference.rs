@@ -210,6 +210,7 @@ fn scenes() -> Vec<Scene> {
         max_steps: Some(10),
         dt_min: Some(1e-9),
         energy_tolerance: Some(1e-6),
+        record_max_bytes: Some(1 << 30),
         ..RunConfig::default()
     };
     let output = OutputConfig {
