@@ -19,6 +19,8 @@ use crate::grid::Grid;
 
 use super::CorrectReport;
 
+mod widen;
+
 /// What [`Embedded::mix`] wrote.
 pub(super) struct Mixed {
     /// Cells mixed into a neighbour.
@@ -766,68 +768,5 @@ impl Mixing<'_> {
             }
         }
         false
-    }
-
-    /// The next ring of free cells around a group's `members`, the `extra` cells it took in and
-    /// the cells it `crossed`: holding fluid at both times, and no source, root or cell another
-    /// group claimed.
-    fn ring(
-        &self,
-        members: &[usize],
-        extra: &[usize],
-        crossed: &[usize],
-        roots: &[usize],
-        claimed: &[usize],
-    ) -> Vec<usize> {
-        let grid = self.grid;
-        let mut ring: Vec<usize> = Vec::new();
-        for &c in members.iter().chain(extra).chain(crossed) {
-            let ijk = grid.ijk(c);
-            for d in &self.span {
-                let Some(q) = shifted(grid, ijk, *d) else {
-                    continue;
-                };
-                let q = grid.index(q[0], q[1], q[2]);
-                if self.alpha(q) > COVERED_TOLERANCE
-                    && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
-                    && self.is_source(q).is_none()
-                    && roots.binary_search(&q).is_err()
-                    && claimed.binary_search(&q).is_err()
-                    && members.binary_search(&q).is_err()
-                    && !extra.contains(&q)
-                    && crossed.binary_search(&q).is_err()
-                {
-                    ring.push(q);
-                }
-            }
-        }
-        ring.sort_unstable();
-        ring.dedup();
-        ring
-    }
-
-    /// The cells bordering a group (its `members`, `extra` and `crossed` cells) that are none of
-    /// them, sorted: what a widening that found no free cell steps over.
-    fn border(&self, members: &[usize], extra: &[usize], crossed: &[usize]) -> Vec<usize> {
-        let grid = self.grid;
-        let mut border: Vec<usize> = Vec::new();
-        for &c in members.iter().chain(extra).chain(crossed) {
-            let ijk = grid.ijk(c);
-            for d in &self.span {
-                let Some(q) = shifted(grid, ijk, *d) else {
-                    continue;
-                };
-                let q = grid.index(q[0], q[1], q[2]);
-                if members.binary_search(&q).is_err()
-                    && !extra.contains(&q)
-                    && crossed.binary_search(&q).is_err()
-                {
-                    border.push(q);
-                }
-            }
-        }
-        border.sort_unstable();
-        border.dedup();
-        border
     }
 }

@@ -1,0 +1,76 @@
+//! The rings a mixing group widens into ([`Mixing::ring`]), and the cells it steps over when no
+//! free cell borders it ([`Mixing::border`]).
+
+use super::super::COVERED_TOLERANCE;
+use super::Mixing;
+use super::shifted;
+
+impl Mixing<'_> {
+    /// The next ring of free cells around a group's `members`, the `extra` cells it took in and
+    /// the cells it `crossed`: holding fluid at both times, and no source, root or cell another
+    /// group claimed.
+    pub(super) fn ring(
+        &self,
+        members: &[usize],
+        extra: &[usize],
+        crossed: &[usize],
+        roots: &[usize],
+        claimed: &[usize],
+    ) -> Vec<usize> {
+        let grid = self.grid;
+        let mut ring: Vec<usize> = Vec::new();
+        for &c in members.iter().chain(extra).chain(crossed) {
+            let ijk = grid.ijk(c);
+            for d in &self.span {
+                let Some(q) = shifted(grid, ijk, *d) else {
+                    continue;
+                };
+                let q = grid.index(q[0], q[1], q[2]);
+                if self.alpha(q) > COVERED_TOLERANCE
+                    && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
+                    && self.is_source(q).is_none()
+                    && roots.binary_search(&q).is_err()
+                    && claimed.binary_search(&q).is_err()
+                    && members.binary_search(&q).is_err()
+                    && !extra.contains(&q)
+                    && crossed.binary_search(&q).is_err()
+                {
+                    ring.push(q);
+                }
+            }
+        }
+        ring.sort_unstable();
+        ring.dedup();
+        ring
+    }
+
+    /// The cells bordering a group (its `members`, `extra` and `crossed` cells) that are none of
+    /// them, sorted: what a widening that found no free cell steps over.
+    pub(super) fn border(
+        &self,
+        members: &[usize],
+        extra: &[usize],
+        crossed: &[usize],
+    ) -> Vec<usize> {
+        let grid = self.grid;
+        let mut border: Vec<usize> = Vec::new();
+        for &c in members.iter().chain(extra).chain(crossed) {
+            let ijk = grid.ijk(c);
+            for d in &self.span {
+                let Some(q) = shifted(grid, ijk, *d) else {
+                    continue;
+                };
+                let q = grid.index(q[0], q[1], q[2]);
+                if members.binary_search(&q).is_err()
+                    && !extra.contains(&q)
+                    && crossed.binary_search(&q).is_err()
+                {
+                    border.push(q);
+                }
+            }
+        }
+        border.sort_unstable();
+        border.dedup();
+        border
+    }
+}
