@@ -47,6 +47,7 @@ fn cfg(scheme: Scheme, relaxation: Relaxation, outputs: Vec<f64>) -> CouplerConf
         scene_hash: 7,
         mass_tolerance: 1e-9,
         energy_tolerance: None,
+        substeps: None,
     }
 }
 
