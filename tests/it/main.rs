@@ -14,4 +14,5 @@ mod issue_15_logs;
 mod issue_16_coupled;
 #[cfg(feature = "mpi")]
 mod issue_16_mpi;
+mod subcycling;
 mod tidy;
