@@ -127,7 +127,8 @@ impl SolidSubsteps {
         match self {
             SolidSubsteps::Fixed(k) => Ok(k),
             SolidSubsteps::Auto(_) => {
-                if !(bound > 0.0) || !(dt / f64::from(MAX_SOLID_SUBSTEPS) <= bound) {
+                let within = bound > 0.0 && dt / f64::from(MAX_SOLID_SUBSTEPS) <= bound;
+                if !within {
                     let k = (dt / bound).ceil();
                     return Err(if k.is_finite() { k as u64 } else { u64::MAX });
                 }

@@ -210,6 +210,7 @@ fn scenes() -> Vec<Scene> {
         max_steps: Some(10),
         dt_min: Some(1e-9),
         energy_tolerance: Some(1e-6),
+        solid_substeps: Some(protocol::scene::SolidSubsteps::AUTO),
         ..RunConfig::default()
     };
     let output = OutputConfig {

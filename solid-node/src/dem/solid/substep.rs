@@ -119,8 +119,8 @@ impl Solid {
             let dx = Vector3::from(self.state.x[p]) - Vector3::from(start.x[p]);
             external_work += Vector3::from(self.ext_force[p]).dot(&dx)
                 + Vector3::from(self.ext_torque[p]).dot(&Vector3::from(self.substeps.turned[p]));
-            for a in 0..3 {
-                impulse[a] += self.ext_force[p][a] * dt;
+            for (i, f) in impulse.iter_mut().zip(&self.ext_force[p]) {
+                *i += f * dt;
             }
         }
         self.state.external_work = start.external_work + external_work;
