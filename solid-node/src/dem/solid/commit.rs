@@ -57,7 +57,10 @@ impl Solid {
         self.state.step += 1;
         self.state.time += dt;
         self.trial_valid = false;
-        self.update_wet();
+        // Inside a trial of sub-steps only the last sub-step's surface is kept (`substep.rs`).
+        if !self.substeps.inner {
+            self.update_wet();
+        }
         StepReport {
             step: self.state.step,
             time: self.state.time,

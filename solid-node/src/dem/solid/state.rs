@@ -139,6 +139,8 @@ pub(super) struct Substeps {
     pub(super) start: Option<State>,
     /// The state has moved since `start` (a trial ran): the next trial restores it first.
     pub(super) dirty: bool,
+    /// A trial's sub-steps are being committed: the committed wet surface waits for the last.
+    pub(super) inner: bool,
     /// Per particle, the sum of the sub-steps' rotation vectors `Σ Ω_k h` (space frame).
     pub(super) turned: Vec<[f64; 3]>,
     /// Links broken and trouble found in the last trial's sub-steps (reported by the commit).

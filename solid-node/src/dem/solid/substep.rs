@@ -56,6 +56,7 @@ impl Solid {
         turned.resize(n, [0.0; 3]);
         let mut report = StepReport::default();
         self.dt = dt / f64::from(k);
+        self.substeps.inner = true;
         for _ in 0..k {
             self.kick_drift(force, torque);
             self.trial_valid = true;
@@ -66,6 +67,8 @@ impl Solid {
             report.broken_links.extend(sub.broken_links);
             report.diagnostics.extend(sub.diagnostics);
         }
+        self.substeps.inner = false;
+        self.update_wet();
         self.dt = dt;
         self.substeps.dirty = true;
         self.substeps.turned = turned;
