@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use anyhow::Context;
-use protocol::scene::{RecordLevel, Scene, Shape};
+use protocol::scene::{RecordLevel, Scene, Shape, SolidSubsteps};
 
 /// What a valid scene runs, for the summary `check` prints.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,6 +29,10 @@ pub struct CheckSummary {
     pub t_end: f64,
     /// Estimated memory \[bytes\] ([`Scene::memory_estimate`]).
     pub memory_bytes: u64,
+    /// `run.solid_substeps` of a solid that sub-steps (`None`: absent, or a prescribed double).
+    /// A fixed K is the K of every step, the first included; `"auto"` chooses it per step from
+    /// the solid's stable step and the fluid's first step, which only the nodes compute.
+    pub solid_substeps: Option<SolidSubsteps>,
 }
 
 /// Checks the scene at `path` as `run` would with the `--fluid`/`--solid` overrides given
@@ -75,6 +79,7 @@ pub fn summarize(scene: &Scene) -> CheckSummary {
         record: scene.run.record,
         t_end: scene.run.t_end,
         memory_bytes: scene.memory_estimate().total_bytes(),
+        solid_substeps: crate::scheme::CouplerConfig::from_scene(scene).substeps,
     }
 }
 
@@ -102,11 +107,48 @@ impl std::fmt::Display for CheckSummary {
             RecordLevel::Diagnostics => "diagnostics",
             RecordLevel::None => "none",
         };
+        match self.solid_substeps {
+            Some(SolidSubsteps::Fixed(k)) => write!(f, ", solid sub-steps {k} (every step)")?,
+            Some(SolidSubsteps::Auto(_)) => write!(
+                f,
+                ", solid sub-steps auto (per step: dt over the solid's stable step, at most 256)"
+            )?,
+            None => {}
+        }
         write!(
             f,
             ", record {record}, t_end {:.3e} s, memory {:.1} MiB",
             self.t_end,
             self.memory_bytes as f64 / f64::from(1u32 << 20)
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(substeps: &str, node: &str) -> Scene {
+        let text = format!(
+            "name = \"k\"\n[run]\n{substeps}\n[solid]\nnode = \"{node}\"\ndensity = 1.0\nyoung = 1.0\n\
+             poisson = 0.0\n[solid.prescribed]\nmotion = \"fixed\"\nbox = {{ center = [0.0, 0.0], size = [1.0, 1.0] }}\n[[solid.bodies]]\n\
+             shape = {{ box = {{ center = [0.0, 0.0], size = [1.0, 1.0] }} }}\ndivisions = [1, 1]\n"
+        );
+        Scene::from_toml_str(&text, "k.toml").unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn check_reports_the_solid_sub_steps() {
+        let fixed = summarize(&scene("solid_substeps = 4", "real")).to_string();
+        assert!(
+            fixed.contains(", solid sub-steps 4 (every step),"),
+            "{fixed}"
+        );
+        let auto = summarize(&scene("solid_substeps = \"auto\"", "real")).to_string();
+        assert!(auto.contains(", solid sub-steps auto (per step"), "{auto}");
+        for (key, node) in [("", "real"), ("solid_substeps = 4", "prescribed")] {
+            let none = summarize(&scene(key, node)).to_string();
+            assert!(!none.contains("sub-steps"), "{none}");
+        }
     }
 }

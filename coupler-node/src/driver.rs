@@ -513,6 +513,7 @@ fn drive_inner(
         record.map_err(DriverError::Record)?;
         if let Message::DtProposal(p) = &msg
             && p.stamp.step == 0
+            && p.stamp.iteration == 0
             && p.dt_max > 0.0
             && p.dt_max.is_finite()
         {
@@ -660,6 +661,7 @@ fn record_step(
         output: report.output,
         ledger: Some(report.ledger.clone()),
         vacuum_cells: report.vacuum_cells,
+        solid_substeps: report.solid_substeps,
         busy_s: busy.clone(),
     })
     .expect("diagnostics serialize");

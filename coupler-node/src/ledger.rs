@@ -56,11 +56,15 @@ pub struct LedgerEntry {
     pub work_solid: f64,
     /// Links broken so far.
     pub links_broken: u64,
+    /// Solid sub-steps of the step (`run.solid_substeps`; 1 without it): a `ledger.csv` column
+    /// only, neither in the diagnostics' JSON nor in the coupler's checkpoint.
+    #[serde(skip)]
+    pub solid_substeps: u32,
 }
 
 /// Header line of `ledger.csv` (DESIGN §7), without the newline.
 pub const CSV_HEADER: &str = "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,\
-solid_dissipated,interface_work,mass_rel_err,energy_rel_err";
+solid_dissipated,interface_work,mass_rel_err,energy_rel_err,solid_substeps";
 
 impl LedgerEntry {
     /// The entry as one `ledger.csv` row (with its newline), in the columns of [`CSV_HEADER`]:
@@ -71,7 +75,7 @@ impl LedgerEntry {
     /// the same bits.
     pub fn csv_row(&self) -> String {
         format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}\n",
             self.t,
             self.step,
             self.fluid_mass,
@@ -81,7 +85,8 @@ impl LedgerEntry {
             self.solid_dissipated,
             self.work_solid,
             self.mass_rel_err,
-            self.energy_rel_err
+            self.energy_rel_err,
+            self.solid_substeps.max(1)
         )
     }
 }
@@ -171,6 +176,7 @@ impl Ledger {
             work_fluid,
             work_solid,
             links_broken: solid.map_or(0, |s| s.links_broken),
+            solid_substeps: 1,
         };
         self.last = Some(entry.clone());
         entry

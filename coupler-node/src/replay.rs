@@ -215,9 +215,21 @@ fn drive(
         at += 1;
     }
     if let Some((step, ckpt)) = &checkpoint {
-        // The fresh node proposes for step 0; restore it, then resume where the record has the
+        // The fresh node proposes for step 0 (a solid with `run.solid_substeps` twice, as the
+        // record's first proposals show); restore it, then resume where the record has the
         // proposal for the checkpoint's step.
-        let _ = recv(bus)?;
+        let first = frames[at..]
+            .iter()
+            .filter(|(dir, s, f)| {
+                *dir == Dir::FromNode
+                    && *s == 0
+                    && codec::decode_header(f).is_ok_and(|h| h.kind == MessageKind::DtProposal)
+            })
+            .count()
+            .max(1);
+        for _ in 0..first {
+            let _ = recv(bus)?;
+        }
         bus.send(node, ckpt)?;
         at = frames
             .iter()

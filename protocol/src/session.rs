@@ -21,6 +21,13 @@ pub trait NodeModel {
     fn implementation(&self) -> &'static str;
     /// Largest stable step and what limits it.
     fn dt_max(&self) -> StepLimit;
+    /// With `run.solid_substeps` (the solid): the stable step a sub-step must stay within and
+    /// what sets it, proposed after [`NodeModel::dt_max`] as a second `DtProposal` of
+    /// iteration 1 ([`SUBSTEP_BOUND_ITERATION`]); `dt_max` then bounds the coupling step by the
+    /// motion alone. `None` (the default): one proposal.
+    fn substep_bound(&self) -> Option<StepLimit> {
+        None
+    }
     /// Conserved totals after the last step.
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals;
     /// Node-private state bytes.
@@ -131,7 +138,7 @@ fn node_loop<N: NodeModel + ?Sized>(
     }
     link.send(&Message::ConservedTotals(node.totals(Stamp::step(0), 0.0)))?;
     let mut step = 0;
-    propose(link, step, node.dt_max())?;
+    propose_node(link, step, node)?;
     loop {
         match link.recv()? {
             Message::Shutdown(shutdown) => {
@@ -157,7 +164,7 @@ fn node_loop<N: NodeModel + ?Sized>(
                     "restored the checkpoint of step {step} ({} bytes)",
                     c.bytes.len()
                 );
-                propose(link, step, node.dt_max())?;
+                propose_node(link, step, node)?;
             }
             Message::StepPlan(plan) => {
                 step = plan.stamp.step;
@@ -183,7 +190,7 @@ fn node_loop<N: NodeModel + ?Sized>(
                     node.totals(Stamp::step(step), t_end),
                 ))?;
                 step += 1;
-                propose(link, step, node.dt_max())?;
+                propose_node(link, step, node)?;
             }
             other => {
                 return Err(unexpected(
@@ -290,6 +297,30 @@ pub fn propose(link: &mut Link<'_>, step: u64, limit: StepLimit) -> Result<(), N
         dt_max: limit.dt_max,
         limiter: limit.limiter,
     }))?;
+    Ok(())
+}
+
+/// The `stamp.iteration` of a solid's second proposal, the bound of its sub-steps
+/// ([`NodeModel::substep_bound`]); a node's proposal for the coupling step has iteration 0.
+pub const SUBSTEP_BOUND_ITERATION: u32 = 1;
+
+/// Sends `node`'s proposal for `step`, then its sub-step bound if it has one.
+pub fn propose_node<N: NodeModel + ?Sized>(
+    link: &mut Link<'_>,
+    step: u64,
+    node: &N,
+) -> Result<(), NodeError> {
+    propose(link, step, node.dt_max())?;
+    if let Some(bound) = node.substep_bound() {
+        link.send(&Message::DtProposal(DtProposal {
+            stamp: Stamp {
+                step,
+                iteration: SUBSTEP_BOUND_ITERATION,
+            },
+            dt_max: bound.dt_max,
+            limiter: bound.limiter,
+        }))?;
+    }
     Ok(())
 }
 

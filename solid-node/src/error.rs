@@ -54,6 +54,25 @@ pub enum StepError {
         /// Torque values the solid takes (1 or 3 per particle).
         n_torque_expected: usize,
     },
+    /// `run.solid_substeps = "auto"` would need more sub-steps than allowed.
+    #[error(
+        "step {step}: dt {dt:?} s needs {needed} solid sub-steps of at most {bound:?} s (the \
+         stable step set by particle {particle}), more than {max}"
+    )]
+    TooManySubsteps {
+        /// Coupling step.
+        step: u64,
+        /// Its size \[s\].
+        dt: f64,
+        /// The solid's stable step \[s\].
+        bound: f64,
+        /// Sub-steps it would need.
+        needed: u64,
+        /// Most allowed.
+        max: u32,
+        /// The particle that sets the bound.
+        particle: u32,
+    },
     /// The committed step is numerically broken: what went wrong, particle by particle.
     #[error("step {step}: {}", join(.diagnostics))]
     Numerical {

@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use protocol::scene::{OutputFormat, Scene};
+use protocol::scene::{MAX_SOLID_SUBSTEPS, OutputFormat, Scene, SolidSubsteps};
 use protocol::session::{NodeModel, StepLimit};
 use protocol::vtk::Series;
 use protocol::wire::{
@@ -31,6 +31,8 @@ pub struct RealSolid {
     zero_torque: Vec<f64>,
     /// The `.vtp` files written so far: `particles.pvd`, `solid.pvd`, `wet.pvd`.
     vtk_series: [Series; 3],
+    /// `run.solid_substeps` (`None`: one step per coupling step, bounded by the solid's).
+    substeps: Option<SolidSubsteps>,
 }
 
 struct Probe {
@@ -101,6 +103,7 @@ impl RealSolid {
             zero_force: vec![0.0; n * dim],
             zero_torque: vec![0.0; n * n_rot],
             vtk_series: Default::default(),
+            substeps: scene.run.solid_substeps,
         })
     }
 
@@ -131,6 +134,19 @@ impl NodeModel for RealSolid {
     }
 
     fn dt_max(&self) -> StepLimit {
+        if self.substeps.is_some() {
+            // The coupling step is bounded by the motion; the stability bound goes to the
+            // sub-steps (`substep_bound`).
+            let dt = self.solid.motion_dt(self.displacement_cap);
+            return StepLimit {
+                dt_max: dt,
+                limiter: if dt.is_finite() {
+                    "dem motion bound (a particle moves or turns fast)".into()
+                } else {
+                    "none".into()
+                },
+            };
+        }
         let dt = self.solid.max_dt(self.displacement_cap);
         // Which particle limits the step, so that a collapsing step names it.
         let (elastic, particle) = self.solid.elastic_dt_limit();
@@ -143,6 +159,15 @@ impl NodeModel for RealSolid {
             dt_max: dt,
             limiter: why,
         }
+    }
+
+    fn substep_bound(&self) -> Option<StepLimit> {
+        self.substeps?;
+        let (_, particle) = self.solid.elastic_dt_limit();
+        Some(StepLimit {
+            dt_max: self.solid.stable_dt(),
+            limiter: format!("dem elastic bound at particle {}", particle.0),
+        })
     }
 
     fn totals(&self, stamp: Stamp, t: f64) -> ConservedTotals {
@@ -276,7 +301,24 @@ impl NodeModel for RealSolid {
 
 impl SolidModel for RealSolid {
     fn begin_step(&mut self, plan: &StepPlan) -> Result<(), StepError> {
-        self.solid.begin_step(plan.dt);
+        let Some(setting) = self.substeps else {
+            self.solid.begin_step(plan.dt);
+            return Ok(());
+        };
+        // The bound proposed for this step (the state has not moved since): the coupler
+        // computes the same K from the same two numbers.
+        let bound = self.solid.stable_dt();
+        let k = setting
+            .for_step(plan.dt, bound)
+            .map_err(|needed| StepError::TooManySubsteps {
+                step: plan.stamp.step,
+                dt: plan.dt,
+                bound,
+                needed,
+                max: MAX_SOLID_SUBSTEPS,
+                particle: self.solid.elastic_dt_limit().1.0,
+            })?;
+        self.solid.begin_substeps(plan.dt, k);
         Ok(())
     }
 

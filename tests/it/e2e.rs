@@ -169,7 +169,7 @@ fn check_ledger_csv_and_record(out: &Path) {
     assert_eq!(
         lines.next(),
         Some(
-            "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,solid_dissipated,interface_work,mass_rel_err,energy_rel_err"
+            "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,solid_dissipated,interface_work,mass_rel_err,energy_rel_err,solid_substeps"
         )
     );
     let rows: Vec<Vec<f64>> = lines
@@ -181,7 +181,11 @@ fn check_ledger_csv_and_record(out: &Path) {
         .collect();
     assert_eq!(rows.len() as u64, steps, "one row per step");
     for (k, row) in rows.iter().enumerate() {
-        assert_eq!(row.len(), 10);
+        assert_eq!(row.len(), 11);
+        assert_eq!(
+            row[10], 1.0,
+            "one solid step per coupling step without the key"
+        );
         assert_eq!(
             row[1], k as f64,
             "steps count from 0, as the diagnostics' step"

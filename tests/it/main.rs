@@ -16,4 +16,5 @@ mod issue_16_coupled;
 mod issue_16_mpi;
 mod issue_38;
 mod issue_39;
+mod subcycling;
 mod tidy;

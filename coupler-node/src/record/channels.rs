@@ -70,6 +70,9 @@ pub struct Diagnostics {
     /// Fluid cells whose density or pressure is below the `fluid.vacuum` thresholds at the end
     /// of the step, cells the solid covers left out (0 without a real fluid).
     pub vacuum_cells: u64,
+    /// With `run.solid_substeps`: the solid sub-steps K of the step (absent without the key).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solid_substeps: Option<u32>,
     /// Busy seconds per process during the run so far (wall clock: the one part of the
     /// record that differs between two runs of a scene).
     pub busy_s: BusySeconds,

@@ -58,6 +58,8 @@ pub struct StepReport {
     pub output: Option<u32>,
     /// The balance.
     pub ledger: LedgerEntry,
+    /// With `run.solid_substeps`: the solid's sub-steps in this step.
+    pub solid_substeps: Option<u32>,
     /// Fluid cells below the vacuum thresholds at the end of the step (0 without a fluid).
     pub vacuum_cells: u64,
     /// Particle ids `[a, b]` of the links broken in this step, in the order they broke.

@@ -1,6 +1,6 @@
 //! What the coupler takes from the scene.
 
-use protocol::scene::{Predictor, RecordLevel, Relaxation, Scene, SchemeName};
+use protocol::scene::{Predictor, RecordLevel, Relaxation, Scene, SchemeName, SolidSubsteps};
 use protocol::wire::{NodeKind, Scheme};
 
 /// What the coupler needs from the scene.
@@ -40,6 +40,10 @@ pub struct CouplerConfig {
     pub mass_tolerance: f64,
     /// Largest relative energy error accepted, if checked.
     pub energy_tolerance: Option<f64>,
+    /// `run.solid_substeps` of a solid that sub-steps (real, or the replay of one; not the
+    /// prescribed double): the solid then proposes its stable step as a second proposal, and
+    /// the coupler agrees on K with it (`None`: one proposal, K = 1).
+    pub substeps: Option<SolidSubsteps>,
 }
 
 impl CouplerConfig {
@@ -70,6 +74,11 @@ impl CouplerConfig {
             scene_hash: scene.hash(),
             mass_tolerance: scene.run.mass_tolerance,
             energy_tolerance: scene.run.energy_tolerance,
+            substeps: scene
+                .solid
+                .as_ref()
+                .filter(|s| s.node != "prescribed")
+                .and(scene.run.solid_substeps),
         }
     }
 

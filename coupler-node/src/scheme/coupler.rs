@@ -3,6 +3,7 @@
 
 use std::collections::VecDeque;
 
+use protocol::session::SUBSTEP_BOUND_ITERATION;
 use protocol::wire::{ConservedTotals, Message, NodeKind, ShutdownReason, SolidState, Stamp};
 
 use crate::dt::{Agreed, Proposal};
@@ -39,6 +40,11 @@ pub struct Coupler {
     pub(super) resume: Option<Resume>,
     /// Proposals for steps before this one are dropped (a restart's, from before the restore).
     pub(super) stale_before: u64,
+    /// With `run.solid_substeps`: the solid's stable step for the sub-steps of this step, its
+    /// second proposal (until the step is agreed).
+    pub(super) substep_bound: Option<Proposal>,
+    /// Solid sub-steps of the agreed step (1 without `run.solid_substeps`).
+    pub(super) substeps: u32,
 }
 
 /// Where the handshake stands; each phase holds what it has collected so far.
@@ -84,6 +90,8 @@ impl Coupler {
             iteration_max: 0,
             resume: None,
             stale_before: 0,
+            substep_bound: None,
+            substeps: 1,
         }
     }
 
@@ -143,14 +151,28 @@ impl Coupler {
                 }
                 w
             }
-            Phase::Proposals(got) => self.missing(got.iter().map(|g| g.node)),
+            Phase::Proposals(got) => self.proposals_missing(got.iter().map(|g| g.node)),
             Phase::Checkpoints(got) => self.missing(got.iter().copied()),
             Phase::Loads(_) => vec![NodeKind::Fluid],
             Phase::Trial(_) => vec![NodeKind::Solid],
             Phase::Totals(got) => self.missing(got.iter().map(|g| g.node)),
-            Phase::Closing(got, _) => self.missing(got.iter().copied()),
+            Phase::Closing(got, _) => self.proposals_missing(got.iter().copied()),
             Phase::Done => Vec::new(),
         }
+    }
+
+    /// [`Coupler::missing`] for the proposals: with `run.solid_substeps`, the solid sends two.
+    fn proposals_missing(&self, got: impl Iterator<Item = NodeKind> + Clone) -> Vec<NodeKind> {
+        let mut missing = self.missing(got);
+        if self.wants_substep_bound() && !missing.contains(&NodeKind::Solid) {
+            missing.push(NodeKind::Solid);
+        }
+        missing
+    }
+
+    /// The solid's sub-step bound is still to come for this step.
+    fn wants_substep_bound(&self) -> bool {
+        self.cfg.solid && self.cfg.substeps.is_some() && self.substep_bound.is_none()
     }
 
     pub(super) fn missing(&self, got: impl Iterator<Item = NodeKind> + Clone) -> Vec<NodeKind> {
@@ -251,6 +273,11 @@ impl Coupler {
                     && hello.contains(&from)
                     && hello.contains(&NodeKind::Fluid)
                     && !surface
+            }
+            (Phase::Proposals(_) | Phase::Closing(..), Message::DtProposal(_))
+                if stamp.iteration == SUBSTEP_BOUND_ITERATION =>
+            {
+                stamp.step == self.step && from == NodeKind::Solid && self.wants_substep_bound()
             }
             (Phase::Proposals(got), Message::DtProposal(_)) => {
                 stamp.step == self.step && !got.iter().any(|g| g.node == from)

@@ -42,6 +42,27 @@ pub enum CouplerError {
         /// Residual after each trial.
         residuals: Vec<f64>,
     },
+    /// `run.solid_substeps = "auto"` would need more sub-steps than allowed.
+    #[error(
+        "step {step} (t = {t:e}): dt {dt:e} s needs {needed} solid sub-steps of at most {bound:e} s \
+         ({limiter}), more than {max}"
+    )]
+    TooManySubsteps {
+        /// Step.
+        step: u64,
+        /// Time at its start.
+        t: f64,
+        /// The agreed step \[s\].
+        dt: f64,
+        /// The solid's stable step \[s\].
+        bound: f64,
+        /// What sets it (the particle).
+        limiter: String,
+        /// Sub-steps it would need.
+        needed: u64,
+        /// Most allowed.
+        max: u32,
+    },
     /// A node reported numerical trouble.
     #[error("{node} node failed at step {} iteration {}: {report}", stamp.step, stamp.iteration)]
     NodeFailure {

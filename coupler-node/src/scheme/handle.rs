@@ -79,6 +79,10 @@ impl Coupler {
                         what: format!("time step proposal {} ({})", p.dt_max, p.limiter),
                     });
                 }
+                if p.stamp.iteration == protocol::session::SUBSTEP_BOUND_ITERATION {
+                    self.substep_bound = Some(Proposal::from_wire(from, p));
+                    return self.advance(actions);
+                }
                 match &mut self.phase {
                     Phase::Proposals(got) => got.push(Proposal::from_wire(from, p)),
                     Phase::Closing(got, _) => got.push(from),

@@ -6,7 +6,9 @@ use protocol::wire::{
     NodeKind, Scheme, Shutdown, ShutdownReason, SolidState, Stamp, StepPlan,
 };
 
-use crate::dt::{self, Agreed};
+use protocol::scene::{MAX_SOLID_SUBSTEPS, SolidSubsteps};
+
+use crate::dt::{self, Agreed, Proposal};
 use crate::scheme::action::{Action, Finish, StepReport};
 use crate::scheme::coupler::{Coupler, Phase, stale};
 use crate::scheme::criterion::criterion_22;
@@ -38,7 +40,16 @@ impl Coupler {
                     }
                     self.phase = Phase::Proposals(Vec::new());
                 }
-                Phase::Proposals(got) => {
+                Phase::Proposals(mut got) => {
+                    let bound = self.substep_bound.take();
+                    // A fixed K: the coupling step is bounded by K solid steps.
+                    if let (Some(SolidSubsteps::Fixed(k)), Some(b)) = (self.cfg.substeps, &bound) {
+                        got.push(Proposal {
+                            node: b.node,
+                            dt_max: b.dt_max * f64::from(k),
+                            limiter: format!("{} (x{k} sub-steps)", b.limiter),
+                        });
+                    }
                     let agreed = dt::agree(
                         self.t,
                         &got,
@@ -50,6 +61,7 @@ impl Coupler {
                         t: self.t,
                         proposals: dt::describe(&got),
                     })?;
+                    self.substeps = self.substeps_of(agreed.dt, bound.as_ref())?;
                     self.plan = Some(agreed);
                     let every = self.cfg.checkpoint_every;
                     if every > 0 && self.step > 0 && self.step.is_multiple_of(every) {
@@ -92,6 +104,25 @@ impl Coupler {
                 }
             }
         }
+    }
+
+    /// The solid's sub-steps for the agreed step `dt` with its sub-step bound, as the solid
+    /// computes them (`SolidSubsteps::for_step` on the same two numbers).
+    fn substeps_of(&self, dt: f64, bound: Option<&Proposal>) -> Result<u32, CouplerError> {
+        let (Some(setting), Some(bound)) = (self.cfg.substeps, bound) else {
+            return Ok(1);
+        };
+        setting
+            .for_step(dt, bound.dt_max)
+            .map_err(|needed| CouplerError::TooManySubsteps {
+                step: self.step,
+                t: self.t,
+                dt,
+                bound: bound.dt_max,
+                limiter: format!("{}:{}", bound.node.name(), bound.limiter),
+                needed,
+                max: MAX_SOLID_SUBSTEPS,
+            })
     }
 
     pub(super) fn start_step(&mut self, actions: &mut Vec<Action>) {
@@ -222,7 +253,8 @@ impl Coupler {
     ) -> Result<(), CouplerError> {
         let fluid = got.iter().find(|t| t.node == NodeKind::Fluid);
         let solid = got.iter().find(|t| t.node == NodeKind::Solid);
-        let entry = self.ledger.update(self.step, fluid, solid);
+        let mut entry = self.ledger.update(self.step, fluid, solid);
+        entry.solid_substeps = self.substeps;
         let t_end_of_step = self.planned_end().expect("a plan precedes the totals");
         let Agreed {
             dt,
@@ -246,6 +278,7 @@ impl Coupler {
             predicted: account.predicted,
             output,
             ledger: entry.clone(),
+            solid_substeps: self.cfg.substeps.map(|_| self.substeps),
             vacuum_cells: fluid.map_or(0, |f| f.vacuum_cells),
             broken_links: solid.map_or_else(Vec::new, |s| {
                 s.broken_pairs

@@ -25,6 +25,8 @@ struct World {
     surface_x: f64,
     /// From this step on the solid's answers carry wet surface revision 1 (links broke).
     revision_from: Option<u64>,
+    /// With `run.solid_substeps`: the solid's stable step, its second proposal (iteration 1).
+    substep_bound: Option<f64>,
     sent: Vec<(NodeKind, Message)>,
 }
 
@@ -47,6 +49,7 @@ fn cfg(scheme: Scheme, relaxation: Relaxation, outputs: Vec<f64>) -> CouplerConf
         scene_hash: 7,
         mass_tolerance: 1e-9,
         energy_tolerance: None,
+        substeps: None,
     }
 }
 
@@ -121,6 +124,7 @@ impl World {
             solid_dt: 0.3,
             surface_x: 0.0,
             revision_from: None,
+            substep_bound: None,
             sent: Vec::new(),
         }
     }
@@ -138,6 +142,10 @@ impl World {
         ));
         // The fluid proposes before the coupler has seen the solid: it must be queued.
         inbox.push_back((NodeKind::Fluid, proposal(0, self.fluid_dt)));
+        // The sub-step bound before the solid's first proposal: it must be queued too.
+        if let Some(bound) = self.substep_bound {
+            inbox.push_back((NodeKind::Solid, bound_proposal(0, bound)));
+        }
         inbox.push_back((NodeKind::Solid, proposal(0, self.solid_dt)));
         let mut reports = Vec::new();
         let mut pending_decision_x = 0.0;
@@ -210,6 +218,12 @@ impl World {
                                     NodeKind::Solid,
                                     proposal(step + 1, self.solid_dt),
                                 ));
+                                if let Some(bound) = self.substep_bound {
+                                    inbox.push_back((
+                                        NodeKind::Solid,
+                                        bound_proposal(step + 1, bound),
+                                    ));
+                                }
                             }
                             _ => {}
                         }
@@ -221,6 +235,60 @@ impl World {
             }
         }
         panic!("the fake nodes ran out of messages before the coupler finished");
+    }
+}
+
+fn bound_proposal(step: u64, dt: f64) -> Message {
+    Message::DtProposal(DtProposal {
+        stamp: Stamp {
+            step,
+            iteration: protocol::session::SUBSTEP_BOUND_ITERATION,
+        },
+        dt_max: dt,
+        limiter: "bound".into(),
+    })
+}
+
+#[test]
+fn solid_substeps_agree_on_k_from_the_second_proposal() {
+    use protocol::scene::SolidSubsteps;
+    let outputs = vec![0.25, 0.5];
+    // A fixed K: the coupling step is bounded by K times the bound, K on every report.
+    let mut world = World::new(1.0, 0.5, 0.5);
+    world.substep_bound = Some(0.02);
+    let mut config = cfg(Scheme::SemiImplicit, Relaxation::None, outputs.clone());
+    config.substeps = Some(SolidSubsteps::Fixed(4));
+    let (reports, finish) = world
+        .run(&mut Coupler::new(config.clone()))
+        .expect("the run completes");
+    assert_eq!(finish, Finish::Completed);
+    assert!((reports[0].dt - 0.08).abs() < 1e-15, "{}", reports[0].dt);
+    assert_eq!(reports[0].limiter, "solid:bound (x4 sub-steps)");
+    assert!(reports.iter().all(|r| r.solid_substeps == Some(4)));
+    assert!(reports.iter().all(|r| r.ledger.solid_substeps == 4));
+    // "auto": the fluid's step, and the smallest K within the bound (0.1/4 ≤ 0.03 < 0.1/3; the
+    // step of 0.05 to the output at 0.25 takes 2).
+    world = World::new(1.0, 0.5, 0.5);
+    world.substep_bound = Some(0.03);
+    config.substeps = Some(SolidSubsteps::AUTO);
+    let (reports, _) = world
+        .run(&mut Coupler::new(config.clone()))
+        .expect("the run completes");
+    let got: Vec<(f64, Option<u32>)> = reports.iter().map(|r| (r.dt, r.solid_substeps)).collect();
+    assert_eq!(reports[0].limiter, "fluid:test");
+    assert_eq!(got[0].1, Some(4), "{got:?}");
+    assert_eq!(got[2].1, Some(2), "{got:?}");
+    // More than 256: the run stops, naming what sets the bound.
+    world = World::new(1.0, 0.5, 0.5);
+    world.substep_bound = Some(1e-4);
+    match world.run(&mut Coupler::new(config)) {
+        Err(CouplerError::TooManySubsteps {
+            needed, limiter, ..
+        }) => {
+            assert_eq!(needed, 1000);
+            assert_eq!(limiter, "solid:bound");
+        }
+        other => panic!("{other:?}"),
     }
 }
 

@@ -62,6 +62,11 @@ pub struct RunConfig {
     /// the last step whose successor would pass it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub record_max_bytes: Option<u64>,
+    /// Solid sub-steps per coupling step: `K` (an integer ≥ 1) or `"auto"` (per step, the
+    /// smallest K whose sub-step meets the solid's own stability bound). Absent: one step of the
+    /// solid per coupling step, the coupling step limited by the solid's bound (K = 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solid_substeps: Option<SolidSubsteps>,
 }
 
 /// Smallest `run.record_max_bytes` (the record's header and the first steps).
@@ -89,6 +94,64 @@ impl Default for RunConfig {
             mass_tolerance: 1e-9,
             energy_tolerance: None,
             record_max_bytes: None,
+            solid_substeps: None,
+        }
+    }
+}
+
+/// Most solid sub-steps one coupling step may take (`run.solid_substeps`); `"auto"` needing more
+/// stops the run naming the particle that sets the solid's bound.
+pub const MAX_SOLID_SUBSTEPS: u32 = 256;
+
+/// `run.solid_substeps`: how many Verlet + RATTLE sub-steps of `dt/K` the solid takes per
+/// coupling step `dt`, under the step's held loads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum SolidSubsteps {
+    /// A fixed K: the coupling step is limited by K times the solid's bound.
+    Fixed(u32),
+    /// `"auto"`: the coupling step is not limited by the solid's bound; each step takes the
+    /// smallest K with `dt/K` within it.
+    Auto(AutoWord),
+}
+
+/// The word `"auto"` of [`SolidSubsteps::Auto`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AutoWord {
+    /// `"auto"`.
+    Auto,
+}
+
+impl SolidSubsteps {
+    /// `"auto"`.
+    pub const AUTO: SolidSubsteps = SolidSubsteps::Auto(AutoWord::Auto);
+
+    /// The sub-steps of a coupling step `dt` whose solid sub-step must stay within `bound`
+    /// (the solid's stable step, safety factor included): the fixed K, or for `"auto"` the
+    /// smallest K ≥ 1 with `dt / K ≤ bound`. `Err(K)` when `"auto"` needs more than
+    /// [`MAX_SOLID_SUBSTEPS`] (K as far as it was counted). Both the coupler and the solid
+    /// node call it on the same numbers, so they agree on K to the bit.
+    pub fn for_step(self, dt: f64, bound: f64) -> Result<u32, u64> {
+        match self {
+            SolidSubsteps::Fixed(k) => Ok(k),
+            SolidSubsteps::Auto(_) => {
+                let within = bound > 0.0 && dt / f64::from(MAX_SOLID_SUBSTEPS) <= bound;
+                if !within {
+                    let k = (dt / bound).ceil();
+                    return Err(if k.is_finite() { k as u64 } else { u64::MAX });
+                }
+                // NOTE: the ceiling of the quotient, then the quotient itself checked: dt/K
+                // rounds, and K is the smallest integer whose rounded sub-step is within bound.
+                let mut k = ((dt / bound).ceil() as u32).clamp(1, MAX_SOLID_SUBSTEPS);
+                while k > 1 && dt / f64::from(k - 1) <= bound {
+                    k -= 1;
+                }
+                while dt / f64::from(k) > bound {
+                    k += 1;
+                }
+                Ok(k)
+            }
         }
     }
 }
@@ -240,6 +303,15 @@ impl RunConfig {
         }
         if run.max_steps == Some(0) {
             return Err(c.invalid("run.max_steps", "at least 1 step", "0".into()));
+        }
+        if let Some(SolidSubsteps::Fixed(k)) = run.solid_substeps
+            && !(1..=MAX_SOLID_SUBSTEPS).contains(&k)
+        {
+            return Err(c.invalid(
+                "run.solid_substeps",
+                &format!("an integer from 1 to {MAX_SOLID_SUBSTEPS}, or \"auto\""),
+                k.to_string(),
+            ));
         }
         if let Some(dt_min) = run.dt_min {
             c.positive("run.dt_min", dt_min)?;

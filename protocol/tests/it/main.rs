@@ -12,3 +12,4 @@ mod scene_face_inertia;
 mod scene_links;
 mod scene_reference;
 mod scenes_dir;
+mod solid_substeps;

@@ -211,6 +211,7 @@ fn scenes() -> Vec<Scene> {
         dt_min: Some(1e-9),
         energy_tolerance: Some(1e-6),
         record_max_bytes: Some(1 << 30),
+        solid_substeps: Some(protocol::scene::SolidSubsteps::AUTO),
         ..RunConfig::default()
     };
     let output = OutputConfig {

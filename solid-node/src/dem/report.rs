@@ -114,6 +114,8 @@ pub struct BrokenLink {
     pub particles: [ParticleId; 2],
     /// Relative elongation `(|X_I − X_J| − D⁰)/D⁰` when it broke \[-\].
     pub elongation: f64,
+    /// Time at which it broke: the end of the (sub-)step whose commit found it stretched \[s\].
+    pub time: f64,
 }
 
 /// Energies of the solid \[J\] (2-D: per unit depth).

@@ -12,6 +12,7 @@ mod dem_loads;
 mod dem_scene;
 mod dem_spring;
 mod dem_stability;
+mod dem_substeps;
 mod dem_support;
 mod dem_top;
 mod dem_wave;

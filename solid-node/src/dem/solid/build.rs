@@ -14,7 +14,7 @@ use crate::dem::model::{
 use crate::dem::solid::forces::ForceScratch;
 use crate::dem::solid::limits::min_limit;
 use crate::dem::solid::orientation::quat_arr;
-use crate::dem::solid::state::{ParticleTrial, Solid, State, Trial};
+use crate::dem::solid::state::{ParticleTrial, Solid, State, Substeps, Trial};
 use crate::dem::stability::elastic_limit;
 use crate::dem::wet::{WetSurfaceData, build_elements};
 
@@ -298,6 +298,7 @@ impl Solid {
             motion: vec![[[0.0; 3]; 2]; n],
             bench_loads: (Vec::new(), Vec::new()),
             before_step: (Vec::new(), Vec::new()),
+            substeps: Substeps::default(),
             model,
         };
         solid.rebuild_wet_topology();

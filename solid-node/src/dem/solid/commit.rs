@@ -15,7 +15,18 @@ use crate::dem::solid::step::with_damping;
 impl Solid {
     /// Accepts the last trial: positions at n+1, internal forces at n+1, fracture, second half
     /// kick, diagnostics, wet surface at n+1.
+    ///
+    /// With K > 1 sub-steps the last trial already committed its sub-steps: the step is
+    /// accepted as it stands (`substep.rs`).
     pub fn commit(&mut self) -> StepReport {
+        if self.substeps.k > 1 {
+            return self.commit_substeps();
+        }
+        self.commit_one()
+    }
+
+    /// Commits the last trial of one (sub-)step of `self.dt`.
+    pub(super) fn commit_one(&mut self) -> StepReport {
         assert!(self.trial_valid, "commit needs a trial");
         let dt = self.dt;
         let mut diagnostics = Vec::new();
@@ -46,7 +57,10 @@ impl Solid {
         self.state.step += 1;
         self.state.time += dt;
         self.trial_valid = false;
-        self.update_wet();
+        // Inside a trial of sub-steps only the last sub-step's surface is kept (`substep.rs`).
+        if !self.substeps.inner {
+            self.update_wet();
+        }
         StepReport {
             step: self.state.step,
             time: self.state.time,
@@ -114,6 +128,7 @@ impl Solid {
                         link: LinkId(l as u32),
                         particles: [ParticleId(link.i), ParticleId(link.j)],
                         elongation,
+                        time: self.state.time + self.dt,
                     });
                 }
             }

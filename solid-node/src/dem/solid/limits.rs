@@ -27,7 +27,20 @@ impl Solid {
     /// moves a particle by its size h_s or by `displacement_cap` (the caller's limit, e.g. one
     /// fluid cell), and the step that turns a particle by π/8 (003 §2.2).
     pub fn max_dt(&self, displacement_cap: f64) -> f64 {
-        let mut dt = ELASTIC_SAFETY * self.limit.0;
+        self.motion_dt(displacement_cap).min(self.stable_dt())
+    }
+
+    /// The stable step, `ELASTIC_SAFETY ×` the stability bound \[s\]: what a sub-step of
+    /// `run.solid_substeps` must stay within.
+    pub fn stable_dt(&self) -> f64 {
+        ELASTIC_SAFETY * self.limit.0
+    }
+
+    /// The motion bounds alone (003 §2.2) \[s\]: the step that moves a particle by its size
+    /// or by `displacement_cap`, and the step that turns it by π/8 (∞ at rest). With
+    /// sub-steps they bound the coupling step, whose surface the fluid sees at both ends.
+    pub fn motion_dt(&self, displacement_cap: f64) -> f64 {
+        let mut dt = f64::INFINITY;
         for (i, p) in self.model.particles.iter().enumerate() {
             let speed = Vector3::from(self.state.v[i]).norm();
             if speed > 0.0 {

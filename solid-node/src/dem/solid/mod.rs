@@ -8,7 +8,7 @@
 //! Files, by concept: `state` (what a solid holds), `build` (from the scene), `query` (what it
 //! answers about the committed state), `evaluate` (forces and wet surface at the committed
 //! configuration), `forces` (the link-force kernel), `limits` (time-step bounds), `step`
-//! (`begin_step`, `trial`), `commit`, `checkpoint`, `orientation` (stored rotations).
+//! (`begin_step`, `trial`), `substep` (K sub-steps per step), `commit`, `checkpoint`, `orientation` (stored rotations).
 
 mod build;
 mod checkpoint;
@@ -20,6 +20,7 @@ mod orientation;
 mod query;
 mod state;
 mod step;
+mod substep;
 
 pub use build::SetupError;
 pub use checkpoint::CheckpointError;

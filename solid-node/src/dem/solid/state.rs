@@ -126,6 +126,25 @@ pub struct Solid {
     /// Centres and orientations at n of the step being committed (with fracture only: the
     /// energy a breaking link takes is evaluated there, [`Solid::break_dissipation`]).
     pub(super) before_step: (Vec<[f64; 3]>, Vec<[f64; 4]>),
+    /// The sub-steps of the step being computed (K = 1: none; `substep.rs`).
+    pub(super) substeps: Substeps,
+}
+
+/// The sub-steps of one coupling step (`Solid::begin_substeps`).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Substeps {
+    /// Sub-steps per step (0 or 1: the step is one Verlet + RATTLE step).
+    pub(super) k: u32,
+    /// The state at the start of the step: every trial starts from it.
+    pub(super) start: Option<State>,
+    /// The state has moved since `start` (a trial ran): the next trial restores it first.
+    pub(super) dirty: bool,
+    /// A trial's sub-steps are being committed: the committed wet surface waits for the last.
+    pub(super) inner: bool,
+    /// Per particle, the sum of the sub-steps' rotation vectors `Σ Ω_k h` (space frame).
+    pub(super) turned: Vec<[f64; 3]>,
+    /// Links broken and trouble found in the last trial's sub-steps (reported by the commit).
+    pub(super) report: crate::dem::report::StepReport,
 }
 
 /// Per-particle buffers `(x, v, ω, orientation)` reused by the wet-surface geometry.

@@ -23,14 +23,29 @@ impl Solid {
             self.update_forces();
         }
         self.dt = dt;
+        self.substeps.k = 1;
         self.trial_valid = false;
     }
 
     /// Trial positions and velocities for external loads `force` (`dim` per particle, \[N\]) and
     /// `torque` (1 per particle in 2-D, 3 in 3-D, space frame, about the centre \[N m\]), held
     /// fixed over the step. May be called repeatedly; nothing is committed.
+    ///
+    /// With [`Solid::begin_substeps`] of K > 1, the trial is K whole sub-steps from the step's
+    /// start state (`substep.rs`).
     pub fn trial(&mut self, force: &[f64], torque: &[f64]) -> &Trial {
         assert!(self.dt > 0.0, "begin_step must precede trial");
+        if self.substeps.k > 1 {
+            return self.trial_substeps(force, torque);
+        }
+        self.kick_drift(force, torque);
+        self.write_trial();
+        self.trial_valid = true;
+        &self.trial
+    }
+
+    /// The loads held over the (sub-)step and every particle's first half kick and drift.
+    pub(super) fn kick_drift(&mut self, force: &[f64], torque: &[f64]) {
         let dim = self.model.dim;
         let n = self.n_particles();
         let n_rot = if dim == 3 { 3 } else { 1 };
@@ -67,7 +82,11 @@ impl Solid {
             let (f, t) = with_damping(damping, p, fi[p], ti[p]);
             trial_particle(model, state, p, dt, f, t, fe[p], te[p], g)
         });
-        // Flat views and the wet surface at the trial configuration.
+    }
+
+    /// Flat views of the particles' trial and the wet surface at the trial configuration.
+    fn write_trial(&mut self) {
+        let dim = self.model.dim;
         let t = &mut self.trial;
         t.dim = dim;
         t.position.clear();
@@ -110,8 +129,6 @@ impl Solid {
             &mut self.sums,
             &mut t.wet,
         );
-        self.trial_valid = true;
-        &self.trial
     }
 
     /// One whole step with the given external loads (`begin_step`, `trial`, `commit`).

@@ -1,0 +1,241 @@
+//! Solid sub-cycling (`run.solid_substeps`, docs/subcycling.md), the real fluid and solid in one
+//! process: a free particle in gas at rest stays at rest for any K; on a shocked free block the
+//! work the fluid gives is the work the solid receives at every K, and the energy error against
+//! the exchange stays below the K = 1 run's; K is on the diagnostics, and "auto" sub-cycles a
+//! stiff block whose stable step is below the fluid's.
+
+use cosim_tests::{InProcess, run_in_process};
+use protocol::codec;
+use protocol::scene::{Scene, SolidSubsteps};
+use protocol::wire::{ConservedTotals, Message, NodeKind, SolidState};
+
+fn parse(toml: &str) -> Scene {
+    Scene::from_toml_str(toml, "subcycling-test.toml").unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn completed(run: &InProcess) {
+    assert_eq!(run.error, None, "coupler: {:?}", run.error);
+    assert!(run.node_errors.is_empty(), "nodes: {:?}", run.node_errors);
+    assert_eq!(run.summary.status, "completed");
+}
+
+fn sent_by(run: &InProcess, node: NodeKind) -> Vec<Message> {
+    run.sink
+        .frames
+        .iter()
+        .filter(|f| f.0 == node && f.1 == NodeKind::Coupler)
+        .filter_map(|f| codec::decode(&f.2).ok().map(|(_, m)| m))
+        .collect()
+}
+
+fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
+    sent_by(run, node)
+        .into_iter()
+        .filter_map(|m| match m {
+            Message::ConservedTotals(t) => Some(t),
+            _ => None,
+        })
+        .collect()
+}
+
+fn solid_states(run: &InProcess) -> Vec<SolidState> {
+    sent_by(run, NodeKind::Solid)
+        .into_iter()
+        .filter_map(|m| match m {
+            Message::SolidState(s) => Some(s),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The `solid_substeps` of every step's diagnostics (`None` where absent).
+fn substeps(run: &InProcess) -> Vec<Option<u64>> {
+    run.sink
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let v: serde_json::Value = serde_json::from_slice(d).expect("diagnostics JSON");
+            v.get("solid_substeps").and_then(|k| k.as_u64())
+        })
+        .collect()
+}
+
+const REST_2D: &str = r#"
+    name = "rest-2d"
+    [run]
+    t_end = 0.1
+    scheme = "semi-implicit"
+    record = "none"
+    [fluid]
+    lower = [0.0, 0.0]
+    upper = [1.0, 1.0]
+    cells = [40, 40]
+    boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
+    [[fluid.init]]
+    region = "all"
+    rho = 1.4
+    p = 1.0
+    [solid]
+    density = 10.0
+    young = 1e4
+    poisson = 0.0
+    [[solid.bodies]]
+    shape = { particles = [ { vertices = [[0.4, 0.35], [0.65, 0.45], [0.55, 0.7], [0.3, 0.6]] } ] }
+"#;
+
+#[test]
+fn a_free_particle_in_gas_at_rest_stays_for_any_k() {
+    for setting in [
+        SolidSubsteps::Fixed(1),
+        SolidSubsteps::Fixed(7),
+        SolidSubsteps::Fixed(64),
+        SolidSubsteps::AUTO,
+    ] {
+        let mut scene = parse(REST_2D);
+        scene.run.solid_substeps = Some(setting);
+        let run = run_in_process(&scene);
+        completed(&run);
+        let states = solid_states(&run);
+        let (first, last) = (&states[0], states.last().expect("states"));
+        let dx = first
+            .position
+            .iter()
+            .zip(&last.position)
+            .chain(first.orientation.iter().zip(&last.orientation))
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let v = last
+            .velocity
+            .iter()
+            .chain(&last.angular_velocity)
+            .map(|v| v.abs())
+            .fold(0.0, f64::max);
+        let k = substeps(&run);
+        println!(
+            "{setting:?}: {} steps, moved {dx:e}, |v| {v:e}, K {:?}",
+            k.len(),
+            k[0]
+        );
+        assert!(run.summary.steps >= 5);
+        assert!(dx <= 1e-12 * 0.3, "{setting:?}: the particle moved {dx:e}");
+        assert!(v <= 1e-12, "{setting:?}: velocity {v:e}");
+        // One rigid particle has no stable-step bound: "auto" takes one sub-step.
+        let expected = match setting {
+            SolidSubsteps::Fixed(k) => u64::from(k),
+            SolidSubsteps::Auto(_) => 1,
+        };
+        assert!(k.iter().all(|&s| s == Some(expected)), "{k:?}");
+    }
+}
+
+const SHOCKED_BLOCK: &str = r#"
+    name = "shocked-block"
+    [run]
+    t_end = 0.2
+    dt_max = 1e-3
+    scheme = "semi-implicit"
+    tolerance = 1e-12
+    max_iterations = 30
+    record = "none"
+    [fluid]
+    lower = [0.0, 0.0]
+    upper = [2.0, 1.0]
+    cells = [80, 40]
+    boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
+    [[fluid.init]]
+    region = "all"
+    rho = 1.4
+    p = 1.0
+    [[fluid.init]]
+    region = { box = { lower = [0.0, 0.0], upper = [0.5, 1.0] } }
+    rho = 5.6
+    p = 10.0
+    [solid]
+    density = 100.0
+    young = 7000.0
+    poisson = 0.0
+    [[solid.bodies]]
+    shape = { box = { center = [1.0, 0.45], size = [0.3, 0.3] } }
+    divisions = [6, 6]
+"#;
+
+/// The shocked block with `setting`: checks the books and returns the energy error against the
+/// exchange and the diagnostics' K of each step.
+fn shocked_block(young: f64, setting: Option<SolidSubsteps>) -> (f64, Vec<Option<u64>>) {
+    let mut scene = parse(SHOCKED_BLOCK);
+    scene.solid.as_mut().expect("solid").young = Some(young);
+    scene.run.solid_substeps = setting;
+    if setting == Some(SolidSubsteps::AUTO) {
+        scene.run.dt_max = None;
+    }
+    let run = run_in_process(&scene);
+    completed(&run);
+    let (fluid, solid) = (totals(&run, NodeKind::Fluid), totals(&run, NodeKind::Solid));
+    let (f0, f1) = (&fluid[0], fluid.last().expect("totals"));
+    let s1 = solid.last().expect("totals");
+    let s = &run.summary;
+    assert!(s.mass_rel_err <= 1e-12, "mass error {:e}", s.mass_rel_err);
+    let de = f1.energy - f0.energy;
+    assert!((de + f1.interface_work).abs() <= 1e-12 * f0.energy);
+    // The fixed point's tolerance separates the surface the solid's loads were taken on from
+    // the accepted one the fluid's solid flux uses; the face velocity is the sub-steps' mean
+    // motion, whose work is the solid's.
+    assert!(
+        (f1.interface_work - s1.interface_work).abs() <= 1e-9 * f1.interface_work.abs(),
+        "{setting:?}: work given {:e}, received {:e}",
+        f1.interface_work,
+        s1.interface_work
+    );
+    let scale = f1
+        .interface_impulse
+        .iter()
+        .map(|x| x.abs())
+        .fold(0.0, f64::max);
+    assert!(scale > 1e-3, "no impulse exchanged");
+    for a in 0..2 {
+        let (given, received) = (f1.interface_impulse[a], s1.interface_impulse[a]);
+        assert!(
+            (given - received).abs() <= 1e-9 * scale,
+            "{given:e} {received:e}"
+        );
+    }
+    println!(
+        "young {young:e}, {setting:?}: {} steps, energy error / exchange {:e}, work {:e}, iterations max {}",
+        s.steps, s.energy_err_vs_exchange, f1.interface_work, s.coupling_iterations.max
+    );
+    assert!(s.coupling_iterations.max < 7);
+    (s.energy_err_vs_exchange, substeps(&run))
+}
+
+#[test]
+fn the_shocked_block_balances_the_exchange_at_every_k_and_its_energy_error_stays_bounded() {
+    let (reference, k) = shocked_block(7000.0, None);
+    assert!(
+        k.iter().all(Option::is_none),
+        "no key, no K on the diagnostics"
+    );
+    assert!(reference > 0.0 && reference <= 1e-3, "{reference:e}");
+    for k in [1, 8, 64] {
+        let (error, on_diagnostics) = shocked_block(7000.0, Some(SolidSubsteps::Fixed(k)));
+        assert!(on_diagnostics.iter().all(|&s| s == Some(u64::from(k))));
+        // The solid's discrete energy error falls as (dt/K)²; the exchange adds none.
+        assert!(
+            error <= reference,
+            "K = {k}: {error:e} against {reference:e}"
+        );
+    }
+}
+
+#[test]
+fn auto_sub_cycles_a_stiff_block_within_twice_the_energy_error_of_k_1() {
+    // Ten times stiffer: the solid's stable step (about 7e-4 s) is below the fluid's.
+    let (one, _) = shocked_block(7e4, None);
+    let (auto, k) = shocked_block(7e4, Some(SolidSubsteps::AUTO));
+    let k: Vec<u64> = k
+        .into_iter()
+        .map(|k| k.expect("K on the diagnostics"))
+        .collect();
+    println!("auto: K from {:?} to {:?}", k.iter().min(), k.iter().max());
+    assert!(k.iter().any(|&k| k > 1), "{k:?}");
+    assert!(auto <= 2.0 * one, "auto {auto:e}, K = 1 {one:e}");
+}
