@@ -12,7 +12,7 @@ use protocol::wire::NodeKind;
 
 use crate::driver::{RecordSink, SinkError};
 use crate::ledger::{CSV_HEADER, LedgerEntry};
-use crate::record::Recorder;
+use crate::record::{Background, Recorder};
 
 /// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
@@ -108,7 +108,7 @@ pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
 pub struct RunSink {
     /// The MCAP record (`None` at level `none`, once [`RunSink::finish`]ed, and once a write
     /// failed).
-    record: Option<Recorder<BufWriter<File>>>,
+    record: Option<Background<File>>,
     /// The record's path and a second handle on it, to cut it back after a failed write.
     record_file: Option<(std::path::PathBuf, File)>,
     /// `run.record_max_bytes`.
@@ -150,7 +150,7 @@ impl RunSink {
                     &scene.to_toml(),
                 )
                 .with_context(|| format!("starting the record {}", path.display()))?;
-                Some(recorder)
+                Some(Background::start(recorder))
             }
         };
         Ok(RunSink {
@@ -192,7 +192,7 @@ impl RunSink {
     /// last complete step and ends the recording.
     fn record_call(
         &mut self,
-        call: impl FnOnce(&mut Recorder<BufWriter<File>>) -> Result<(), crate::record::RecordError>,
+        call: impl FnOnce(&mut Background<File>) -> Result<(), crate::record::RecordError>,
     ) -> Result<(), SinkError> {
         let Some(recorder) = self.record.as_mut() else {
             return Ok(());
@@ -201,9 +201,9 @@ impl RunSink {
             Ok(()) => Ok(()),
             Err(err) => {
                 let committed = recorder.committed();
-                // NOTE: dropped, the MCAP writer would try to write its summary after the
-                // failure; forgotten, the bytes it holds stay out of the file.
-                std::mem::forget(self.record.take());
+                // (The record's thread forgot its writer at the failure: no summary is written
+                // after it.)
+                self.record = None;
                 Err(SinkError::Write(
                     self.cut_back(committed, &with_sources(&err)),
                 ))
@@ -277,6 +277,7 @@ impl RecordSink for RunSink {
         let (Some(cap), Some(recorder)) = (self.cap, self.record.as_ref()) else {
             return Ok(());
         };
+        // (The bytes of the steps written: one step may still be on the record's thread.)
         let bytes = recorder.committed();
         self.largest_step = self.largest_step.max(bytes.saturating_sub(self.last_bytes));
         self.last_bytes = bytes;
@@ -285,7 +286,7 @@ impl RecordSink for RunSink {
         let chunks = self.steps + bytes / (4 << 20);
         let summary = SUMMARY_BASE_BYTES + SUMMARY_BYTES_PER_CHUNK * chunks;
         let next = self.largest_step;
-        if bytes + next + summary > cap {
+        if bytes + 2 * next + summary > cap {
             // Reported once: the run ends here.
             self.cap = None;
             return Err(SinkError::Limit(format!(

@@ -50,7 +50,9 @@
 //! complete MCAP file without summary, which the standard readers (Python `mcap`'s
 //! `make_reader`, the mcap crate's `MessageStream`) read up to the last completed step; only a
 //! kill during the write itself leaves one unfinished record at the end. [`Recorder::finish`]
-//! writes the real data end, summary and footer over the provisional end.
+//! writes the real data end, summary and footer over the provisional end. In a run the
+//! recorder works on a thread of its own ([`Background`]): the coupler hands each message over
+//! and goes on, and waits at the end of a step for the step before it to be written.
 //!
 //! # Reading
 //!
@@ -59,12 +61,14 @@
 //! reads up to where it stopped. [`recover`] keeps what verifies, says what it dropped, and
 //! rewrites it as a complete file.
 
+mod background;
 mod channels;
 mod error;
 mod reader;
 mod recover;
 mod writer;
 
+pub use background::Background;
 pub use channels::{
     BusySeconds, DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, Diagnostics, FRAME_MESSAGE_ENCODING,
     FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_topic,

@@ -56,8 +56,8 @@ impl<W: Write + Seek> Recorder<W> {
         if level == RecordLevel::None {
             return Err(RecordError::Disabled);
         }
-        // NOTE: `compression_threads(0)` keeps zstd on the caller's thread (pitfall 13), so
-        // compression never takes a core from the solvers.
+        // NOTE: `compression_threads(0)` keeps zstd on the caller's thread (pitfall 13): one
+        // thread, the record's own in a run (`record::Background`), not one per core.
         let compression = match compression {
             RecordCompression::None => None,
             RecordCompression::Lz4 => Some(Compression::Lz4),

@@ -56,14 +56,15 @@ fn out_of_range_fixed_point_keys_are_refused_by_key() {
     }
 }
 
-/// Issue 15, item 8: `run.record_compression` is lz4 unless the scene says `"none"` or
-/// `"zstd"`; it survives the scene's round trip through TOML (the record's metadata); any other
-/// value is refused naming the key and the three allowed values.
+/// Issue 15, item 8: `run.record_compression` is zstd (issue 39: a compact record by default)
+/// unless the scene says `"none"` or `"lz4"`; it survives the scene's round trip through TOML
+/// (the record's metadata); any other value is refused naming the key and the three allowed
+/// values.
 #[test]
 fn record_compression_is_read_and_a_bad_value_names_the_key_and_the_choices() {
     assert_eq!(
         scene("").expect("defaults").run.record_compression,
-        RecordCompression::None
+        RecordCompression::Zstd
     );
     for (value, want) in [
         ("none", RecordCompression::None),
