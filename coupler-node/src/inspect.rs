@@ -394,7 +394,7 @@ pub fn stream_table(
         }
     }
     out.flush().map_err(io("writing"))?;
-    summary.end = stream.finish();
+    summary.end = stream.finish()?;
     Ok(summary)
 }
 

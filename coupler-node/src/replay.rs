@@ -78,7 +78,12 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
         .metadata
         .get("scene")
         .and_then(|m| m.get("toml"))
-        .context("the record holds no scene metadata")?;
+        .with_context(|| {
+            format!(
+                "the record {} holds no scene metadata (a run killed before its first step?)",
+                opts.file.display()
+            )
+        })?;
     if opts.node == NodeKind::Coupler {
         let scene = protocol::scene::Scene::from_toml_str(scene_toml, "the record's scene")
             .map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -87,7 +92,8 @@ pub fn replay(opts: &ReplayOptions) -> anyhow::Result<Outcome> {
     let frames = script(&rec, opts.node);
     anyhow::ensure!(
         !frames.is_empty(),
-        "the record holds no messages of the {} node (record = \"exchange\" or \"all\" keeps them)",
+        "the record {} holds no messages of the {} node (record = \"exchange\" or \"all\" keeps them)",
+        opts.file.display(),
         opts.node
     );
     let recorded_impl = frames

@@ -29,6 +29,8 @@ pub struct RealFluid {
     formats: Vec<OutputFormat>,
     name: String,
     probes: Vec<Probe>,
+    /// The probe files exist: later rows are appended (`NodeModel::write_probes`).
+    probes_started: bool,
     /// Whether the scene has a solid (the embedded part is built from the first surface).
     coupled: bool,
     /// Whether cracks may open in that solid (`[solid] fracture`, or several bodies).
@@ -85,6 +87,7 @@ impl RealFluid {
             formats: scene.output.formats.clone(),
             name: scene.name.clone(),
             probes,
+            probes_started: false,
             coupled: scene.solid.is_some(),
             // Cracks open where links break, and between separate bodies that touch and part.
             fracture: scene
@@ -321,21 +324,27 @@ impl NodeModel for RealFluid {
         }
     }
 
-    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
-        if !self.writes() {
+    fn write_probes(&mut self, out: &Path, end: bool) -> std::io::Result<()> {
+        let held = self.probes.iter().map(|p| p.rows.len()).max().unwrap_or(0);
+        if !self.writes() || (!end && held < protocol::session::PROBE_ROWS_HELD) {
             return Ok(());
         }
         let dim = self.dim();
         let vel = ["u", "v", "w"][..dim].join(",");
-        for probe in &self.probes {
-            let mut text = format!("t,rho,{vel},p\n");
+        let started = std::mem::replace(&mut self.probes_started, true);
+        for probe in &mut self.probes {
+            let mut text = if started {
+                String::new()
+            } else {
+                format!("t,rho,{vel},p\n")
+            };
             for [t, rho, u @ .., p] in &probe.rows {
                 let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
                 text.push_str(&format!("{t:e},{rho:e},{},{p:e}\n", vel.join(",")));
             }
+            probe.rows.clear();
             let path = out.join(format!("probe_{}.csv", probe.name));
-            std::fs::write(&path, text)
-                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            crate::output::append_or_create(&path, started, text.as_bytes())?;
         }
         Ok(())
     }

@@ -65,8 +65,8 @@ impl NodeModel for FluidSide<'_> {
         self.model.record_probes(t);
     }
 
-    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
-        self.model.write_probes(out)
+    fn write_probes(&mut self, out: &Path, end: bool) -> std::io::Result<()> {
+        self.model.write_probes(out, end)
     }
 }
 

@@ -38,9 +38,16 @@ pub trait NodeModel {
     fn write_output(&mut self, k: u32, t: f64, out: &Path) -> std::io::Result<()>;
     /// Appends one row to each probe after a step ending at `t`.
     fn record_probes(&mut self, t: f64);
-    /// Writes the probe files into `out`.
-    fn write_probes(&self, out: &Path) -> std::io::Result<()>;
+    /// Writes the probe rows recorded since the last call into the probe files in `out` and
+    /// forgets them, so that a node's memory does not grow with the steps (issue 38): the first
+    /// call that writes creates the files with their header, later ones append. A node may keep
+    /// rows back until it holds [`PROBE_ROWS_HELD`] of them, except at the `end` of the run,
+    /// which writes every file (its header at least).
+    fn write_probes(&mut self, out: &Path, end: bool) -> std::io::Result<()>;
 }
+
+/// Probe rows a node holds at most before it writes them out ([`NodeModel::write_probes`]).
+pub const PROBE_ROWS_HELD: usize = 1024;
 
 /// Runs node `kind` until the coupler's shutdown (DESIGN §3 from a node's side).
 ///
@@ -178,6 +185,10 @@ fn node_loop<N: NodeModel + ?Sized>(
                 }
                 let t_end = plan.t_end();
                 node.record_probes(t_end);
+                if let Some(out) = &cfg.out {
+                    node.write_probes(out, false)
+                        .map_err(|source| NodeError::output(out, source))?;
+                }
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
                     write_output(node, link, out, (k + first_planned, step, t_end))?;
                     debug!("output {} at t = {t_end:.6e} s", k + first_planned);
@@ -206,7 +217,7 @@ fn node_loop<N: NodeModel + ?Sized>(
 /// The end of a node's run: the probe files.
 fn finish<N: NodeModel + ?Sized>(node: &mut N, cfg: &LoopConfig) -> Result<(), NodeError> {
     if let Some(out) = &cfg.out {
-        node.write_probes(out)
+        node.write_probes(out, true)
             .map_err(|source| NodeError::output(out, source))?;
         debug!("probes written into {}", out.display());
     }

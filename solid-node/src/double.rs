@@ -224,7 +224,7 @@ impl NodeModel for PrescribedDouble {
 
     fn record_probes(&mut self, _t: f64) {}
 
-    fn write_probes(&self, _out: &Path) -> std::io::Result<()> {
+    fn write_probes(&mut self, _out: &Path, _end: bool) -> std::io::Result<()> {
         Ok(())
     }
 }

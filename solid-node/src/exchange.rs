@@ -23,6 +23,8 @@ pub struct RealSolid {
     formats: Vec<OutputFormat>,
     name: String,
     probes: Vec<Probe>,
+    /// The probe files exist: later rows are appended (`NodeModel::write_probes`).
+    probes_started: bool,
     links_broken: u64,
     /// Particle ids of the links broken in the last committed step, two per link, in break
     /// order (the totals of that step carry them to the coupler's `links_broken.csv`).
@@ -98,6 +100,7 @@ impl RealSolid {
             formats: scene.output.formats.clone(),
             name: scene.name.clone(),
             probes,
+            probes_started: false,
             links_broken: 0,
             last_broken: Vec::new(),
             zero_force: vec![0.0; n * dim],
@@ -281,19 +284,28 @@ impl NodeModel for RealSolid {
         }
     }
 
-    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
+    fn write_probes(&mut self, out: &Path, end: bool) -> std::io::Result<()> {
+        let held = self.probes.iter().map(|p| p.rows.len()).max().unwrap_or(0);
+        if !end && held < protocol::session::PROBE_ROWS_HELD {
+            return Ok(());
+        }
         let dim = self.solid.dim();
         let axes = ["x", "y", "z"][..dim].join(",");
         let vels = ["vx", "vy", "vz"][..dim].join(",");
-        for probe in &self.probes {
-            let mut text = format!("t,{axes},{vels},sigma_n\n");
+        let started = std::mem::replace(&mut self.probes_started, true);
+        for probe in &mut self.probes {
+            let mut text = if started {
+                String::new()
+            } else {
+                format!("t,{axes},{vels},sigma_n\n")
+            };
             for row in &probe.rows {
                 text.push_str(row);
                 text.push('\n');
             }
+            probe.rows.clear();
             let path = out.join(format!("probe_{}.csv", probe.name));
-            std::fs::write(&path, text)
-                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            crate::output::append_or_create(&path, started, text.as_bytes())?;
         }
         Ok(())
     }

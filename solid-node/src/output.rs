@@ -278,6 +278,22 @@ fn one_line(title: &str) -> String {
     title.replace(['\n', '\r'], " ").chars().take(255).collect()
 }
 
+/// Writes `bytes` to `path`: appended when `append`, else into a new (or emptied) file. An error
+/// names the file.
+pub fn append_or_create(path: &std::path::Path, append: bool, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let named =
+        |e: std::io::Error| std::io::Error::new(e.kind(), format!("{}: {e}", path.display()));
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .write(true)
+        .append(append)
+        .truncate(!append)
+        .open(path)
+        .map_err(named)?;
+    file.write_all(bytes).map_err(named)
+}
+
 #[cfg(test)]
 mod tests {
     use protocol::scene::Scene;

@@ -15,6 +15,7 @@ mod issue_16_coupled;
 #[cfg(feature = "mpi")]
 mod issue_16_mpi;
 mod issue_38;
+mod issue_38_records;
 mod issue_39;
 mod subcycling;
 mod tidy;

@@ -103,9 +103,9 @@ impl NodeModel for Leader<'_> {
         self.inner.record_probes(t);
     }
 
-    fn write_probes(&self, out: &Path) -> std::io::Result<()> {
+    fn write_probes(&mut self, out: &Path, end: bool) -> std::io::Result<()> {
         // Rank 0 holds every probe's rows: nothing to ask of the others.
-        self.inner.write_probes(out)
+        self.inner.write_probes(out, end)
     }
 }
 

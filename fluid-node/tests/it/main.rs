@@ -26,4 +26,5 @@ mod fv_mirror;
 mod fv_ranks;
 mod fv_report;
 mod fv_riemann;
+mod probe_stream;
 mod vtk_xml;

@@ -165,9 +165,17 @@ impl Stream {
     }
 
     /// How the file ended, once every byte was fed: finished (data end and more), the
-    /// recorder's provisional end (a killed or running run), or cut short inside a record.
-    pub fn finish(self) -> End {
-        match self.after_end {
+    /// recorder's provisional end (a killed or running run), or cut short inside a record. Bytes
+    /// shorter than the magic are not MCAP; a record that runs past the end of bytes that end
+    /// with the end magic is damage, not a cut (as [`super::scan`] says).
+    pub fn finish(self) -> Result<End, ScanError> {
+        let magic = mcap::MAGIC;
+        if self.offset == 0 {
+            return Err(ScanError::NotMcap {
+                len: self.buf.len(),
+            });
+        }
+        Ok(match self.after_end {
             Some((0, count, first))
                 if count == PROVISIONAL_TAIL && first[..] == PROVISIONAL_END[13..] =>
             {
@@ -176,10 +184,24 @@ impl Stream {
             Some(_) => End::Finished {
                 summary_damage: None,
             },
-            None => End::CutShort {
-                offset: self.offset,
-                unreadable_bytes: self.buf.len() - self.at,
-            },
-        }
+            None => {
+                let rest = &self.buf[self.at..];
+                if rest.len() >= magic.len() && rest.ends_with(magic) {
+                    return Err(ScanError::Record {
+                        offset: self.offset,
+                        opcode: rest[0],
+                        reason: format!(
+                            "the record runs past the end of the file ({} bytes left), which \
+                             ends with the end magic: damaged, not cut short",
+                            rest.len()
+                        ),
+                    });
+                }
+                End::CutShort {
+                    offset: self.offset,
+                    unreadable_bytes: rest.len(),
+                }
+            }
+        })
     }
 }
