@@ -17,30 +17,14 @@ impl Mixing<'_> {
         roots: &[usize],
         claimed: &[usize],
     ) -> Vec<usize> {
-        let grid = self.grid;
-        let mut ring: Vec<usize> = Vec::new();
-        for &c in members.iter().chain(extra).chain(crossed) {
-            let ijk = grid.ijk(c);
-            for d in &self.span {
-                let Some(q) = shifted(grid, ijk, *d) else {
-                    continue;
-                };
-                let q = grid.index(q[0], q[1], q[2]);
-                if self.alpha(q) > COVERED_TOLERANCE
-                    && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
-                    && self.is_source(q).is_none()
-                    && roots.binary_search(&q).is_err()
-                    && claimed.binary_search(&q).is_err()
-                    && members.binary_search(&q).is_err()
-                    && !extra.contains(&q)
-                    && crossed.binary_search(&q).is_err()
-                {
-                    ring.push(q);
-                }
-            }
-        }
-        ring.sort_unstable();
-        ring.dedup();
+        let mut ring = self.border(members, extra, crossed);
+        ring.retain(|&q| {
+            self.alpha(q) > COVERED_TOLERANCE
+                && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
+                && self.is_source(q).is_none()
+                && roots.binary_search(&q).is_err()
+                && claimed.binary_search(&q).is_err()
+        });
         ring
     }
 
