@@ -24,6 +24,30 @@ fn moved(frame: &SolidFrame, dt: f64) -> SolidFrame {
     next
 }
 
+/// Moves the 2-D body of `embedded` rigidly, half a cell a step at most, while some vertex is
+/// `inside`; returns the steps taken and the largest relative mass error over them.
+fn drive(
+    solver: &mut fluid_node::fv::FluidSolver,
+    embedded: &mut Embedded,
+    inside: impl Fn(&[f64]) -> bool,
+) -> (u64, f64) {
+    let m0 = embedded.totals(solver).mass;
+    let (mut worst, mut step) = (0.0f64, 0);
+    while embedded.surface().vertices.chunks_exact(2).any(&inside) {
+        let dt = 0.5 * solver.max_dt().min(embedded.one_cell_dt());
+        let report = embedded.predict(solver, dt);
+        assert!(report.ok(), "step {step}: {:?}", report.troubles);
+        let next = moved(embedded.surface(), dt);
+        embedded
+            .correct(solver, dt, next, step, false)
+            .unwrap_or_else(|e| panic!("step {step}: {e}"));
+        let mass = embedded.totals(solver).mass;
+        worst = worst.max((mass - m0).abs() / m0);
+        step += 1;
+    }
+    (step, worst)
+}
+
 /// Drives a square of side 0.1 from (0.8, 0.5) at `velocity` and `omega` through the wall
 /// x = 1 of the unit box at rest (40 x 40 cells), half a cell a step at most, until it is out;
 /// returns the largest relative mass error over the steps.
@@ -33,25 +57,7 @@ fn through_the_wall(velocity: [f64; 2], omega: f64, fracture: bool) -> f64 {
     let body = polygon_2d(&square, velocity, omega);
     let mut embedded = Embedded::new(&solver, body).expect("embedded");
     embedded.set_fracture(fracture);
-    let m0 = embedded.totals(&solver).mass;
-    let (mut worst, mut step) = (0.0f64, 0);
-    while embedded
-        .surface()
-        .vertices
-        .chunks_exact(2)
-        .any(|x| x[0] < 1.0)
-    {
-        let dt = 0.5 * solver.max_dt().min(embedded.one_cell_dt());
-        let report = embedded.predict(&mut solver, dt);
-        assert!(report.ok(), "step {step}: {:?}", report.troubles);
-        let next = moved(embedded.surface(), dt);
-        embedded
-            .correct(&mut solver, dt, next, step, false)
-            .unwrap_or_else(|e| panic!("step {step}: {e}"));
-        let mass = embedded.totals(&solver).mass;
-        worst = worst.max((mass - m0).abs() / m0);
-        step += 1;
-    }
+    let (step, worst) = drive(&mut solver, &mut embedded, |x| x[0] < 1.0);
     println!(
         "v {velocity:?}, omega {omega}, fracture {fracture}: out after {step} steps, mass error {worst:e}"
     );
@@ -144,25 +150,7 @@ fn gas_sealed_under_an_arch_pressed_through_a_wall_stays_physical() {
     ];
     let mut embedded =
         Embedded::new(&solver, polygon_2d(&arch, [0.0, -3.0], 0.0)).expect("embedded");
-    let m0 = embedded.totals(&solver).mass;
-    let (mut worst, mut step) = (0.0f64, 0);
-    while embedded
-        .surface()
-        .vertices
-        .chunks_exact(2)
-        .any(|x| x[1] > 0.0)
-    {
-        let dt = 0.5 * solver.max_dt().min(embedded.one_cell_dt());
-        let report = embedded.predict(&mut solver, dt);
-        assert!(report.ok(), "step {step}: {:?}", report.troubles);
-        let next = moved(embedded.surface(), dt);
-        embedded
-            .correct(&mut solver, dt, next, step, false)
-            .unwrap_or_else(|e| panic!("step {step}: {e}"));
-        let mass = embedded.totals(&solver).mass;
-        worst = worst.max((mass - m0).abs() / m0);
-        step += 1;
-    }
+    let (step, worst) = drive(&mut solver, &mut embedded, |x| x[1] > 0.0);
     println!("out after {step} steps, mass error {worst:e}");
     // NOTE: measured 83 steps, mass error 0.
     assert!(step > 29, "{step} steps");
