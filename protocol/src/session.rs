@@ -186,8 +186,15 @@ fn node_loop<N: NodeModel + ?Sized>(
                 let t_end = plan.t_end();
                 node.record_probes(t_end);
                 if let Some(out) = &cfg.out {
-                    node.write_probes(out, false)
-                        .map_err(|source| NodeError::output(out, source))?;
+                    node.write_probes(out, false).map_err(|source| {
+                        let err = NodeError::output(out, source);
+                        let _ = link.send(&Message::Failure(Failure {
+                            stamp: Stamp::step(step),
+                            node: link.me(),
+                            report: err.to_string(),
+                        }));
+                        err
+                    })?;
                 }
                 if let (Some(k), Some(out)) = (plan.output, &cfg.out) {
                     write_output(node, link, out, (k + first_planned, step, t_end))?;
