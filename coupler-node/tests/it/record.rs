@@ -383,8 +383,9 @@ fn python_mcap_reads_finished_killed_cut_and_recovered_records() {
 #[test]
 fn issue_15_each_record_compression_reads_back_the_same_messages() {
     let reference = read_recording(&record_run(3, RecordLevel::Exchange).0).unwrap();
-    // The default scene value and the recorder's default agree.
-    assert_eq!(RecordCompression::default(), RecordCompression::None);
+    // The default scene value and the recorder's default agree: zstd (issue 39, a compact
+    // record by default).
+    assert_eq!(RecordCompression::default(), RecordCompression::Zstd);
     for (compression, name) in [
         (RecordCompression::None, ""),
         (RecordCompression::Lz4, "lz4"),
