@@ -187,8 +187,8 @@ fn mpi_rank(pid: u32) -> Option<u32> {
 fn a_killed_rank_is_named_and_no_rank_is_left() {
     let dir = out_dir("mpi-kill");
     let scene = blast_scene(&dir, 1_000_000, 1e6, "times = [1e6]");
-    // A million steps of checkpoints would not fit the disk: the run is refused before it
-    // starts (issue 38) unless the record is capped; it is killed after a few steps anyway.
+    // A million steps of checkpoints would not fit the disk (issue 38 warns of it, or refuses
+    // an uncompressed record): capped; the run is killed after a few steps anyway.
     let text = std::fs::read_to_string(&scene).expect("scene");
     std::fs::write(
         &scene,
