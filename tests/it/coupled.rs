@@ -6,18 +6,18 @@ use protocol::codec;
 use protocol::scene::Scene;
 use protocol::wire::{ConservedTotals, Message, NodeKind, SolidState};
 
-fn parse(toml: &str) -> Scene {
+pub(crate) fn parse(toml: &str) -> Scene {
     Scene::from_toml_str(toml, "coupled-test.toml").unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn completed(run: &InProcess) {
+pub(crate) fn completed(run: &InProcess) {
     assert_eq!(run.error, None, "coupler: {:?}", run.error);
     assert!(run.node_errors.is_empty(), "nodes: {:?}", run.node_errors);
     assert_eq!(run.summary.status, "completed");
 }
 
 /// Every message one node sent the coupler, decoded, in order.
-fn sent_by(run: &InProcess, node: NodeKind) -> Vec<Message> {
+pub(crate) fn sent_by(run: &InProcess, node: NodeKind) -> Vec<Message> {
     run.sink
         .frames
         .iter()
@@ -26,7 +26,7 @@ fn sent_by(run: &InProcess, node: NodeKind) -> Vec<Message> {
         .collect()
 }
 
-fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
+pub(crate) fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
     sent_by(run, node)
         .into_iter()
         .filter_map(|m| match m {
@@ -36,7 +36,7 @@ fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
         .collect()
 }
 
-fn solid_states(run: &InProcess) -> Vec<SolidState> {
+pub(crate) fn solid_states(run: &InProcess) -> Vec<SolidState> {
     sent_by(run, NodeKind::Solid)
         .into_iter()
         .filter_map(|m| match m {

@@ -104,6 +104,27 @@ fn start(dir: &Path, edit: impl Fn(String) -> String, extra: &[&str], bytes: u64
     child
 }
 
+/// `scenes/sod.toml` with `edit` applied, run into `dir/out` with `stderr`; returns the output
+/// folder and the running coupler.
+fn spawn_sod(dir: &Path, edit: impl Fn(String) -> String, stderr: Stdio) -> (PathBuf, Child) {
+    std::fs::create_dir_all(dir).expect("dir");
+    let scene = dir.join("sod.toml");
+    let text = std::fs::read_to_string(workspace().join("scenes/sod.toml")).expect("sod");
+    std::fs::write(&scene, edit(text)).expect("scene");
+    let out = dir.join("out");
+    let _start = shared_start();
+    let child = coupler()
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .arg("-q")
+        .stderr(stderr)
+        .spawn()
+        .expect("coupler");
+    (out, child)
+}
+
 /// Waits (at most `limit`) for `child` to exit; returns its exit code and stderr.
 fn finish(mut child: Child, limit: Duration) -> (Option<i32>, String) {
     let deadline = Instant::now() + limit;
@@ -242,26 +263,14 @@ fn issue_38_nodes_go_within_a_second_of_a_killed_coupler() {
     let took = kill_coupler_and_time_its_nodes(waiting);
     assert!(took < Duration::from_secs(1), "waiting nodes took {took:?}");
     let dir = out_dir("issue38-pdeathsig-busy");
-    std::fs::create_dir_all(&dir).expect("dir");
-    let scene = dir.join("busy.toml");
-    let text = std::fs::read_to_string(workspace().join("scenes/sod.toml"))
-        .expect("sod")
-        .replace("cells = [400]", "cells = [1000000]")
-        .replace("t_end = 0.2", "t_end = 100.0");
-    std::fs::write(&scene, text).expect("scene");
-    let out = dir.join("out");
-    let child = {
-        let _start = shared_start();
-        coupler()
-            .arg("run")
-            .arg(&scene)
-            .arg("--out")
-            .arg(&out)
-            .arg("-q")
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("coupler")
-    };
+    let (out, child) = spawn_sod(
+        &dir,
+        |t| {
+            t.replace("cells = [400]", "cells = [1000000]")
+                .replace("t_end = 0.2", "t_end = 100.0")
+        },
+        Stdio::null(),
+    );
     // Busy: the first step is done, the fluid is inside a later one.
     let deadline = Instant::now() + Duration::from_secs(60);
     while std::fs::read_to_string(out.join("ledger.csv")).map_or(0, |l| l.lines().count()) < 2 {
@@ -419,26 +428,14 @@ fn issue_38_a_write_error_stops_the_run_naming_the_file_with_every_output_readab
 #[test]
 fn issue_38_a_probe_file_lost_at_the_end_fails_the_run() {
     let dir = out_dir("issue38-probe");
-    std::fs::create_dir_all(&dir).expect("dir");
-    let scene = dir.join("sod.toml");
-    let text = std::fs::read_to_string(workspace().join("scenes/sod.toml"))
-        .expect("sod")
-        .replace("cells = [400]", "cells = [4000]")
-        + "\n[[output.probes]]\nname = \"mid\"\npoint = [0.5]\n";
-    std::fs::write(&scene, text).expect("scene");
-    let out = dir.join("out");
-    let child = {
-        let _start = shared_start();
-        coupler()
-            .arg("run")
-            .arg(&scene)
-            .arg("--out")
-            .arg(&out)
-            .arg("-q")
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("coupler")
-    };
+    let (out, child) = spawn_sod(
+        &dir,
+        |t| {
+            t.replace("cells = [400]", "cells = [4000]")
+                + "\n[[output.probes]]\nname = \"mid\"\npoint = [0.5]\n"
+        },
+        Stdio::piped(),
+    );
     let deadline = Instant::now() + Duration::from_secs(30);
     while !out.join("ledger.csv").exists() {
         assert!(Instant::now() < deadline, "the run did not start");

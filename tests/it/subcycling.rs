@@ -5,48 +5,10 @@
 //! stiff block whose stable step is below the fluid's.
 
 use cosim_tests::{InProcess, run_in_process};
-use protocol::codec;
-use protocol::scene::{Scene, SolidSubsteps};
-use protocol::wire::{ConservedTotals, Message, NodeKind, SolidState};
+use protocol::scene::SolidSubsteps;
+use protocol::wire::NodeKind;
 
-fn parse(toml: &str) -> Scene {
-    Scene::from_toml_str(toml, "subcycling-test.toml").unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn completed(run: &InProcess) {
-    assert_eq!(run.error, None, "coupler: {:?}", run.error);
-    assert!(run.node_errors.is_empty(), "nodes: {:?}", run.node_errors);
-    assert_eq!(run.summary.status, "completed");
-}
-
-fn sent_by(run: &InProcess, node: NodeKind) -> Vec<Message> {
-    run.sink
-        .frames
-        .iter()
-        .filter(|f| f.0 == node && f.1 == NodeKind::Coupler)
-        .filter_map(|f| codec::decode(&f.2).ok().map(|(_, m)| m))
-        .collect()
-}
-
-fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
-    sent_by(run, node)
-        .into_iter()
-        .filter_map(|m| match m {
-            Message::ConservedTotals(t) => Some(t),
-            _ => None,
-        })
-        .collect()
-}
-
-fn solid_states(run: &InProcess) -> Vec<SolidState> {
-    sent_by(run, NodeKind::Solid)
-        .into_iter()
-        .filter_map(|m| match m {
-            Message::SolidState(s) => Some(s),
-            _ => None,
-        })
-        .collect()
-}
+use crate::coupled::{completed, parse, solid_states, totals};
 
 /// The `solid_substeps` of every step's diagnostics (`None` where absent).
 fn substeps(run: &InProcess) -> Vec<Option<u64>> {
