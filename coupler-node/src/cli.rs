@@ -223,7 +223,7 @@ pub enum Report {
     Figures {
         /// The run's output folder.
         run: PathBuf,
-        /// Where the figures go (default RUN/figures).
+        /// Where the figures and their page, index.html, go (default RUN/report).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Also the normal stress against the azimuthal angle about the solid's centroid.
@@ -427,7 +427,7 @@ fn replay(options: &crate::replay::ReplayOptions) -> anyhow::Result<ExitCode> {
 fn report(report: Report) -> anyhow::Result<ExitCode> {
     match report {
         Report::Figures { run, out, polar } => {
-            let out = out.unwrap_or_else(|| run.join("figures"));
+            let out = out.unwrap_or_else(|| run.join("report"));
             for path in crate::report::figures(&run, &out, polar)? {
                 println!("{}", path.display());
             }

@@ -179,10 +179,10 @@ pub fn prepare(out: &Path, overwrite: bool, keep: Option<&Path>) -> anyhow::Resu
 /// `summary.json`, `scene.toml`, `outputs.csv`, `ledger.csv`, `links_broken.csv`,
 /// `probe_<name>.csv`, `<kind>_<k>.<csv|vtk|vti|vtp>` for the kinds `fluid`, `surface`, `loads`,
 /// `solid`, `particles`, `wet`, the `.pvd` series (and their `.pvd.tmp`), and the folder
-/// `figures`.
+/// `report` (and `figures`, its name before).
 pub fn is_run_output(name: &str, is_dir: bool) -> bool {
     if is_dir {
-        return name == "figures";
+        return name == "report" || name == "figures";
     }
     const FIXED: [&str; 6] = [
         "exchange.mcap",
@@ -276,6 +276,7 @@ mod tests {
             assert!(!is_run_output(name, false), "{name}");
         }
         assert!(is_run_output("figures", true));
+        assert!(is_run_output("report", true));
         assert!(!is_run_output("data", true));
     }
 }

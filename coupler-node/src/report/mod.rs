@@ -6,7 +6,10 @@
 //!   particle probes on one chart when there are several (Fig. 13, 14); for each fluid probe its
 //!   pressure; for each output of a 2-D run the density and pressure fields with the wet surface
 //!   on top as PNG images (Fig. 6, 12, 18); with `--polar`, the normal stress against the
-//!   azimuthal angle about the solid's centroid (Fig. 15).
+//!   azimuthal angle about the solid's centroid (Fig. 15). The ledger's mass and energy errors
+//!   against time. Each field is also framed as an SVG (axes in metres, colour bar with the
+//!   unit, the field and the time in the title), and `index.html` gathers the summary and every
+//!   figure on one page.
 //! - `report energy RUN... [--scale S,...] --out FILE.svg`: the energy error of several runs on
 //!   one chart, each times its scale (Fig. 7: dt, dt/2, dt/4 rescaled by 1, 4, 16).
 //! - `report pressure RUN... --reference P --out FILE.svg`: the largest |p − P| over the fluid
@@ -21,6 +24,8 @@
 
 pub mod data;
 pub mod error;
+pub mod field;
+pub mod page;
 pub mod plot;
 
 use std::path::{Path, PathBuf};
@@ -147,17 +152,70 @@ pub fn figures(run: &Path, out: &Path, polar: bool) -> anyhow::Result<Vec<PathBu
             &mut written,
         )?;
     }
+    ledger_figures(run, out, &scene.name, &mut written)?;
     let particles = probe_figures(run, out, &mut written)?;
     if particles.len() > 1 {
         probes_together(&particles, out, &mut written)?;
     }
+    let outputs = output_times(run)?;
     if let Some(fluid) = scene.fluid.as_ref().filter(|_| scene.dim() == 2) {
-        field_figures(run, out, fluid, &mut written)?;
+        field_figures(run, out, (&scene.name, fluid), &outputs, &mut written)?;
     }
     if polar {
         polar_figures(run, out, &mut written)?;
     }
+    let summary = std::fs::read_to_string(run.join("summary.json")).ok();
+    let page = page::write_page(out, &scene.name, summary.as_deref(), &written, &outputs)
+        .with_context(|| format!("writing {}", out.join("index.html").display()))?;
+    written.push(page);
     Ok(written)
+}
+
+/// The run's output times `(k, t)` from `outputs.csv` (none without the file).
+fn output_times(run: &Path) -> anyhow::Result<page::Outputs> {
+    let path = run.join("outputs.csv");
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let t = read_table(&path)?;
+    Ok(t.pairs("k", "t")
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(k, t)| (format!("{k}"), t))
+        .collect())
+}
+
+/// The ledger's relative mass and energy errors against time, when the run has `ledger.csv`.
+fn ledger_figures(
+    run: &Path,
+    out: &Path,
+    name: &str,
+    written: &mut Vec<PathBuf>,
+) -> anyhow::Result<()> {
+    let path = run.join("ledger.csv");
+    if !path.exists() {
+        return Ok(());
+    }
+    let t = read_table(&path)?;
+    for (column, stem, title) in [
+        ("mass_rel_err", "ledger_mass", "relative mass error"),
+        ("energy_rel_err", "ledger_energy", "relative energy error"),
+    ] {
+        if let Some(points) = t.pairs("t", column) {
+            chart(
+                out,
+                stem,
+                &format!("{name}: {title} (ledger.csv)"),
+                ("t [s]", column),
+                &[Series {
+                    label: name.to_string(),
+                    points,
+                }],
+                written,
+            )?;
+        }
+    }
+    Ok(())
 }
 
 /// One chart per probe file of `run` (position, trajectory and stress of a particle, or the
@@ -273,7 +331,8 @@ fn probes_together(
 fn field_figures(
     run: &Path,
     out: &Path,
-    fluid: &protocol::scene::FluidConfig,
+    (name, fluid): (&str, &protocol::scene::FluidConfig),
+    outputs: &page::Outputs,
     written: &mut Vec<PathBuf>,
 ) -> anyhow::Result<()> {
     let grid = |cells: Vec<(f64, f64, f64)>| Field {
@@ -296,14 +355,31 @@ fn field_figures(
         } else {
             Vec::new()
         };
-        for var in ["rho", "p"] {
+        let time = outputs.iter().find(|(key, _)| *key == k).map(|o| o.1);
+        for (var, what, quantity) in [("rho", "density", "ρ [kg/m³]"), ("p", "pressure", "p [Pa]")]
+        {
             let (Some(x), Some(y), Some(v)) = (t.column("x"), t.column("y"), t.column(var)) else {
                 continue;
             };
             let png = out.join(format!("field_{k}_{var}.png"));
             let cells = t.rows.iter().map(|r| (r[x], r[y], r[v])).collect();
-            field_png(&png, &grid(cells), &segments, 1000).map_err(|e| anyhow::anyhow!(e))?;
-            written.push(png);
+            let colours =
+                field_png(&png, &grid(cells), &segments, 1000).map_err(|e| anyhow::anyhow!(e))?;
+            written.push(png.clone());
+            let title = match time {
+                Some(t) => format!("{name}: {what} at t = {t:e} s (output {k})"),
+                None => format!("{name}: {what} (output {k})"),
+            };
+            let svg = out.join(format!("field_{k}_{var}.svg"));
+            let frame = field::Frame {
+                title: &title,
+                quantity,
+                lower: [fluid.lower[0], fluid.lower[1]],
+                upper: [fluid.upper[0], fluid.upper[1]],
+                colours,
+            };
+            field::field_svg(&svg, &png, &frame).map_err(|e| anyhow::anyhow!(e))?;
+            written.push(svg);
         }
     }
     Ok(())

@@ -43,6 +43,116 @@ fn padded(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
     (lo - pad)..(hi + pad)
 }
 
+/// Labels drawn on an axis.
+pub const AXIS_LABELS: usize = 8;
+
+/// How an axis writes its tick labels: `(v − offset) / 10^exponent` with `decimals` decimals,
+/// the smallest number that tells every tick of the axis apart (no `1.020e0` repeated along an
+/// axis that spans 1e-4). Values of 1e4 and above, or below 1e-2, are scaled by a power of ten
+/// that is a multiple of 3 (engineering notation), written once in the axis's description; an
+/// axis whose span is below 1e-4 of its values shows them less an offset, written there too.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ticks {
+    /// The values plotters labels on the axis (its bold key points).
+    pub values: Vec<f64>,
+    /// Power of ten the labels are in (a multiple of 3).
+    pub exponent: i32,
+    /// Subtracted from each value before scaling.
+    pub offset: f64,
+    /// Decimals of each label.
+    pub decimals: usize,
+}
+
+impl Ticks {
+    /// The ticks of an axis over `range` with at most `labels` labels.
+    pub fn new(range: &std::ops::Range<f64>, labels: usize) -> Ticks {
+        let big = range.start.abs().max(range.end.abs());
+        let span = range.end - range.start;
+        let offset = if big > 0.0 && span > 0.0 && span < 1e-4 * big {
+            // A round value near the middle: the span's power of ten, times 100.
+            let unit = 10f64.powi(span.log10().floor() as i32 + 2);
+            ((range.start + range.end) / 2.0 / unit).round() * unit
+        } else {
+            0.0
+        };
+        let shown = (range.start - offset).abs().max((range.end - offset).abs());
+        let exponent = if shown > 0.0 && !(1e-2..1e4).contains(&shown) {
+            3 * (shown.log10() / 3.0).floor() as i32
+        } else {
+            0
+        };
+        let mut ticks = Ticks {
+            values: Vec::new(),
+            exponent,
+            offset,
+            decimals: 0,
+        };
+        // plotters places its ticks on the scaled axis (it gives one tick to a span below
+        // f64::EPSILON, such as mass errors of 1e-16).
+        let scaled = ticks.scaled(range.start)..ticks.scaled(range.end);
+        if scaled.start.is_finite() && scaled.end.is_finite() && scaled.end > scaled.start {
+            use plotters::coord::ranged1d::Ranged;
+            let unit = 10f64.powi(exponent);
+            ticks.values = plotters::coord::types::RangedCoordf64::from(scaled)
+                .key_points(labels)
+                .into_iter()
+                .map(|v| v * unit + offset)
+                .collect();
+        }
+        while ticks.decimals < 15 && !ticks.distinct() {
+            ticks.decimals += 1;
+        }
+        ticks
+    }
+
+    /// `v` on the scaled axis the labels read: `(v − offset) / 10^exponent`.
+    pub fn scaled(&self, v: f64) -> f64 {
+        (v - self.offset) / 10f64.powi(self.exponent)
+    }
+
+    /// The label of `v`.
+    pub fn label(&self, v: f64) -> String {
+        self.label_scaled(self.scaled(v))
+    }
+
+    /// The label of a value on the scaled axis.
+    pub fn label_scaled(&self, scaled: f64) -> String {
+        let text = format!("{scaled:.*}", self.decimals);
+        // No "-0.00".
+        if text
+            .trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+        {
+            text.trim_start_matches('-').to_string()
+        } else {
+            text
+        }
+    }
+
+    /// What the axis's description gets: ` (× 1e3)`, ` − 1.02`, or nothing.
+    pub fn suffix(&self) -> String {
+        let mut s = String::new();
+        if self.offset != 0.0 {
+            s.push_str(&format!(" − {}", self.offset));
+        }
+        if self.exponent != 0 {
+            s.push_str(&format!(" (× 1e{})", self.exponent));
+        }
+        s
+    }
+
+    fn distinct(&self) -> bool {
+        let labels: Vec<String> = self.values.iter().map(|&v| self.label(v)).collect();
+        // NOTE: values read from the scaled key points carry round-off (0.30000000000000004);
+        // labels are compared, not values.
+        labels
+            .iter()
+            .enumerate()
+            .all(|(i, a)| labels[i + 1..].iter().all(|b| a != b))
+    }
+}
+
 /// An SVG line chart of `series` into `path`.
 pub fn line_chart(
     path: &Path,
@@ -55,23 +165,30 @@ pub fn line_chart(
         let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
         root.fill(&WHITE)?;
         let all = || series.iter().flat_map(|s| s.points.iter());
+        let (xr, yr) = (padded(all().map(|p| p.0)), padded(all().map(|p| p.1)));
+        let (xt, yt) = (Ticks::new(&xr, AXIS_LABELS), Ticks::new(&yr, AXIS_LABELS));
+        // Drawn on the axes the labels read (scaled and less the offset).
+        let on = |t: &Ticks, r: &std::ops::Range<f64>| t.scaled(r.start)..t.scaled(r.end);
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(90)
-            .build_cartesian_2d(padded(all().map(|p| p.0)), padded(all().map(|p| p.1)))?;
+            .build_cartesian_2d(on(&xt, &xr), on(&yt, &yr))?;
         chart
             .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .y_label_formatter(&|v| format!("{v:.3e}"))
+            .x_labels(AXIS_LABELS)
+            .y_labels(AXIS_LABELS)
+            .x_desc(format!("{x_desc}{}", xt.suffix()))
+            .y_desc(format!("{y_desc}{}", yt.suffix()))
+            .x_label_formatter(&|v| xt.label_scaled(*v))
+            .y_label_formatter(&|v| yt.label_scaled(*v))
             .draw()?;
         for (i, s) in series.iter().enumerate() {
             let color = PALETTE[i % PALETTE.len()];
             chart
                 .draw_series(LineSeries::new(
-                    s.points.iter().copied(),
+                    s.points.iter().map(|&(x, y)| (xt.scaled(x), yt.scaled(y))),
                     color.stroke_width(2),
                 ))?
                 .label(s.label.clone())
@@ -107,13 +224,13 @@ pub struct Field {
 }
 
 /// A PNG image of `field` (viridis, its own range) with `segments` (`[x0, y0, x1, y1]`)
-/// drawn in white, about `width` pixels wide.
+/// drawn in white, about `width` pixels wide; returns the range of values its colours span.
 pub fn field_png(
     path: &Path,
     field: &Field,
     segments: &[[f64; 4]],
     width: u32,
-) -> Result<(), ReportError> {
+) -> Result<std::ops::Range<f64>, ReportError> {
     let [nx, ny] = field.n;
     if nx == 0 || ny == 0 {
         return Err(ReportError::Draw {
@@ -125,6 +242,7 @@ pub fn field_png(
     let (w, h) = ((nx * px) as u32, (ny * px) as u32);
     let range = padded(field.cells.iter().map(|c| c.2));
     let (lo, span) = (range.start, range.end - range.start);
+    let colours = range.clone();
     let dx = [
         (field.upper[0] - field.lower[0]) / nx as f64,
         (field.upper[1] - field.lower[1]) / ny as f64,
@@ -159,5 +277,6 @@ pub fn field_png(
     draw().map_err(|e| ReportError::Draw {
         path: path.to_path_buf(),
         message: e.to_string(),
-    })
+    })?;
+    Ok(colours)
 }
