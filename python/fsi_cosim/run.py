@@ -1,5 +1,6 @@
 """A run's folder (what `coupler-node run SCENE --out DIR` writes) as numpy arrays."""
 
+import csv
 import json
 import os
 import shutil
@@ -12,11 +13,15 @@ from . import vtk
 
 def read_csv(path):
     """A CSV file with a header line as a numpy structured array (one field per column;
-    numbers as float64 or int64, text as str). A file with a header and no rows gives an
-    empty array with the header's fields."""
-    with open(path, encoding="utf-8") as f:
-        header = f.readline().strip().split(",")
-        rows = [line.rstrip("\n").split(",") for line in f if line.strip()]
+    numbers as float64 or int64, text as str), read with the standard `csv` module (quoted
+    fields, CRLF). A file with a header and no rows gives an empty array with the header's
+    fields; a row of another length than the header is an error naming it."""
+    with open(path, encoding="utf-8", newline="") as f:
+        lines = [row for row in csv.reader(f) if row]
+    header, rows = [h.strip() for h in lines[0]], lines[1:]
+    for i, row in enumerate(rows):
+        if len(row) != len(header):
+            raise ValueError(f"{path}: row {i + 2} has {len(row)} values for {len(header)} columns")
     columns = list(zip(*rows)) if rows else [() for _ in header]
     fields = []
     for name, col in zip(header, columns):
