@@ -173,8 +173,28 @@ fn check_grid(grid: &Value, fluid: &VtkFile) {
         .split_whitespace()
         .map(|v| v.parse().expect("an integer"))
         .collect();
-    let (nx, ny) = (ext[1], ext[3]);
-    assert_eq!(ext[5], 0, "a 2-D image is flat in z");
+    // A flat axis has extent 0 0 (one layer); a 3-D grid's slice is its middle layer.
+    let (nx, ny, nz) = (ext[1], ext[3], ext[5].max(1));
+    let kz = nz / 2;
+    let origin: Vec<f64> = fluid.dataset["Origin"]
+        .split_whitespace()
+        .map(|v| v.parse().expect("a number"))
+        .collect();
+    let spacing: Vec<f64> = fluid.dataset["Spacing"]
+        .split_whitespace()
+        .map(|v| v.parse().expect("a number"))
+        .collect();
+    let z = if ext[5] == 0 {
+        0.0
+    } else {
+        origin[2] + (kz as f64 + 0.5) * spacing[2]
+    };
+    assert_eq!(
+        grid["pose"]["position"]["z"].as_f64(),
+        Some(z),
+        "the slice's plane"
+    );
+    assert_eq!(grid["cell_size"]["x"].as_f64(), Some(spacing[0]));
     let stride = grid["cell_stride"].as_u64().expect("cell_stride") as usize;
     assert_eq!(grid["column_count"], nx);
     assert_eq!(grid["row_stride"].as_u64(), Some((nx * stride) as u64));
@@ -198,8 +218,9 @@ fn check_grid(grid: &Value, fluid: &VtkFile) {
             .expect("the field")
             .as_f64()
             .expect("f64");
-        for (idx, &want) in field.iter().enumerate() {
-            let at = idx * stride + offset;
+        let slice = &field[nx * ny * kz..nx * ny * (kz + 1)];
+        for (cell, &want) in slice.iter().enumerate() {
+            let (idx, at) = (cell + nx * ny * kz, cell * stride + offset);
             let got = f32::from_le_bytes(data[at..at + 4].try_into().expect("4 bytes"));
             if hidden[idx] & 32 != 0 {
                 assert!(got.is_nan(), "{name} of covered cell {idx}: {got}");
@@ -213,7 +234,7 @@ fn check_grid(grid: &Value, fluid: &VtkFile) {
             }
         }
     }
-    assert!(covered > 0, "the beam covers cells");
+    assert!(covered > 0, "the solid covers cells of the slice");
 }
 
 /// The scene of output `k` draws the solid's faces (`solid_k.vtp`), coloured by `sigma_n`.
@@ -227,6 +248,7 @@ fn check_scene(scene: &Value, faces: &VtkFile) {
     assert_eq!(lines.len(), 1, "the faces (no link broke)");
     let line = &lines[0];
     has(line, LINE, "LinePrimitive");
+    has(&line["pose"], POSE, "LinePrimitive.pose");
     assert_eq!(line["type"], 2, "LINE_LIST");
     let points = faces
         .array("Points", "Points")
@@ -375,5 +397,112 @@ fn the_record_shows_the_run_in_foxglove() {
         "{}",
         String::from_utf8_lossy(&check.stderr)
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two cubes linked by one link, one pulled away at 1 m/s (scenes/opening-fracture-3d.toml on
+/// a 16³ grid): the link breaks in the first steps.
+const SCENE_3D: &str = r#"name = "viewcrack"
+[run]
+t_end = 0.06
+scheme = "semi-implicit"
+tolerance = 1e-12
+[fluid]
+lower = [0.0, 0.0, 0.0]
+upper = [2.0, 2.0, 2.0]
+cells = [16, 16, 16]
+boundary = { x = ["wall", "wall"], y = ["wall", "wall"], z = ["wall", "wall"] }
+[[fluid.init]]
+region = "all"
+rho = 1.4
+p = 1.0
+[solid]
+density = 7000.0
+young = 2.1e11
+poisson = 0.3
+fracture = { elongation_at_break = 1e-3 }
+[[solid.bodies]]
+shape = { box = { center = [1.0, 1.0, 1.0], size = [0.8, 0.8, 0.8] } }
+divisions = [2, 1, 1]
+[[solid.constraints]]
+region = { box = { lower = [0.7, 0.9, 0.9], upper = [0.9, 1.1, 1.1] } }
+motion = "fixed"
+[[solid.constraints]]
+region = { box = { lower = [1.1, 0.9, 0.9], upper = [1.3, 1.1, 1.1] } }
+motion = { velocity = [1.0, 0.0, 0.0] }
+[output]
+times = [0.0, 0.05]
+"#;
+
+/// 3-D: the grid is the fluid's mid-plane slice, the particles' faces are triangle fans, and
+/// the broken link is a red segment between the two particles' centres.
+#[test]
+fn a_3d_run_shows_its_slice_faces_and_broken_links() {
+    let dir = out_dir("issue-39-foxglove-3d");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let scene = dir.join("crack.toml");
+    std::fs::write(&scene, SCENE_3D).expect("scene");
+    let out = dir.join("out");
+    run_scene(&scene, &out, &[]);
+    let broken = std::fs::read_to_string(out.join("links_broken.csv")).expect("links_broken");
+    let pairs: Vec<[usize; 2]> = broken
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            [v[2].parse().expect("a"), v[3].parse().expect("b")]
+        })
+        .collect();
+    assert_eq!(pairs, [[0, 1]], "{broken}");
+    let got = views(&out.join("exchange.mcap"));
+    // Outputs 0 (t = 0, before the break), 1 (t = 0.05) and 2 (t_end), after it.
+    assert_eq!(got["/foxglove/fluid"].len(), 3);
+    assert_eq!(got["/foxglove/solid"].len(), 3);
+    let outputs = got["/foxglove/fluid"].iter().zip(&got["/foxglove/solid"]);
+    for (k, ((_, _, grid), (_, _, scene))) in outputs.enumerate() {
+        let grid: Value = serde_json::from_slice(grid).expect("JSON");
+        check_grid(&grid, &vtk(&out.join(format!("fluid_{k}.vti"))));
+        let scene: Value = serde_json::from_slice(scene).expect("JSON");
+        let entity = &scene["entities"][0];
+        has(entity, SCENE_ENTITY, "SceneEntity");
+        let faces = vtk(&out.join(format!("solid_{k}.vtp")));
+        let offsets = faces
+            .array("Polys", "offsets")
+            .and_then(|a| a.as_i64())
+            .expect("polys");
+        // A fan of n - 2 triangles per polygon of n points.
+        let mut start = 0;
+        let triangles: i64 = offsets
+            .iter()
+            .map(|&end| {
+                let n = end - start;
+                start = end;
+                n - 2
+            })
+            .sum();
+        let tri = &entity["triangles"][0];
+        assert_eq!(
+            tri["indices"].as_array().expect("indices").len() as i64,
+            3 * triangles
+        );
+        let lines = entity["lines"].as_array().expect("lines");
+        if k == 0 {
+            assert!(lines.is_empty(), "nothing broken at t = 0");
+            continue;
+        }
+        assert_eq!(lines.len(), 1, "the broken links");
+        let centres = vtk(&out.join(format!("particles_{k}.vtp")));
+        let x = centres
+            .array("Points", "Points")
+            .and_then(|a| a.as_f64())
+            .expect("points");
+        let points = lines[0]["points"].as_array().expect("points");
+        assert_eq!(points.len(), 2);
+        for (p, id) in points.iter().zip(pairs[0]) {
+            for (axis, c) in ["x", "y", "z"].iter().zip(&x[3 * id..3 * id + 3]) {
+                assert_eq!(p[axis].as_f64().expect("a number") as f32, *c as f32);
+            }
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
