@@ -77,6 +77,12 @@ pub trait RecordSink {
     fn links_broken(&mut self, _t: f64, _step: u64, _pairs: &[[u32; 2]]) -> Result<(), SinkError> {
         Ok(())
     }
+    /// The views of an accepted step's output (`output`: the output index the step planned,
+    /// if any), before its `end_step`: the record's Foxglove channels; the default keeps
+    /// nothing.
+    fn views(&mut self, _output: Option<u32>, _t: f64) -> Result<(), SinkError> {
+        Ok(())
+    }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), SinkError>;
 }
@@ -449,6 +455,10 @@ impl RecordSink for TimedSink<'_> {
         self.timed(|s| s.links_broken(t, step, pairs))
     }
 
+    fn views(&mut self, output: Option<u32>, t: f64) -> Result<(), SinkError> {
+        self.timed(|s| s.views(output, t))
+    }
+
     fn end_step(&mut self) -> Result<(), SinkError> {
         self.timed(|s| s.end_step())
     }
@@ -669,6 +679,8 @@ fn record_step(
         .map_err(DriverError::Record)?;
     sink.ledger(&report.ledger).map_err(DriverError::Record)?;
     sink.links_broken(report.t, report.step, &report.broken_links)
+        .map_err(DriverError::Record)?;
+    sink.views(report.output, report.t)
         .map_err(DriverError::Record)?;
     sink.end_step().map_err(DriverError::Record)?;
     tracing::debug!(

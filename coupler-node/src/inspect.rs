@@ -378,7 +378,9 @@ pub fn stream_table(
                 }
                 checked.push(m.channel_id);
             }
-            let m = crate::record::recorded(channel, m)?;
+            let Some(m) = crate::record::recorded(channel, m)? else {
+                continue;
+            };
             summary.steps = Some(
                 summary
                     .steps

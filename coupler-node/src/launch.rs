@@ -205,7 +205,7 @@ fn run_reserved(
     let hung_up = Arc::new(AtomicBool::new(false));
     let supervisor = Supervisor::start(children, abort.clone(), hung_up.clone())?;
 
-    let mut run_sink = RunSink::create(&opts.out, &scene)?;
+    let mut run_sink = RunSink::create(&opts.out, &scene, resume.is_some())?;
     let sink: &mut dyn RecordSink = &mut run_sink;
     let cfg = CouplerConfig::from_scene(&scene);
     let mut coupler = match resume {

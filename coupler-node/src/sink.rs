@@ -125,11 +125,20 @@ pub struct RunSink {
     ledger: CsvFile,
     /// The broken links, `links_broken.csv`, when the scene can break any.
     links_broken: Option<CsvFile>,
+    /// The run's folder, where the nodes write their outputs (the Foxglove views read them).
+    out: std::path::PathBuf,
+    /// File index of the first planned output (1 when the nodes wrote output 0 at t = 0).
+    first_output: u32,
+    /// Output 0 (t = 0) is written and its views not yet recorded.
+    initial_view: bool,
+    /// Links broken so far in this run, as particle-id pairs (the solid's view draws them).
+    broken: Vec<[u32; 2]>,
 }
 
 impl RunSink {
     /// Creates the run's files in `out`, the record first (with the scene as its metadata).
-    pub fn create(out: &Path, scene: &Scene) -> anyhow::Result<RunSink> {
+    /// `resumed`: the run resumes from a checkpoint (no views of the initial output then).
+    pub fn create(out: &Path, scene: &Scene, resumed: bool) -> anyhow::Result<RunSink> {
         let level = scene.run.record;
         let mut record_file = None;
         let record = match level {
@@ -168,6 +177,10 @@ impl RunSink {
                 .is_some_and(|s| s.fracture.is_some())
                 .then(|| CsvFile::create(&out.join("links_broken.csv"), LINKS_BROKEN_HEADER))
                 .transpose()?,
+            out: out.to_path_buf(),
+            first_output: u32::from(scene.initial_output()),
+            initial_view: scene.initial_output() && !resumed,
+            broken: Vec::new(),
         })
     }
 
@@ -267,9 +280,24 @@ impl RecordSink for RunSink {
     }
 
     fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
+        self.broken.extend_from_slice(pairs);
         self.links_broken
             .as_mut()
             .map_or(Ok(()), |csv| csv.append(&links_broken_rows(t, step, pairs)))
+    }
+
+    fn views(&mut self, output: Option<u32>, t: f64) -> Result<(), SinkError> {
+        let out = self.out.clone();
+        if std::mem::take(&mut self.initial_view) {
+            self.record_call(|r| r.record_views(&out, 0, 0.0, &[]))?;
+        }
+        let Some(k) = output else {
+            return Ok(());
+        };
+        let (k, broken) = (k + self.first_output, std::mem::take(&mut self.broken));
+        let done = self.record_call(|r| r.record_views(&out, k, t, &broken));
+        self.broken = broken;
+        done
     }
 
     fn end_step(&mut self) -> Result<(), SinkError> {

@@ -17,5 +17,7 @@ mod issue_16_mpi;
 mod issue_38;
 mod issue_38_records;
 mod issue_39;
+mod issue_39_python;
+mod issue_39_views;
 mod subcycling;
 mod tidy;

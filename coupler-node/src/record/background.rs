@@ -25,6 +25,7 @@ enum Job {
     Frame(NodeKind, NodeKind, f64, u64, Vec<u8>),
     Checkpoint(NodeKind, f64, u64, Vec<u8>),
     Diagnostics(f64, u64, Vec<u8>),
+    Views(std::path::PathBuf, u32, f64, Vec<[u32; 2]>),
     EndStep,
     Finish,
 }
@@ -98,6 +99,17 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         json: &[u8],
     ) -> Result<(), RecordError> {
         self.send(Job::Diagnostics(t, wall_ns, json.to_vec()))
+    }
+
+    /// [`Recorder::record_views`]: the files are read and converted on the record's thread.
+    pub fn record_views(
+        &mut self,
+        dir: &std::path::Path,
+        k: u32,
+        t: f64,
+        broken: &[[u32; 2]],
+    ) -> Result<(), RecordError> {
+        self.send(Job::Views(dir.to_path_buf(), k, t, broken.to_vec()))
     }
 
     /// [`Recorder::end_step`], handed over; returns once the step before it is written.
@@ -214,6 +226,9 @@ fn work<W: Write + std::io::Seek>(
                 .map(|()| None),
             Job::Diagnostics(t, wall, bytes) => {
                 recorder.record_diagnostics(t, wall, &bytes).map(|()| None)
+            }
+            Job::Views(dir, k, t, broken) => {
+                recorder.record_views(&dir, k, t, &broken).map(|()| None)
             }
             Job::EndStep => recorder
                 .end_step()

@@ -10,10 +10,16 @@
 //! | `/checkpoint/fluid`, `/checkpoint/solid` | `bincode` | `protocol::wire::Message`, `bincode-serde` |
 //! | `/diagnostics` | `json` | `cosim.Diagnostics`, `jsonschema` ([`diagnostics_schema`], derived from [`Diagnostics`]) |
 //! | `/checkpoint/coupler` | `bincode` | `protocol::wire::Message`, `bincode-serde` (a `Checkpoint` whose bytes are a `CouplerCheckpoint`) |
+//! | `/foxglove/solid` | `json` | `foxglove.SceneUpdate`, `jsonschema` (at each output: the particles coloured by `sigma_n`, broken links; [`foxglove`]) |
+//! | `/foxglove/fluid` | `json` | `foxglove.Grid`, `jsonschema` (at each output: `rho` and `p`, 2-D or the mid-plane slice) |
 //!
 //! Frames are the bytes of `protocol::codec` (24-byte header + bincode payload), so a reader
-//! decodes them with `protocol::codec::decode`. Channel ids are fixed (1 to 8 in the order of the
-//! table; only `/diagnostics` at level `Diagnostics`), sequence numbers count per channel from 0.
+//! decodes them with `protocol::codec::decode`. Channel ids are fixed (1 to 10 in the order of the
+//! table; `/diagnostics` and the two Foxglove channels, 1 to 3, at level `Diagnostics`),
+//! sequence numbers count per channel from 0. The Foxglove channels are views of the output
+//! files (written only with VTK outputs): their log and publish times are the output's
+//! simulated time, and the readers here ([`read_recording`], `inspect`, `replay`) leave them
+//! out.
 //! Log time is the simulated time in ns ([`protocol::topics::log_time`]): a frame or checkpoint
 //! has the start time of its step, a diagnostics message the end time of its step, so
 //! Foxglove's timeline is the simulation's. Publish time is the wall clock in ns since the UNIX
@@ -64,6 +70,7 @@
 mod background;
 mod channels;
 mod error;
+pub mod foxglove;
 mod reader;
 mod recover;
 mod writer;
@@ -75,6 +82,6 @@ pub use channels::{
 };
 pub use error::RecordError;
 pub(crate) use reader::recorded;
-pub use reader::{Recorded, Recording, read_recording};
+pub use reader::{FOXGLOVE_PREFIX, Recorded, Recording, read_recording};
 pub use recover::{Recovered, recover};
 pub use writer::{Recorder, cut_back};

@@ -6,6 +6,9 @@ use protocol::mcap_read::{self, Dropped, End, Mode, Scan};
 use protocol::topics;
 
 use crate::record::channels::DIAGNOSTICS_TOPIC;
+
+/// Topics of the Foxglove channels begin so ([`crate::record::foxglove`]).
+pub const FOXGLOVE_PREFIX: &str = "/foxglove/";
 use crate::record::error::RecordError;
 
 /// One recorded message.
@@ -107,19 +110,24 @@ fn payload_step(topic: &str, data: &[u8], log_time: u64) -> Result<u64, RecordEr
     })
 }
 
-/// A scanned message of `channel` as a [`Recorded`] (its step read from the payload).
+/// A scanned message of `channel` as a [`Recorded`] (its step read from the payload); `None`
+/// for the Foxglove channels (`/foxglove/...`: views of the output files, not the exchange,
+/// and without a step), which the readers here leave out.
 pub(crate) fn recorded(
     channel: &mcap_read::ScannedChannel,
     m: mcap_read::ScannedMessage,
-) -> Result<Recorded, RecordError> {
-    Ok(Recorded {
+) -> Result<Option<Recorded>, RecordError> {
+    if channel.topic.starts_with(FOXGLOVE_PREFIX) {
+        return Ok(None);
+    }
+    Ok(Some(Recorded {
         step: payload_step(&channel.topic, &m.data, m.log_time)?,
         topic: channel.topic.clone(),
         log_time: m.log_time,
         publish_time: m.publish_time,
         sequence: m.sequence,
         data: m.data,
-    })
+    }))
 }
 
 pub(crate) fn recording(scan: Scan) -> Result<Recording, RecordError> {
@@ -127,7 +135,7 @@ pub(crate) fn recording(scan: Scan) -> Result<Recording, RecordError> {
     let messages = scan
         .messages
         .into_iter()
-        .map(|m| recorded(&scan.channels[&m.channel_id], m))
+        .filter_map(|m| recorded(&scan.channels[&m.channel_id], m).transpose())
         .collect::<Result<_, RecordError>>()?;
     Ok(Recording {
         messages,

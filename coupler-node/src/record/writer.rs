@@ -21,6 +21,10 @@ use crate::record::channels::{
     level_name,
 };
 use crate::record::error::RecordError;
+use crate::record::foxglove::{
+    self, FLUID_TOPIC, GRID_SCHEMA_NAME, SCENE_UPDATE_SCHEMA_NAME, SOLID_TOPIC, grid_schema,
+    scene_update_schema,
+};
 
 /// Largest uncompressed chunk [`Recorder`] holds in memory before it writes it (4 MiB).
 const CHUNK_SIZE: u64 = 4 << 20;
@@ -152,6 +156,15 @@ impl<W: Write + Seek> Recorder<W> {
             let id = writer.add_channel(frames, topic, FRAME_MESSAGE_ENCODING, &meta)?;
             channels.insert(topic, (id, 0));
         }
+        // Last, so the ids of the older channels stay as they were.
+        for (topic, name, schema) in [
+            (SOLID_TOPIC, SCENE_UPDATE_SCHEMA_NAME, scene_update_schema()),
+            (FLUID_TOPIC, GRID_SCHEMA_NAME, grid_schema()),
+        ] {
+            let schema = writer.add_schema(name, "jsonschema", schema.as_bytes())?;
+            let id = writer.add_channel(schema, topic, "json", &BTreeMap::new())?;
+            channels.insert(topic, (id, 0));
+        }
         let mut recorder = Recorder {
             writer,
             level,
@@ -219,6 +232,41 @@ impl<W: Write + Seek> Recorder<W> {
         json: &[u8],
     ) -> Result<(), RecordError> {
         self.write(DIAGNOSTICS_TOPIC, t, wall_ns, json)
+    }
+
+    /// Records the Foxglove views of output `k` of the files in `dir` (module
+    /// [`crate::record::foxglove`]): the solid's scene update and the fluid's grid, each when
+    /// its files are there; log and publish time = `t` (the output's simulated time), so the
+    /// messages are a function of the run. `broken`: the links broken so far. A file that is
+    /// there and does not read is logged and left out (the views are not the run's data).
+    pub fn record_views(
+        &mut self,
+        dir: &std::path::Path,
+        k: u32,
+        t: f64,
+        broken: &[[u32; 2]],
+    ) -> Result<(), RecordError> {
+        let views = [
+            (
+                SOLID_TOPIC,
+                foxglove::solid_scene(dir, k, t, broken).map(|m| serde_json::to_vec(&m)),
+            ),
+            (
+                FLUID_TOPIC,
+                foxglove::fluid_grid(dir, k, t).map(|m| serde_json::to_vec(&m)),
+            ),
+        ];
+        for (topic, view) in views {
+            match view {
+                Ok(json) => {
+                    let json = json.expect("a Foxglove message serializes");
+                    self.write(topic, t, topics::log_time(t), &json)?;
+                }
+                Err(foxglove::ViewError::Missing(_)) => {}
+                Err(err) => tracing::warn!("{topic} lacks output {k}: {err}"),
+            }
+        }
+        Ok(())
     }
 
     /// Called after each completed step: closes the open chunk, writes it and the provisional

@@ -284,6 +284,21 @@ fn frames_read_back_byte_identical_with_channels_and_metadata() {
             assert_eq!(channel.message_encoding, "json");
             assert_eq!(schema.encoding, "jsonschema");
             let _: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        } else if let Some(view) = channel.topic.strip_prefix("/foxglove/") {
+            // Issue 39 item 2: the Foxglove views, last (ids 9 and 10), empty here (no outputs).
+            let (id, name) = match view {
+                "solid" => (9, "foxglove.SceneUpdate"),
+                "fluid" => (10, "foxglove.Grid"),
+                other => panic!("unknown view {other}"),
+            };
+            assert_eq!(channel.id, id);
+            assert_eq!(channel.message_encoding, "json");
+            assert_eq!(
+                (schema.name.as_str(), schema.encoding.as_str()),
+                (name, "jsonschema")
+            );
+            let doc: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+            assert_eq!(doc["title"], name);
         } else {
             assert_eq!(channel.message_encoding, "bincode");
             assert_eq!(schema.name, "protocol::wire::Message");
