@@ -7,19 +7,25 @@
 //!
 //! Face flux choice, in this order:
 //! 1. a vacuum cell on either side (ρ or p below the thresholds): Lax–Friedrichs (paper 000
-//!    §3.2), which divides by neither ρ nor p;
+//!    §3.2), which divides by neither ρ nor p; between two vacuum cells its local form
+//!    (`euler::flux_local_lax_friedrichs`, the classical flux where a side's speed exceeds
+//!    `Δx/Δt`): positivity preserving under the step's CFL condition as the classical flux is,
+//!    but it diffuses at the gas's speed rather than at `Δx/Δt`, so that an odd–even mode of
+//!    round-off in near-vacuum cells does not grow in the cut cells a withdrawing solid opens
+//!    (docs/cut-cells.md §4);
 //! 2. a non-physical Roe average (c² ≤ 0) anywhere in the stencil, or negative linearised star
 //!    states at the face: HLLE (numerics.md §1.8, not in Daru–Tenaud);
 //! 3. otherwise the scheme's flux (OSMP, or the MUSCL–Hancock/HLLC reference).
 //!
 //! After the update a cell with ρ ≤ 0 or p ≤ 0 (or non-finite) has its two faces recomputed
-//! with HLLE, then Lax–Friedrichs, at most [`MAX_FIXES`] rounds (a-posteriori positivity
-//! safeguard of numerics.md §1.8). What is still wrong is reported by the caller.
+//! with HLLE, then Lax–Friedrichs (a local Lax–Friedrichs face: Lax–Friedrichs at once), at most
+//! [`MAX_FIXES`] rounds (a-posteriori positivity safeguard of numerics.md §1.8). What is still
+//! wrong is reported by the caller.
 
 use crate::fv::euler::{
     NQ, Primitive, RoeAverage, RoeSide, State, flux_hllc, flux_hlle, flux_lax_friedrichs,
-    physical_flux, primitive, primitive_floored, roe_eigenvector, roe_star_states_positive,
-    roe_strengths,
+    flux_local_lax_friedrichs, physical_flux, primitive, primitive_floored, roe_eigenvector,
+    roe_star_states_positive, roe_strengths,
 };
 use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
 
@@ -87,14 +93,16 @@ pub enum FaceFlux {
     Regular,
     /// HLLE fallback.
     Hlle,
-    /// Lax–Friedrichs (vacuum).
+    /// Local Lax–Friedrichs (between two vacuum cells).
+    LocalLaxFriedrichs,
+    /// Lax–Friedrichs (beside vacuum, and the last fallback).
     LaxFriedrichs,
 }
 
 /// Counters of one line update.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LineStats {
-    /// Faces that used Lax–Friedrichs.
+    /// Faces that used Lax–Friedrichs, local (between vacuum cells) or classical.
     pub lax_friedrichs: u32,
     /// Faces that used the HLLE fallback.
     pub hlle: u32,
@@ -269,7 +277,7 @@ pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
     for k in &s.kind[own_lo..last_face] {
         match k {
             FaceFlux::Hlle => stats.hlle += 1,
-            FaceFlux::LaxFriedrichs => stats.lax_friedrichs += 1,
+            FaceFlux::LocalLaxFriedrichs | FaceFlux::LaxFriedrichs => stats.lax_friedrichs += 1,
             FaceFlux::Regular => {}
         }
     }
@@ -422,8 +430,8 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
             star_ok[j] = roe_star_states_positive(&u[j], &u[j + 1], &roe[j], &a);
         }
     }
-    // Faces beside vacuum: Lax–Friedrichs; an invalid average in the stencil or non-physical
-    // star states: HLLE.
+    // Faces beside vacuum: Lax–Friedrichs (local between two); an invalid average in the stencil or
+    // non-physical star states: HLLE.
     s.bad_prefix[0] = 0;
     for l in 0..s.roe.len() {
         s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe[l].valid);
@@ -431,7 +439,10 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     for fi in 0..=n {
         let f = ng - 1 + fi;
         let (ul, ur) = (&s.u[f], &s.u[f + 1]);
-        if s.vacuum[f] || s.vacuum[f + 1] {
+        if s.vacuum[f] && s.vacuum[f + 1] {
+            s.face[fi] = flux_local_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho);
+            s.kind[fi] = FaceFlux::LocalLaxFriedrichs;
+        } else if s.vacuum[f] || s.vacuum[f + 1] {
             s.face[fi] = flux_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho);
             s.kind[fi] = FaceFlux::LaxFriedrichs;
         } else if s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius] || !s.star_ok[fi] {
@@ -510,7 +521,11 @@ fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
     }
     for fi in 0..=n {
         let f = ng - 1 + fi;
-        if s.vacuum[f] || s.vacuum[f + 1] {
+        if s.vacuum[f] && s.vacuum[f + 1] {
+            s.face[fi] =
+                flux_local_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma, setup.vacuum_rho);
+            s.kind[fi] = FaceFlux::LocalLaxFriedrichs;
+        } else if s.vacuum[f] || s.vacuum[f + 1] {
             s.face[fi] = flux_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma, setup.vacuum_rho);
             s.kind[fi] = FaceFlux::LaxFriedrichs;
         } else {

@@ -4,7 +4,8 @@
 //! Method: OSMP fluxes of Daru & Tenaud (JCP 2004) of order 3, 5 or 7 on Roe characteristic
 //! variables, one full-`Δt` sweep per axis with the sweep order cycling through the
 //! permutations (paper 003 §2.1 and §3.4 step 1); Lax–Friedrichs at faces beside vacuum cells
-//! (paper 000 §3.2); reflecting walls, periodic and zero-gradient outflow boundaries.
+//! (paper 000 §3.2), in its local form between two vacuum cells (docs/cut-cells.md §4);
+//! reflecting walls, periodic and zero-gradient outflow boundaries.
 //!
 //! Public API used by the node loop:
 //! ```text
@@ -79,6 +80,8 @@ pub mod sweep;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_vacuum;
 
 pub use comm::{Comm, Serial};
 pub use line::FluxKind;

@@ -11,7 +11,7 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::fv::euler::{NQ, State, flux_hlle, flux_lax_friedrichs, primitive_floored};
+use crate::fv::euler::{NQ, State, flux_hlle, flux_local_lax_friedrichs, primitive_floored};
 use crate::fv::line::{LineScratch, LineSetup, LineStats, advance_line};
 use crate::fv::state::{BoundaryKind, FluidParams};
 use crate::grid::Grid;
@@ -657,7 +657,9 @@ fn advance_segments(
 
 /// The fluxes of the faces inside the `runs` of a cut pencil (`full`: the gathered line, `face`:
 /// its faces, `start`: its first cell along the pencil): a two-point flux between the ghost
-/// states on either side, HLLE (Lax–Friedrichs beside vacuum, as the line's own fallback).
+/// states on either side, HLLE (the local Lax–Friedrichs flux beside vacuum: these faces lie
+/// inside the solid at t^n, and the classical flux's diffusion `Δx/Δt` between a ghost state and
+/// vacuum is no flux the gas makes; docs/cut-cells.md §4).
 /// No cell reads them; they are kept for the correct, where a face between two cells covered
 /// at t^n carries the sweep's flux once the solid uncovers part of it at t^{n+1} (eq. 13).
 ///
@@ -688,7 +690,7 @@ fn run_faces(
             face[f as usize] = if gas(ul) && gas(ur) {
                 flux_hlle(ul, ur, setup.gamma)
             } else {
-                flux_lax_friedrichs(ul, ur, setup.sigma, setup.gamma, setup.vacuum_rho)
+                flux_local_lax_friedrichs(ul, ur, setup.sigma, setup.gamma, setup.vacuum_rho)
             };
         }
     }
