@@ -19,7 +19,7 @@ pub struct Frame<'a> {
     pub title: &'a str,
     /// The colour bar's description, `p [Pa]`.
     pub quantity: &'a str,
-    /// Domain corners `[x, y]` [m].
+    /// Domain corners `[x, y]` \[m\].
     pub lower: [f64; 2],
     /// Upper corner.
     pub upper: [f64; 2],
@@ -27,7 +27,7 @@ pub struct Frame<'a> {
     pub colours: Range<f64>,
 }
 
-/// Height of the drawn image, or its width if wider [px].
+/// Height of the drawn image, or its width if wider \[px\].
 const SIDE: f64 = 560.0;
 const LEFT: f64 = 90.0;
 const TOP: f64 = 45.0;
