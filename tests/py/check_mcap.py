@@ -8,7 +8,7 @@ Opens the file, reads every message, and checks that
     (bus and checkpoint channels: "bincode", schema "protocol::wire::Message"/"bincode-serde";
     "/diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object);
     topics are '/'-rooted (record layout 2),
-  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 4,
+  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 5,
   - every diagnostics message parses as a JSON object with an integer "step", and its log time
     is its "t" (the step's end) in nanoseconds (log time = simulated time),
   - log times never decrease within a channel (frames: the start time of their step),
@@ -38,7 +38,7 @@ FRAME_TOPICS = {
     "/checkpoint/coupler",
 }
 DIAGNOSTICS = "/diagnostics"
-PROTOCOL_VERSION = 4
+PROTOCOL_VERSION = 5
 
 
 class CheckError(Exception):
