@@ -225,3 +225,28 @@ fn a_link_broken_at_sub_step_j_of_k_has_the_time_of_that_sub_step() {
     assert_eq!(run.sink.links_broken, expected);
     assert!((t14 - 14.0 * h).abs() < 1e-15 && (t27 - 27.0 * h).abs() < 1e-15);
 }
+
+#[test]
+fn check_expects_the_k_and_the_step_the_first_step_of_auto_takes() {
+    use coupler_node::check::{FirstSubsteps, first_substeps};
+    // The stiff block of `auto_sub_cycles_a_stiff_block_within_twice_the_energy_error_of_k_1`.
+    let mut scene = parse(SHOCKED_BLOCK);
+    scene.solid.as_mut().expect("solid").young = Some(7e4);
+    scene.run.solid_substeps = Some(SolidSubsteps::AUTO);
+    scene.run.dt_max = None;
+    scene.run.max_steps = Some(1);
+    let Some(FirstSubsteps::Expected { k, dt, .. }) = first_substeps(&scene) else {
+        panic!("{:?}", first_substeps(&scene));
+    };
+    let run = run_in_process(&scene);
+    let first: serde_json::Value =
+        serde_json::from_slice(&run.sink.diagnostics[0]).expect("diagnostics JSON");
+    println!("check: K {k}, dt {dt:e}; the run: {first}");
+    assert!(k > 1, "the stiff block sub-cycles: K = {k}");
+    assert_eq!(first["solid_substeps"].as_u64(), Some(u64::from(k)));
+    assert_eq!(
+        first["dt"].as_f64(),
+        Some(dt),
+        "the same first step, to the bit"
+    );
+}
