@@ -71,10 +71,10 @@ pub trait RecordSink {
     fn ledger(&mut self, _entry: &LedgerEntry) -> Result<(), SinkError> {
         Ok(())
     }
-    /// The links broken in accepted step `step`, which ends at `t` \[s\], as particle-id
-    /// pairs in break order, before its `end_step` (`links_broken.csv`; called for every step,
-    /// with an empty list when none broke); the default keeps nothing.
-    fn links_broken(&mut self, _t: f64, _step: u64, _pairs: &[[u32; 2]]) -> Result<(), SinkError> {
+    /// The links broken in accepted step `step` as (time of the sub-step that broke it \[s\],
+    /// particle-id pair), in break order, before its `end_step` (`links_broken.csv`; called
+    /// for every step, with an empty list when none broke); the default keeps nothing.
+    fn links_broken(&mut self, _step: u64, _links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
         Ok(())
     }
     /// The views of an accepted step's output (`output`: the output index the step planned,
@@ -451,8 +451,8 @@ impl RecordSink for TimedSink<'_> {
         self.timed(|s| s.ledger(entry))
     }
 
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
-        self.timed(|s| s.links_broken(t, step, pairs))
+    fn links_broken(&mut self, step: u64, links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
+        self.timed(|s| s.links_broken(step, links))
     }
 
     fn views(&mut self, output: Option<u32>, t: f64) -> Result<(), SinkError> {
@@ -678,7 +678,7 @@ fn record_step(
     sink.diagnostics(report.t, wall_ns(), &json)
         .map_err(DriverError::Record)?;
     sink.ledger(&report.ledger).map_err(DriverError::Record)?;
-    sink.links_broken(report.t, report.step, &report.broken_links)
+    sink.links_broken(report.step, &report.broken_links)
         .map_err(DriverError::Record)?;
     sink.views(report.output, report.t)
         .map_err(DriverError::Record)?;

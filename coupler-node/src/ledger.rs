@@ -203,6 +203,7 @@ mod tests {
             boundary_energy_out: out_e,
             links_broken: 0,
             broken_pairs: Vec::new(),
+            broken_substeps: Vec::new(),
             swept_mass: 0.0,
             vacuum_cells: 0,
             kinetic: 0.0,

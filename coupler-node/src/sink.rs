@@ -92,13 +92,14 @@ const SUMMARY_BYTES_PER_CHUNK: u64 = 256;
 /// Header line of `links_broken.csv` (DESIGN §7), without the newline.
 pub const LINKS_BROKEN_HEADER: &str = "t,step,a,b";
 
-/// The `links_broken.csv` rows of one accepted step (each with its newline): `t` the step's end
-/// in shortest round-trip form, `step` from 0, `a, b` the particle ids of each link broken in
-/// it, in the order they broke. Empty when none broke.
-pub fn links_broken_rows(t: f64, step: u64, pairs: &[[u32; 2]]) -> String {
-    pairs
+/// The `links_broken.csv` rows of one accepted step (each with its newline): `t` the end of the
+/// solid sub-step that broke the link (the step's end without sub-steps) in shortest
+/// round-trip form, `step` from 0, `a, b` the particle ids of each link broken in it, in the
+/// order they broke. Empty when none broke.
+pub fn links_broken_rows(step: u64, links: &[(f64, [u32; 2])]) -> String {
+    links
         .iter()
-        .map(|[a, b]| format!("{t:e},{step},{a},{b}\n"))
+        .map(|(t, [a, b])| format!("{t:e},{step},{a},{b}\n"))
         .collect()
 }
 
@@ -279,11 +280,11 @@ impl RecordSink for RunSink {
         self.ledger.append(&entry.csv_row())
     }
 
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
-        self.broken.extend_from_slice(pairs);
+    fn links_broken(&mut self, step: u64, links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
+        self.broken.extend(links.iter().map(|(_, pair)| *pair));
         self.links_broken
             .as_mut()
-            .map_or(Ok(()), |csv| csv.append(&links_broken_rows(t, step, pairs)))
+            .map_or(Ok(()), |csv| csv.append(&links_broken_rows(step, links)))
     }
 
     fn views(&mut self, output: Option<u32>, t: f64) -> Result<(), SinkError> {

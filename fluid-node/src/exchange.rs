@@ -210,6 +210,7 @@ impl NodeModel for RealFluid {
             boundary_energy_out: totals.outflow_energy,
             links_broken: 0,
             broken_pairs: Vec::new(),
+            broken_substeps: Vec::new(),
             swept_mass: budget.swept_mass,
             vacuum_cells: self.vacuum_cells(),
             kinetic: 0.0,

@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 4;
+pub const PROTOCOL_VERSION: u32 = 5;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -309,6 +309,10 @@ pub struct ConservedTotals {
     /// broke (solid only; empty in the initial totals and from the doubles). Breaking is decided
     /// when a step is accepted, never on a rejected fixed-point trial.
     pub broken_pairs: Vec<u32>,
+    /// For each link of `broken_pairs`, the solid sub-step `j` (1 to K, `run.solid_substeps`;
+    /// 1 without sub-steps) at whose end it broke: the coupler gives it the time
+    /// `tⁿ + j dt/K` (`links_broken.csv`), the step's end for `j = K` (solid only).
+    pub broken_substeps: Vec<u32>,
     /// Fluid mass the solid's motion displaced since the start \[kg\] (2-D: per unit depth):
     /// `Σ_n Σ_cells ρⁿ max(0, Λ^{n+1} − Λⁿ) V`, the fluid that was, at the start of each step,
     /// in the volume the solid newly covers during it (fluid only; 0 from the doubles).

@@ -186,6 +186,7 @@ impl NodeModel for PrescribedDouble {
             boundary_energy_out: 0.0,
             links_broken: 0,
             broken_pairs: Vec::new(),
+            broken_substeps: Vec::new(),
             swept_mass: 0.0,
             vacuum_cells: 0,
             kinetic,

@@ -29,6 +29,8 @@ pub struct RealSolid {
     /// Particle ids of the links broken in the last committed step, two per link, in break
     /// order (the totals of that step carry them to the coupler's `links_broken.csv`).
     last_broken: Vec<u32>,
+    /// The sub-step (1 to K) in which each of them broke.
+    last_broken_substeps: Vec<u32>,
     zero_force: Vec<f64>,
     zero_torque: Vec<f64>,
     /// The `.vtp` files written so far: `particles.pvd`, `solid.pvd`, `wet.pvd`.
@@ -103,6 +105,7 @@ impl RealSolid {
             probes_started: false,
             links_broken: 0,
             last_broken: Vec::new(),
+            last_broken_substeps: Vec::new(),
             zero_force: vec![0.0; n * dim],
             zero_torque: vec![0.0; n * n_rot],
             vtk_series: Default::default(),
@@ -193,6 +196,7 @@ impl NodeModel for RealSolid {
             boundary_energy_out: 0.0,
             links_broken: self.links_broken,
             broken_pairs: self.last_broken.clone(),
+            broken_substeps: self.last_broken_substeps.clone(),
             swept_mass: 0.0,
             vacuum_cells: 0,
             kinetic: e.kinetic_translation + e.kinetic_rotation,
@@ -218,6 +222,7 @@ impl NodeModel for RealSolid {
         self.links_broken = links_broken;
         // A checkpoint is the state at the start of a step: nothing has broken in it yet.
         self.last_broken.clear();
+        self.last_broken_substeps.clear();
         Ok(())
     }
 
@@ -374,9 +379,11 @@ impl SolidModel for RealSolid {
         let report = self.solid.commit();
         self.links_broken += report.broken_links.len() as u64;
         self.last_broken.clear();
+        self.last_broken_substeps.clear();
         for b in &report.broken_links {
             self.last_broken
                 .extend([b.particles[0].0, b.particles[1].0]);
+            self.last_broken_substeps.push(b.substep);
         }
         if report.diagnostics.is_empty() {
             Ok(())

@@ -353,9 +353,10 @@ fn the_rod_deforming_tangentially_keeps_the_gas_at_rest() {
     }
 }
 
-/// `scenes/thin-shell.toml` (paper 003 §5.3) for its first 600 steps (t ≈ 0.01 s): the Mach-3
-/// shock reaches the shell at t ≈ 0.007 s and pushes its middle downstream; the fluid's mass is
-/// conserved to round-off of what the shell sweeps, and the energy balance closes.
+/// `scenes/thin-shell.toml` (paper 003 §5.3; solid sub-steps "auto", explicit) for its first
+/// 600 steps (t ≈ 0.066 s): the Mach-3 shock reaches the shell at t ≈ 0.007 s and pushes its
+/// middle downstream; the fluid's mass is conserved to round-off of what the shell sweeps, and
+/// the energy balance closes.
 #[test]
 fn the_thin_shell_is_pushed_by_the_shock_and_conserves() {
     let mut shell = cosim_tests::scene("thin-shell.toml");

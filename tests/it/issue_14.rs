@@ -18,7 +18,7 @@ use crate::e2e::{out_dir, run_scene, summary};
 /// 1 % elongation, i.e. 1e-3 m; with dt = 1.5e-4 s the links (0, 1) and (3, 4) (relative speed
 /// 2 m/s, 3e-4 m a step) break after 4 steps (1.2e-3 m: step 3), (2, 3) (1 m/s) after 7
 /// (1.05e-3 m: step 6), (1, 2) never.
-const PULLED_ROW: &str = r#"
+pub(crate) const PULLED_ROW: &str = r#"
 name = "pulled-row"
 [run]
 t_end = 1.2e-3

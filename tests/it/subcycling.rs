@@ -201,3 +201,52 @@ fn auto_sub_cycles_a_stiff_block_within_twice_the_energy_error_of_k_1() {
     assert!(k.iter().any(|&k| k > 1), "{k:?}");
     assert!(auto <= 2.0 * one, "auto {auto:e}, K = 1 {one:e}");
 }
+
+#[test]
+fn a_link_broken_at_sub_step_j_of_k_has_the_time_of_that_sub_step() {
+    // The pulled row of issue 14 (dt = 1.5e-4 s) with K = 4 sub-steps of h = 3.75e-5 s: the
+    // links (0, 1) and (3, 4) open at 2 m/s, 7.5e-5 m a sub-step, and pass 1e-3 m at the 14th
+    // sub-step (1.05e-3 m), the 2nd of step 3; (2, 3) opens at 1 m/s and passes it at the 27th
+    // (1.0125e-3 m), the 3rd of step 6.
+    let text = crate::issue_14::PULLED_ROW.replace("[run]\n", "[run]\nsolid_substeps = 4\n");
+    let run = run_in_process(&parse(&text));
+    assert_eq!(run.error, None);
+    assert!(run.node_errors.is_empty(), "{:?}", run.node_errors);
+    assert_eq!(substeps(&run), vec![Some(4); 8]);
+    // t(n): the end of step n, the start of step n + 1, as the diagnostics give it.
+    let t = |step: usize| {
+        let v: serde_json::Value =
+            serde_json::from_slice(&run.sink.diagnostics[step]).expect("diagnostics JSON");
+        v["t"].as_f64().expect("t")
+    };
+    let h = 1.5e-4 / 4.0;
+    let (t14, t27) = (t(2) + 2.0 * h, t(5) + 3.0 * h);
+    let expected = format!("{t14:e},3,0,1\n{t14:e},3,3,4\n{t27:e},6,2,3\n");
+    assert_eq!(run.sink.links_broken, expected);
+    assert!((t14 - 14.0 * h).abs() < 1e-15 && (t27 - 27.0 * h).abs() < 1e-15);
+}
+
+#[test]
+fn check_expects_the_k_and_the_step_the_first_step_of_auto_takes() {
+    use coupler_node::check::{FirstSubsteps, first_substeps};
+    // The stiff block of `auto_sub_cycles_a_stiff_block_within_twice_the_energy_error_of_k_1`.
+    let mut scene = parse(SHOCKED_BLOCK);
+    scene.solid.as_mut().expect("solid").young = Some(7e4);
+    scene.run.solid_substeps = Some(SolidSubsteps::AUTO);
+    scene.run.dt_max = None;
+    scene.run.max_steps = Some(1);
+    let Some(FirstSubsteps::Expected { k, dt, .. }) = first_substeps(&scene) else {
+        panic!("{:?}", first_substeps(&scene));
+    };
+    let run = run_in_process(&scene);
+    let first: serde_json::Value =
+        serde_json::from_slice(&run.sink.diagnostics[0]).expect("diagnostics JSON");
+    println!("check: K {k}, dt {dt:e}; the run: {first}");
+    assert!(k > 1, "the stiff block sub-cycles: K = {k}");
+    assert_eq!(first["solid_substeps"].as_u64(), Some(u64::from(k)));
+    assert_eq!(
+        first["dt"].as_f64(),
+        Some(dt),
+        "the same first step, to the bit"
+    );
+}

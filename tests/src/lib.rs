@@ -42,9 +42,9 @@ impl RecordSink for MemorySink {
         self.diagnostics.push(json.to_vec());
         Ok(())
     }
-    fn links_broken(&mut self, t: f64, step: u64, pairs: &[[u32; 2]]) -> Result<(), SinkError> {
+    fn links_broken(&mut self, step: u64, links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
         self.links_broken
-            .push_str(&coupler_node::sink::links_broken_rows(t, step, pairs));
+            .push_str(&coupler_node::sink::links_broken_rows(step, links));
         Ok(())
     }
     fn end_step(&mut self) -> Result<(), SinkError> {

@@ -62,6 +62,8 @@ pub struct StepReport {
     pub solid_substeps: Option<u32>,
     /// Fluid cells below the vacuum thresholds at the end of the step (0 without a fluid).
     pub vacuum_cells: u64,
-    /// Particle ids `[a, b]` of the links broken in this step, in the order they broke.
-    pub broken_links: Vec<[u32; 2]>,
+    /// The links broken in this step, in the order they broke: the end of the solid sub-step
+    /// that broke each (`tⁿ + j dt/K`, [`crate::scheme::substep_end`]) and its particle ids
+    /// `[a, b]`.
+    pub broken_links: Vec<(f64, [u32; 2])>,
 }

@@ -37,6 +37,7 @@ pub use config::CouplerConfig;
 pub use coupler::Coupler;
 pub use criterion::criterion_22;
 pub use error::{CouplerError, RestoreError};
+pub use step::substep_end;
 
 #[cfg(test)]
 mod tests;

@@ -14,6 +14,17 @@ use crate::scheme::coupler::{Coupler, Phase, stale};
 use crate::scheme::criterion::criterion_22;
 use crate::scheme::error::CouplerError;
 
+/// The end of solid sub-step `j` (1 to `k`) of the step from `t` of `dt` that ends at `end`:
+/// `t + j (dt/k)`, and `end` itself for the last (`links_broken.csv`; at K = 1 every link
+/// breaks at the step's end, as the coupler books it).
+pub fn substep_end(t: f64, dt: f64, end: f64, j: u32, k: u32) -> f64 {
+    if j >= k {
+        end
+    } else {
+        t + f64::from(j) * (dt / f64::from(k))
+    }
+}
+
 impl Coupler {
     /// Moves to the next phase when the current one is complete.
     pub(super) fn advance(&mut self, actions: &mut Vec<Action>) -> Result<(), CouplerError> {
@@ -283,7 +294,13 @@ impl Coupler {
             broken_links: solid.map_or_else(Vec::new, |s| {
                 s.broken_pairs
                     .chunks_exact(2)
-                    .map(|p| [p[0], p[1]])
+                    .enumerate()
+                    .map(|(i, p)| {
+                        // A solid that sends no sub-step (a double) breaks at the step's end.
+                        let j = s.broken_substeps.get(i).copied().unwrap_or(self.substeps);
+                        let t = substep_end(self.t, dt, t_end_of_step, j, self.substeps);
+                        (t, [p[0], p[1]])
+                    })
                     .collect()
             }),
         }));

@@ -78,6 +78,7 @@ fn totals(node: NodeKind, step: u64, mass: f64) -> Message {
         boundary_energy_out: 0.0,
         links_broken: 0,
         broken_pairs: Vec::new(),
+        broken_substeps: Vec::new(),
         swept_mass: 0.0,
         vacuum_cells: 0,
         kinetic: 0.0,

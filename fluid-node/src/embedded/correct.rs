@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use super::beyond::{outside_domain, sweep_beyond};
 use super::cells::{
-    CellKind, across, domain_face, fluid_part, full_state, overlap_scale, touches_gas,
+    CellKind, across, domain_face, fluid_part, full_state, overlap_scale, pressure_cell,
+    touches_gas,
 };
 use super::error::Reach;
 use super::loads::{add_loads, push_moment};
@@ -491,9 +492,13 @@ impl Embedded {
                 continue;
             }
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
+            // The neighbour a face takes `p̄` from is near: one of the two holds F^n's wall.
+            let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom.solid_fraction, s)]
+                as usize
+                - 1;
             let mut pi = [0.0; 3];
             for a in 0..dim {
-                pi[a] = self.near.hooks.pressures[a][k] * s.normal[a] * s.area;
+                pi[a] = self.near.hooks.pressures[a][kp] * s.normal[a] * s.area;
             }
             let p = s.particle as usize;
             let x = flux_frame.center(p);

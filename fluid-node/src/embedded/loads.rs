@@ -3,7 +3,7 @@
 
 use protocol::sum::OddSum;
 
-use super::cells::{domain_face, touches_gas};
+use super::cells::{domain_face, pressure_cell, touches_gas};
 use super::error::Reach;
 use super::{Embedded, EmbeddedError, SolidFrame};
 use crate::cutcell::compute;
@@ -44,10 +44,11 @@ impl Embedded {
                 continue;
             }
             let mut f = [0.0; 3];
+            let pc = pressure_cell(grid, &self.state.geom.solid_fraction, s) as u32;
             for a in 0..d {
-                let Some(p) = self.near.pressure_of(s.cell, a) else {
+                let Some(p) = self.near.pressure_of(pc, a) else {
                     self.scratch.odd = sum;
-                    return Err(self.outside_near(None, Reach::TrialSurface, s.cell));
+                    return Err(self.outside_near(None, Reach::TrialSurface, pc));
                 };
                 f[a] = -p * s.normal[a] * s.area;
             }

@@ -34,7 +34,9 @@
 //!
 //! Readings chosen where the papers are silent:
 //! - `p̄` of a sub-face is the pressure of the cell holding it, from the state each sweep starts
-//!   with; ghost states make it the mirrored fluid pressure in a covered cell.
+//!   with; ghost states make it the mirrored fluid pressure in a covered cell. A face in a cell
+//!   covered at t^n takes the `p̄` of the fluid cell it faces (`cells::pressure_cell`): a thin
+//!   covered run mirrors one side only.
 //! - Ghost states mirror along the sweep line (numerics §2.6), which is exact for walls normal
 //!   to the axis; the wall velocity is the area-averaged velocity of the sub-faces of the cut
 //!   cell beside the covered run.

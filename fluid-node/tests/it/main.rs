@@ -15,6 +15,7 @@ mod embedded_memory;
 mod embedded_piston;
 mod embedded_rest;
 mod embedded_support;
+mod embedded_thin;
 mod embedded_uniform;
 mod embedded_wall_hit;
 mod embedded_withdrawn;

@@ -83,6 +83,7 @@ fn every_message() -> Vec<Message> {
             boundary_energy_out: 1e-9,
             links_broken: 12,
             broken_pairs: vec![3, 4, 0, 49],
+            broken_substeps: vec![1, 4],
             swept_mass: 0.25,
             vacuum_cells: 7,
             kinetic: 3.5,

@@ -116,6 +116,9 @@ pub struct BrokenLink {
     pub elongation: f64,
     /// Time at which it broke: the end of the (sub-)step whose commit found it stretched \[s\].
     pub time: f64,
+    /// The sub-step (1 to K) of its coupling step at whose end it broke: 1 without sub-steps
+    /// (`Solid::begin_substeps`).
+    pub substep: u32,
 }
 
 /// Energies of the solid \[J\] (2-D: per unit depth).

@@ -279,3 +279,56 @@ fn stretched_link_faces_coincide_until_the_link_breaks() {
         total_volume(&solid)
     );
 }
+
+/// Issue 37 (docs/subcycling.md, the thin shell's rotation): the vertices shared by linked
+/// particles are the means of their rigid corners, so particles of a column that all turn by θ
+/// keep their long wet faces parallel to the column, shifted along it by `(t/2) sin θ`. A
+/// uniform pressure p on the two long faces of the middle particle then gives it the torque
+/// `p h t sin θ`, in the sense of θ: a negative stiffness `p h t` (the faces of a lone rigid
+/// rectangle turn with it and take none).
+#[test]
+fn particles_turning_together_keep_their_long_faces_parallel_a_negative_stiffness() {
+    let (t, h) = (3.125e-3, 5e-3);
+    let cfg = shape_config(
+        Shape::Box {
+            center: vec![0.5, 0.1],
+            size: vec![t, 3.0 * h],
+        },
+        vec![1, 3],
+        false,
+    );
+    let mut solid = build(&cfg, 2, 1);
+    for p in 0..3 {
+        solid.set_angular_velocity(ParticleId(p), &[100.0]);
+    }
+    solid.begin_step(1e-4);
+    let trial = solid.trial(&[0.0; 6], &[0.0; 3]);
+    let theta = trial.orientation[1];
+    assert!((theta - 1e-2).abs() <= 1e-12, "theta {theta}");
+    let x = [trial.position[2], trial.position[3]];
+    let wet = &trial.wet;
+    let (mut torque, mut faces) = (0.0, 0);
+    for e in 0..wet.n_elements() {
+        if !wet.wet[e] || wet.element_particle[e] != 1 {
+            continue;
+        }
+        let (n, c, a) = (
+            &wet.normal[2 * e..2 * e + 2],
+            &wet.centroid[2 * e..2 * e + 2],
+            wet.area[e],
+        );
+        assert!(n[1].abs() <= 1e-12, "a long face turned: normal {n:?}");
+        assert!((a - h).abs() <= 1e-12 * h, "area {a}");
+        // Pressure p = 1 Pa: force −p n A at the face's centroid, moment about the centre.
+        let f = [-n[0] * a, -n[1] * a];
+        torque += (c[0] - x[0]) * f[1] - (c[1] - x[1]) * f[0];
+        faces += 1;
+    }
+    assert_eq!(faces, 2, "the middle particle's two long faces are wet");
+    let expected = h * t * theta.sin();
+    println!("torque {torque:e} N m, p h t sin(theta) {expected:e}");
+    assert!(
+        (torque - expected).abs() <= 1e-9 * expected,
+        "torque {torque:e}, expected {expected:e}"
+    );
+}

@@ -129,6 +129,7 @@ impl Solid {
                         particles: [ParticleId(link.i), ParticleId(link.j)],
                         elongation,
                         time: self.state.time + self.dt,
+                        substep: 1,
                     });
                 }
             }

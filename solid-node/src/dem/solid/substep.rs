@@ -17,7 +17,7 @@
 
 use nalgebra::Vector3;
 
-use crate::dem::report::StepReport;
+use crate::dem::report::{BrokenLink, StepReport};
 use crate::dem::solid::orientation::{quat, quat_arr, rotate_body};
 use crate::dem::solid::state::{Solid, Trial};
 use crate::dem::wet::{write_connectivity, write_geometry};
@@ -57,14 +57,18 @@ impl Solid {
         let mut report = StepReport::default();
         self.dt = dt / f64::from(k);
         self.substeps.inner = true;
-        for _ in 0..k {
+        for j in 1..=k {
             self.kick_drift(force, torque);
             self.trial_valid = true;
             let sub = self.commit_one();
             for (sum, [_, phi]) in turned.iter_mut().zip(&self.motion) {
                 *sum = (Vector3::from(*sum) + Vector3::from(*phi)).into();
             }
-            report.broken_links.extend(sub.broken_links);
+            report.broken_links.extend(
+                sub.broken_links
+                    .into_iter()
+                    .map(|b| BrokenLink { substep: j, ..b }),
+            );
             report.diagnostics.extend(sub.diagnostics);
         }
         self.substeps.inner = false;
