@@ -459,7 +459,13 @@ fn bad_scene_is_refused_before_any_process_starts() {
     let text = std::fs::read_to_string(workspace().join("scenes/sod.toml"))
         .expect("scene")
         .lines()
-        .map(|l| if l.starts_with("cfl =") { "cfl = 2.5" } else { l })
+        .map(|l| {
+            if l.starts_with("cfl =") {
+                "cfl = 2.5"
+            } else {
+                l
+            }
+        })
         .collect::<Vec<_>>()
         .join("\n");
     let path = dir.join("bad.toml");
@@ -544,7 +550,10 @@ fn sod_runs_end_to_end_and_matches_the_exact_solution() {
     assert_eq!(n, 400);
     // The same number as the in-process OSMP5 study at N = 400 and the scene's cfl = 0.7
     // (6.0828e-4, docs/cfl_study.csv), through the bus and the CSV (12 significant digits).
-    assert!((l1 - 6.0828e-4).abs() < 0.0001e-4, "L1 density error {l1:e}");
+    assert!(
+        (l1 - 6.0828e-4).abs() < 0.0001e-4,
+        "L1 density error {l1:e}"
+    );
     let _ = std::fs::remove_dir_all(out);
 }
 
