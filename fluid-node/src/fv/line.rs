@@ -21,6 +21,7 @@ use crate::fv::euler::{
     physical_flux, primitive, primitive_floored, roe_eigenvector, roe_star_states_positive,
     roe_strengths,
 };
+use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
 
 /// Rounds of the a-posteriori positivity fix.
@@ -117,9 +118,11 @@ pub struct LineScratch {
     /// Output: face fluxes, `n + 1` (face `i` is the left face of interior cell `i`).
     pub face: Vec<State>,
     cells: CellLine,
-    phys: Vec<State>,
     vacuum: Vec<bool>,
-    roe: Vec<RoeAverage>,
+    roe: RoeLine,
+    /// The regular face fluxes, one array per component (written by the vectorised loop,
+    /// then copied into [`LineScratch::face`]).
+    face_q: [Vec<f64>; NQ],
     bad_prefix: Vec<u32>,
     speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
@@ -133,23 +136,106 @@ pub struct LineScratch {
     pub(crate) pencil: Vec<State>,
     pub(crate) pencil_new: Vec<State>,
     pub(crate) pencil_face: Vec<State>,
+    /// The interior cells of a block of pencils, in and out (`block.rs`).
+    pub(crate) tile: Vec<State>,
+    /// The instruction set [`advance_line`] runs on ([`Isa::best`] unless set).
+    isa: Isa,
 }
 
-/// What the cells of a line give the interfaces: primitives and their Roe-average sides.
+/// What the cells of a line give the interfaces, one array per quantity (structure of arrays,
+/// so that the loops over the line vectorise): the conserved state, the velocity and the
+/// other Roe-average side quantities, the pressure, the physical flux; and the primitives as
+/// structs for MUSCL–Hancock.
 #[derive(Clone, Debug, Default)]
 struct CellLine {
     prim: Vec<Primitive>,
-    roe: Vec<RoeSide>,
+    q: [Vec<f64>; NQ],
+    vel: [Vec<f64>; 3],
+    sqrt_rho: Vec<f64>,
+    h: Vec<f64>,
+    flux: [Vec<f64>; NQ],
 }
 
 impl CellLine {
     fn resize(&mut self, len: usize) {
         self.prim.resize(len, Primitive::default());
-        self.roe.resize(len, RoeSide::default());
+        let arrays = self.q.iter_mut().chain(&mut self.vel).chain(&mut self.flux);
+        for v in arrays.chain([&mut self.sqrt_rho, &mut self.h]) {
+            v.resize(len, 0.0);
+        }
+    }
+
+    /// The Roe-average side of cell `i` (as [`RoeSide::new`] gives it).
+    #[inline(always)]
+    fn side(&self, i: usize) -> RoeSide {
+        RoeSide {
+            sqrt_rho: self.sqrt_rho[i],
+            vel: [self.vel[0][i], self.vel[1][i], self.vel[2][i]],
+            h: self.h[i],
+        }
+    }
+
+    /// The conserved state of cell `i`.
+    #[inline(always)]
+    fn state(&self, i: usize) -> State {
+        std::array::from_fn(|q| self.q[q][i])
+    }
+}
+
+/// The Roe averages of a line's interfaces, one array per field.
+#[derive(Clone, Debug, Default)]
+struct RoeLine {
+    vel: [Vec<f64>; 3],
+    h: Vec<f64>,
+    c: Vec<f64>,
+    valid: Vec<bool>,
+}
+
+impl RoeLine {
+    fn resize(&mut self, len: usize) {
+        for v in self.vel.iter_mut().chain([&mut self.h, &mut self.c]) {
+            v.resize(len, 0.0);
+        }
+        self.valid.resize(len, false);
+    }
+
+    #[inline(always)]
+    fn get(&self, l: usize) -> RoeAverage {
+        RoeAverage {
+            vel: [self.vel[0][l], self.vel[1][l], self.vel[2][l]],
+            h: self.h[l],
+            c: self.c[l],
+            valid: self.valid[l],
+        }
+    }
+
+    #[inline(always)]
+    fn set(&mut self, l: usize, roe: &RoeAverage) {
+        for k in 0..3 {
+            self.vel[k][l] = roe.vel[k];
+        }
+        self.h[l] = roe.h;
+        self.c[l] = roe.c;
+        self.valid[l] = roe.valid;
     }
 }
 
 impl LineScratch {
+    /// The instruction set [`advance_line`] runs on.
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// Runs [`advance_line`] on `isa` from now on (the results are the same bits on every
+    /// ISA; this is for the tests that check it and for benchmarks).
+    ///
+    /// # Panics
+    /// If this CPU does not have `isa` ([`Isa::supported`]).
+    pub fn set_isa(&mut self, isa: Isa) {
+        assert!(isa.supported(), "this CPU has no {isa:?}");
+        self.isa = isa;
+    }
+
     /// Sizes the buffers for `n` interior and `ng` ghost cells per side.
     pub fn resize(&mut self, n: usize, ng: usize) {
         let len = n + 2 * ng;
@@ -157,9 +243,11 @@ impl LineScratch {
         self.new.resize(n, [0.0; NQ]);
         self.face.resize(n + 1, [0.0; NQ]);
         self.cells.resize(len);
-        self.phys.resize(len, [0.0; NQ]);
         self.vacuum.resize(len, false);
-        self.roe.resize(len - 1, RoeAverage::default());
+        self.roe.resize(len - 1);
+        for v in &mut self.face_q {
+            v.resize(n + 1, 0.0);
+        }
         self.bad_prefix.resize(len, 0);
         for sp in &mut self.speeds {
             sp.resize(len - 1);
@@ -188,7 +276,7 @@ impl LineScratch {
 /// sound speed is 0 where p ≤ 0, the faces beside it take the Lax–Friedrichs flux, which
 /// divides by neither, and the vacuum count counts it. Below minus the thresholds it is
 /// numerical trouble (the default thresholds, 1e-10, pass round-off only).
-#[inline]
+#[inline(always)]
 pub fn state_ok(u: &State, gamma: f64, vacuum_rho: f64, vacuum_p: f64) -> bool {
     let w = primitive_floored(u, gamma, vacuum_rho);
     let finite = u.iter().all(|x| x.is_finite()) && w.p.is_finite();
@@ -196,8 +284,41 @@ pub fn state_ok(u: &State, gamma: f64, vacuum_rho: f64, vacuum_p: f64) -> bool {
     finite && (gas || (w.rho > -vacuum_rho && w.p > -vacuum_p))
 }
 
-/// Advances one line by `Δt = sigma Δx` (see the module doc).
+/// Advances one line by `Δt = sigma Δx` (see the module doc), on the instruction set of
+/// [`LineScratch::isa`] (the same bits on each, `isa.rs`).
 pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
+    match s.isa {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 if Isa::Avx512.supported() => {
+            // SAFETY: the CPU has AVX-512F (checked on the line above).
+            unsafe { advance_line_avx512(s, setup) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::Avx2.supported() => {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            unsafe { advance_line_avx2(s, setup) }
+        }
+        _ => advance_line_body(s, setup),
+    }
+}
+
+/// [`advance_line_body`] compiled for AVX2 (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn advance_line_avx2(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
+    advance_line_body(s, setup)
+}
+
+/// [`advance_line_body`] compiled for AVX-512F (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn advance_line_avx512(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
+    advance_line_body(s, setup)
+}
+
+/// The body of [`advance_line`]: inlined, with the passes it calls, into each ISA's copy.
+#[inline(always)]
+fn advance_line_body(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
     let LineSetup { n, ng, .. } = *setup;
     let gamma = setup.gamma;
     let len = n + 2 * ng;
@@ -285,6 +406,7 @@ fn wall_face(f: &mut State) {
     *f = [0.0, f[1], 0.0, 0.0, 0.0];
 }
 
+#[inline(always)]
 fn update_cells(s: &mut LineScratch, setup: &LineSetup, lo: usize, hi: usize) {
     let sigma = setup.sigma;
     for m in lo..hi {
@@ -304,32 +426,51 @@ fn n_waves(setup: &LineSetup) -> usize {
 }
 
 /// Primitive variables, Roe-average sides, physical fluxes and vacuum flags of every cell of
-/// the line.
+/// the line (the primitives as structs only for MUSCL–Hancock).
+#[inline(always)]
 fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
     let len = s.u.len();
     let u = &s.u[..len];
-    let (prim, roe) = (&mut s.cells.prim[..len], &mut s.cells.roe[..len]);
-    let (phys, vacuum) = (&mut s.phys[..len], &mut s.vacuum[..len]);
+    let c = &mut s.cells;
     for i in 0..len {
-        let w = primitive_floored(&u[i], setup.gamma, setup.vacuum_rho);
-        prim[i] = w;
+        for q in 0..NQ {
+            c.q[q][i] = u[i][q];
+        }
+    }
+    let vacuum = &mut s.vacuum[..len];
+    for i in 0..len {
+        let ui = c.state(i);
+        let w = primitive_floored(&ui, setup.gamma, setup.vacuum_rho);
         // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
-        roe[i] = RoeSide::new(&u[i], &w);
-        phys[i] = physical_flux(&u[i], &w);
+        let side = RoeSide::new(&ui, &w);
+        let flux = physical_flux(&ui, &w);
+        for k in 0..3 {
+            c.vel[k][i] = side.vel[k];
+        }
+        c.sqrt_rho[i] = side.sqrt_rho;
+        c.h[i] = side.h;
+        for q in 0..NQ {
+            c.flux[q][i] = flux[q];
+        }
         vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+    }
+    if setup.flux == FluxKind::MusclHancock {
+        for i in 0..len {
+            c.prim[i] = primitive_floored(&u[i], setup.gamma, setup.vacuum_rho);
+        }
     }
 }
 
 /// Roe averages, wave speeds and strengths at every interface of the line. An interface beside
 /// a vacuum cell or with a non-physical average (c² ≤ 0, non-finite) is marked invalid and
 /// gets λ = α = 0.
+#[inline(always)]
 fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
     let nint = s.u.len() - 1;
     let gamma = setup.gamma;
-    let u = &s.u[..nint + 1];
     let vacuum = &s.vacuum[..nint + 1];
-    let (prim, side) = (&s.cells.prim[..nint + 1], &s.cells.roe[..nint + 1]);
-    let roe = &mut s.roe[..nint];
+    let cells = &s.cells;
+    let roe = &mut s.roe;
     let [s0, s1, s2] = &mut s.speeds;
     let (lam0, lam1, lam2) = (
         &mut s0.lam[..nint],
@@ -344,20 +485,22 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
         &mut w3.alpha[..nint],
         &mut w4.alpha[..nint],
     );
+    let rho = &cells.q[0][..nint + 1];
     for l in 0..nint {
-        let sides_ok = !vacuum[l] & !vacuum[l + 1] & (prim[l].rho > 0.0) & (prim[l + 1].rho > 0.0);
-        let average = RoeSide::average(&side[l], &side[l + 1], gamma, sides_ok);
-        let du: State = std::array::from_fn(|q| u[l + 1][q] - u[l][q]);
+        let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
+        let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
+        let du: State = std::array::from_fn(|q| cells.q[q][l + 1] - cells.q[q][l]);
         // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
         let alpha =
             roe_strengths(&average, &du, gamma).map(|a| if average.valid { a } else { 0.0 });
-        roe[l] = average;
+        roe.set(l, &average);
         let (un, c) = (average.vel[0], average.c);
         [lam0[l], lam1[l], lam2[l]] = [un - c, un + c, un];
         [a0[l], a1[l], a2[l], a3[l], a4[l]] = alpha;
     }
 }
 
+#[inline(always)]
 fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     let LineSetup {
         n,
@@ -387,16 +530,17 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     {
         let nf = n + 1;
         let f0 = ng - 1;
-        let (u, phys) = (&s.u[f0..f0 + nf + 1], &s.phys[f0..f0 + nf + 1]);
-        let roe = &s.roe[f0..f0 + nf];
+        let (cells, roe_line) = (&s.cells, &s.roe);
         let lam: [&[f64]; 3] = std::array::from_fn(|k| &s.speeds[k].lam[f0..f0 + nf]);
         let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &s.waves[k].alpha[f0..f0 + nf]);
         let psi: [&[f64]; NQ] = std::array::from_fn(|k| &s.psi[k][..nf]);
-        let (face, star_ok) = (&mut s.face[..nf], &mut s.star_ok[..nf]);
+        let phys: [&[f64]; NQ] = std::array::from_fn(|q| &cells.flux[q][f0..f0 + nf + 1]);
+        let (face_q, star_ok) = (&mut s.face_q, &mut s.star_ok[..nf]);
         for j in 0..nf {
+            let roe = roe_line.get(f0 + j);
             let mut flux = [0.0; NQ];
             for q in 0..NQ {
-                flux[q] = 0.5 * (phys[j][q] + phys[j + 1][q]);
+                flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
             }
             let mut a = [0.0; NQ];
             let mut coef = [0.0; NQ];
@@ -408,25 +552,31 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
             // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
             // image is the mirror image of the flux to the last bit (a problem symmetric about
             // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
-            let (r0, r1) = (roe_eigenvector(&roe[j], 0), roe_eigenvector(&roe[j], 1));
+            let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
             for q in 0..NQ {
                 flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
             }
             for k in 2..NQ {
-                let r = roe_eigenvector(&roe[j], k);
+                let r = roe_eigenvector(&roe, k);
                 for q in 0..NQ {
                     flux[q] -= coef[k] * r[q];
                 }
             }
-            face[j] = flux;
-            star_ok[j] = roe_star_states_positive(&u[j], &u[j + 1], &roe[j], &a);
+            for q in 0..NQ {
+                face_q[q][j] = flux[q];
+            }
+            let (ul, ur) = (cells.state(f0 + j), cells.state(f0 + j + 1));
+            star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
+        }
+        for (j, face) in s.face[..nf].iter_mut().enumerate() {
+            *face = std::array::from_fn(|q| s.face_q[q][j]);
         }
     }
     // Faces beside vacuum: Lax–Friedrichs; an invalid average in the stencil or non-physical
     // star states: HLLE.
     s.bad_prefix[0] = 0;
-    for l in 0..s.roe.len() {
-        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe[l].valid);
+    for l in 0..s.roe.valid.len() {
+        s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.roe.valid[l]);
     }
     for fi in 0..=n {
         let f = ng - 1 + fi;
