@@ -15,6 +15,12 @@
 //! After the update a cell with ρ ≤ 0 or p ≤ 0 (or non-finite) has its two faces recomputed
 //! with HLLE, then Lax–Friedrichs, at most [`MAX_FIXES`] rounds (a-posteriori positivity
 //! safeguard of numerics.md §1.8). What is still wrong is reported by the caller.
+//!
+//! Layout: the passes run over one array per quantity along the line (cells, interfaces,
+//! waves, face components) without branches, so that each vectorises on the instruction set
+//! the line runs on (`isa.rs`); the scheme's flux is computed at every face, and the special
+//! faces (vacuum, HLLE fallback, positivity fix) overwrite theirs afterwards, one by one, on the
+//! slower scalar path.
 
 use crate::fv::euler::{
     NQ, Primitive, RoeAverage, RoeSide, State, flux_hllc, flux_hlle, flux_lax_friedrichs,
@@ -165,6 +171,31 @@ impl CellLine {
         }
     }
 
+    /// The cells `lo .. lo + len` as slices of one length, so that a loop over them has no
+    /// bounds checks left and vectorises.
+    #[inline(always)]
+    fn view(&self, lo: usize, len: usize) -> CellView<'_> {
+        let r = lo..lo + len;
+        CellView {
+            q: std::array::from_fn(|k| &self.q[k][r.clone()]),
+            vel: std::array::from_fn(|k| &self.vel[k][r.clone()]),
+            sqrt_rho: &self.sqrt_rho[r.clone()],
+            h: &self.h[r.clone()],
+            flux: std::array::from_fn(|k| &self.flux[k][r.clone()]),
+        }
+    }
+}
+
+/// Slices of a [`CellLine`], all of one length.
+struct CellView<'a> {
+    q: [&'a [f64]; NQ],
+    vel: [&'a [f64]; 3],
+    sqrt_rho: &'a [f64],
+    h: &'a [f64],
+    flux: [&'a [f64]; NQ],
+}
+
+impl CellView<'_> {
     /// The Roe-average side of cell `i` (as [`RoeSide::new`] gives it).
     #[inline(always)]
     fn side(&self, i: usize) -> RoeSide {
@@ -199,24 +230,16 @@ impl RoeLine {
         self.valid.resize(len, false);
     }
 
+    /// The average of interface `l` of slices `vel, h, c, valid` of a `RoeLine` (of one
+    /// length, so that no bounds check stays in a loop).
     #[inline(always)]
-    fn get(&self, l: usize) -> RoeAverage {
+    fn get(vel: [&[f64]; 3], h: &[f64], c: &[f64], valid: &[bool], l: usize) -> RoeAverage {
         RoeAverage {
-            vel: [self.vel[0][l], self.vel[1][l], self.vel[2][l]],
-            h: self.h[l],
-            c: self.c[l],
-            valid: self.valid[l],
+            vel: [vel[0][l], vel[1][l], vel[2][l]],
+            h: h[l],
+            c: c[l],
+            valid: valid[l],
         }
-    }
-
-    #[inline(always)]
-    fn set(&mut self, l: usize, roe: &RoeAverage) {
-        for k in 0..3 {
-            self.vel[k][l] = roe.vel[k];
-        }
-        self.h[l] = roe.h;
-        self.c[l] = roe.c;
-        self.valid[l] = roe.valid;
     }
 }
 
@@ -432,25 +455,38 @@ fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
     let len = s.u.len();
     let u = &s.u[..len];
     let c = &mut s.cells;
-    for i in 0..len {
-        for q in 0..NQ {
-            c.q[q][i] = u[i][q];
+    for (q, cq) in c.q.iter_mut().enumerate() {
+        let cq = &mut cq[..len];
+        for i in 0..len {
+            cq[i] = u[i][q];
         }
     }
+    let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][..len]);
+    let [v0, v1, v2] = &mut c.vel;
+    let vel = [&mut v0[..len], &mut v1[..len], &mut v2[..len]];
+    let [f0, f1, f2, f3, f4] = &mut c.flux;
+    let flux_q = [
+        &mut f0[..len],
+        &mut f1[..len],
+        &mut f2[..len],
+        &mut f3[..len],
+        &mut f4[..len],
+    ];
+    let (sqrt_rho, h) = (&mut c.sqrt_rho[..len], &mut c.h[..len]);
     let vacuum = &mut s.vacuum[..len];
     for i in 0..len {
-        let ui = c.state(i);
+        let ui: State = std::array::from_fn(|k| q[k][i]);
         let w = primitive_floored(&ui, setup.gamma, setup.vacuum_rho);
         // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
         let side = RoeSide::new(&ui, &w);
         let flux = physical_flux(&ui, &w);
         for k in 0..3 {
-            c.vel[k][i] = side.vel[k];
+            vel[k][i] = side.vel[k];
         }
-        c.sqrt_rho[i] = side.sqrt_rho;
-        c.h[i] = side.h;
-        for q in 0..NQ {
-            c.flux[q][i] = flux[q];
+        sqrt_rho[i] = side.sqrt_rho;
+        h[i] = side.h;
+        for k in 0..NQ {
+            flux_q[k][i] = flux[k];
         }
         vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
     }
@@ -469,8 +505,11 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
     let nint = s.u.len() - 1;
     let gamma = setup.gamma;
     let vacuum = &s.vacuum[..nint + 1];
-    let cells = &s.cells;
-    let roe = &mut s.roe;
+    let cells = s.cells.view(0, nint + 1);
+    let [rv0, rv1, rv2] = &mut s.roe.vel;
+    let roe_vel = [&mut rv0[..nint], &mut rv1[..nint], &mut rv2[..nint]];
+    let (roe_h, roe_c) = (&mut s.roe.h[..nint], &mut s.roe.c[..nint]);
+    let roe_valid = &mut s.roe.valid[..nint];
     let [s0, s1, s2] = &mut s.speeds;
     let (lam0, lam1, lam2) = (
         &mut s0.lam[..nint],
@@ -485,7 +524,7 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
         &mut w3.alpha[..nint],
         &mut w4.alpha[..nint],
     );
-    let rho = &cells.q[0][..nint + 1];
+    let rho = cells.q[0];
     for l in 0..nint {
         let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
         let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
@@ -493,7 +532,12 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
         // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
         let alpha =
             roe_strengths(&average, &du, gamma).map(|a| if average.valid { a } else { 0.0 });
-        roe.set(l, &average);
+        for k in 0..3 {
+            roe_vel[k][l] = average.vel[k];
+        }
+        roe_h[l] = average.h;
+        roe_c[l] = average.c;
+        roe_valid[l] = average.valid;
         let (un, c) = (average.vel[0], average.c);
         [lam0[l], lam1[l], lam2[l]] = [un - c, un + c, un];
         [a0[l], a1[l], a2[l], a3[l], a4[l]] = alpha;
@@ -530,14 +574,26 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     {
         let nf = n + 1;
         let f0 = ng - 1;
-        let (cells, roe_line) = (&s.cells, &s.roe);
+        let cells = s.cells.view(f0, nf + 1);
+        let r = &s.roe;
+        let roe_vel: [&[f64]; 3] = std::array::from_fn(|k| &r.vel[k][f0..f0 + nf]);
+        let (roe_h, roe_c) = (&r.h[f0..f0 + nf], &r.c[f0..f0 + nf]);
+        let roe_valid = &r.valid[f0..f0 + nf];
         let lam: [&[f64]; 3] = std::array::from_fn(|k| &s.speeds[k].lam[f0..f0 + nf]);
         let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &s.waves[k].alpha[f0..f0 + nf]);
         let psi: [&[f64]; NQ] = std::array::from_fn(|k| &s.psi[k][..nf]);
-        let phys: [&[f64]; NQ] = std::array::from_fn(|q| &cells.flux[q][f0..f0 + nf + 1]);
-        let (face_q, star_ok) = (&mut s.face_q, &mut s.star_ok[..nf]);
+        let phys = cells.flux;
+        let [fq0, fq1, fq2, fq3, fq4] = &mut s.face_q;
+        let face_q = [
+            &mut fq0[..nf],
+            &mut fq1[..nf],
+            &mut fq2[..nf],
+            &mut fq3[..nf],
+            &mut fq4[..nf],
+        ];
+        let star_ok = &mut s.star_ok[..nf];
         for j in 0..nf {
-            let roe = roe_line.get(f0 + j);
+            let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
             let mut flux = [0.0; NQ];
             for q in 0..NQ {
                 flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
@@ -565,7 +621,7 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
             for q in 0..NQ {
                 face_q[q][j] = flux[q];
             }
-            let (ul, ur) = (cells.state(f0 + j), cells.state(f0 + j + 1));
+            let (ul, ur) = (cells.state(j), cells.state(j + 1));
             star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
         }
         for (j, face) in s.face[..nf].iter_mut().enumerate() {
