@@ -503,28 +503,68 @@ fn cell_pass(s: &mut LineScratch, setup: &LineSetup) {
 #[inline(always)]
 fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
     let nint = s.u.len() - 1;
-    let gamma = setup.gamma;
-    let vacuum = &s.vacuum[..nint + 1];
     let cells = s.cells.view(0, nint + 1);
     let [rv0, rv1, rv2] = &mut s.roe.vel;
-    let roe_vel = [&mut rv0[..nint], &mut rv1[..nint], &mut rv2[..nint]];
-    let (roe_h, roe_c) = (&mut s.roe.h[..nint], &mut s.roe.c[..nint]);
-    let roe_valid = &mut s.roe.valid[..nint];
     let [s0, s1, s2] = &mut s.speeds;
-    let (lam0, lam1, lam2) = (
+    let [w0, w1, w2, w3, w4] = &mut s.waves;
+    interface_loop(
+        &cells,
+        &s.vacuum[..nint + 1],
+        setup.gamma,
+        &mut rv0[..nint],
+        &mut rv1[..nint],
+        &mut rv2[..nint],
+        &mut s.roe.h[..nint],
+        &mut s.roe.c[..nint],
+        &mut s.roe.valid[..nint],
         &mut s0.lam[..nint],
         &mut s1.lam[..nint],
         &mut s2.lam[..nint],
-    );
-    let [w0, w1, w2, w3, w4] = &mut s.waves;
-    let (a0, a1, a2, a3, a4) = (
         &mut w0.alpha[..nint],
         &mut w1.alpha[..nint],
         &mut w2.alpha[..nint],
         &mut w3.alpha[..nint],
         &mut w4.alpha[..nint],
     );
-    let rho = cells.q[0];
+}
+
+/// The loop of [`interface_pass`]. Its outputs are separate `&mut` arguments: they reach the
+/// compiler as `noalias` (also once inlined), which the loop needs to vectorise with sixteen
+/// output arrays (slices cut from one `&mut LineScratch` in one function body do not, and the
+/// loop stayed scalar).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn interface_loop(
+    cells: &CellView<'_>,
+    vacuum: &[bool],
+    gamma: f64,
+    roe_v0: &mut [f64],
+    roe_v1: &mut [f64],
+    roe_v2: &mut [f64],
+    roe_h: &mut [f64],
+    roe_c: &mut [f64],
+    roe_valid: &mut [bool],
+    lam0: &mut [f64],
+    lam1: &mut [f64],
+    lam2: &mut [f64],
+    a0: &mut [f64],
+    a1: &mut [f64],
+    a2: &mut [f64],
+    a3: &mut [f64],
+    a4: &mut [f64],
+) {
+    let nint = roe_h.len();
+    let (roe_v0, roe_v1, roe_v2) = (
+        &mut roe_v0[..nint],
+        &mut roe_v1[..nint],
+        &mut roe_v2[..nint],
+    );
+    let (roe_c, roe_valid) = (&mut roe_c[..nint], &mut roe_valid[..nint]);
+    let (lam0, lam1, lam2) = (&mut lam0[..nint], &mut lam1[..nint], &mut lam2[..nint]);
+    let (a0, a1, a2) = (&mut a0[..nint], &mut a1[..nint], &mut a2[..nint]);
+    let (a3, a4) = (&mut a3[..nint], &mut a4[..nint]);
+    let vacuum = &vacuum[..nint + 1];
+    let rho = &cells.q[0][..nint + 1];
     for l in 0..nint {
         let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
         let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
@@ -532,9 +572,7 @@ fn interface_pass(s: &mut LineScratch, setup: &LineSetup) {
         // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
         let alpha =
             roe_strengths(&average, &du, gamma).map(|a| if average.valid { a } else { 0.0 });
-        for k in 0..3 {
-            roe_vel[k][l] = average.vel[k];
-        }
+        [roe_v0[l], roe_v1[l], roe_v2[l]] = average.vel;
         roe_h[l] = average.h;
         roe_c[l] = average.c;
         roe_valid[l] = average.valid;
@@ -582,48 +620,19 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
         let lam: [&[f64]; 3] = std::array::from_fn(|k| &s.speeds[k].lam[f0..f0 + nf]);
         let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &s.waves[k].alpha[f0..f0 + nf]);
         let psi: [&[f64]; NQ] = std::array::from_fn(|k| &s.psi[k][..nf]);
-        let phys = cells.flux;
         let [fq0, fq1, fq2, fq3, fq4] = &mut s.face_q;
-        let face_q = [
+        let roe = (roe_vel, roe_h, roe_c, roe_valid);
+        face_loop(
+            &cells,
+            roe,
+            (lam, alpha, psi),
+            &mut s.star_ok[..nf],
             &mut fq0[..nf],
             &mut fq1[..nf],
             &mut fq2[..nf],
             &mut fq3[..nf],
             &mut fq4[..nf],
-        ];
-        let star_ok = &mut s.star_ok[..nf];
-        for j in 0..nf {
-            let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
-            let mut flux = [0.0; NQ];
-            for q in 0..NQ {
-                flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
-            }
-            let mut a = [0.0; NQ];
-            let mut coef = [0.0; NQ];
-            for k in 0..NQ {
-                a[k] = alpha[k][j];
-                coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
-            }
-            // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
-            // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
-            // image is the mirror image of the flux to the last bit (a problem symmetric about
-            // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
-            let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
-            for q in 0..NQ {
-                flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
-            }
-            for k in 2..NQ {
-                let r = roe_eigenvector(&roe, k);
-                for q in 0..NQ {
-                    flux[q] -= coef[k] * r[q];
-                }
-            }
-            for q in 0..NQ {
-                face_q[q][j] = flux[q];
-            }
-            let (ul, ur) = (cells.state(j), cells.state(j + 1));
-            star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
-        }
+        );
         for (j, face) in s.face[..nf].iter_mut().enumerate() {
             *face = std::array::from_fn(|q| s.face_q[q][j]);
         }
@@ -646,6 +655,63 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
         } else {
             s.kind[fi] = FaceFlux::Regular;
         }
+    }
+}
+
+/// The regular flux of every face `j` of `cells` (faces between cells `j` and `j + 1`) into
+/// `fq0..fq4`, and whether its linearised star states are physical. The outputs are separate
+/// `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+#[inline(always)]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn face_loop(
+    cells: &CellView<'_>,
+    (roe_vel, roe_h, roe_c, roe_valid): ([&[f64]; 3], &[f64], &[f64], &[bool]),
+    (lam, alpha, psi): ([&[f64]; 3], [&[f64]; NQ], [&[f64]; NQ]),
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    let nf = star_ok.len();
+    let (fq0, fq1, fq2, fq3, fq4) = (
+        &mut fq0[..nf],
+        &mut fq1[..nf],
+        &mut fq2[..nf],
+        &mut fq3[..nf],
+        &mut fq4[..nf],
+    );
+    let phys = cells.flux;
+    for j in 0..nf {
+        let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
+        let mut flux = [0.0; NQ];
+        for q in 0..NQ {
+            flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
+        }
+        let mut a = [0.0; NQ];
+        let mut coef = [0.0; NQ];
+        for k in 0..NQ {
+            a[k] = alpha[k][j];
+            coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
+        }
+        // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
+        // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
+        // image is the mirror image of the flux to the last bit (a problem symmetric about
+        // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
+        let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
+        for q in 0..NQ {
+            flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
+        }
+        for k in 2..NQ {
+            let r = roe_eigenvector(&roe, k);
+            for q in 0..NQ {
+                flux[q] -= coef[k] * r[q];
+            }
+        }
+        [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
+        let (ul, ur) = (cells.state(j), cells.state(j + 1));
+        star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
     }
 }
 
