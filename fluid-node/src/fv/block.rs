@@ -1,9 +1,9 @@
 //! The cells of a block of pencils, read from and written to the x-fastest state in one pass
 //! each (`sweep.rs`).
 //!
-//! A block is [`BLOCK_PENCILS`] consecutive pencils; along y
-//! or z they are neighbours along x, so the block's cells at one position `m` along the axis
-//! are one contiguous run of the state (16 cells, 640 bytes in 3-D). [`gather_block`] reads
+//! A block is [`BLOCK_PENCILS`] consecutive pencils; along y or z they are neighbours along x,
+//! so the block's cells at one position `m` along the axis are one contiguous run of the state
+//! (16 cells, 640 bytes in 3-D). [`gather_block`] reads
 //! the block's interior cells run by run into a tile (pencil-major, sweep frame), from which
 //! each pencil's line is filled in cache; [`CellWriter::scatter_block`] writes the tile of the
 //! updated cells back the same way, straight into the x-fastest output.
