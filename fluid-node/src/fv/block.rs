@@ -18,25 +18,56 @@
 use std::marker::PhantomData;
 
 use crate::fv::euler::{NQ, State};
-use crate::fv::sweep::{BLOCK_PENCILS, Pencils};
 
-/// Fills `tile` with the interior cells of the pencils `p0 .. p0 + count` of `pencils`, pencil
-/// after pencil (`tile[k n + m]` is cell `m` of pencil `p0 + k`), in the sweep frame `fr` (as
-/// `sweep::to_local` gives it).
+/// Pencils per parallel block of a sweep (a fixed partition, `sweep.rs`).
+pub const BLOCK_PENCILS: usize = 16;
+
+/// The cells of one block: the first cell of each of its pencils, the cells a pencil and the
+/// index distance between consecutive cells of a pencil.
+pub(crate) struct Block {
+    bases: [usize; BLOCK_PENCILS],
+    count: usize,
+    n: usize,
+    stride: usize,
+}
+
+impl Block {
+    /// The block of the pencils whose first cells are `bases` (at most [`BLOCK_PENCILS`]), of
+    /// `n` cells `stride` apart.
+    pub(crate) fn new(bases: impl Iterator<Item = usize>, n: usize, stride: usize) -> Block {
+        let mut block = Block {
+            bases: [0; BLOCK_PENCILS],
+            count: 0,
+            n,
+            stride,
+        };
+        for base in bases {
+            assert!(
+                block.count < BLOCK_PENCILS,
+                "more than {BLOCK_PENCILS} pencils"
+            );
+            block.bases[block.count] = base;
+            block.count += 1;
+        }
+        block
+    }
+}
+
+/// Fills `tile` with the cells of the pencils of `block`, pencil after pencil (`tile[k n + m]`
+/// is cell `m` of its pencil `k`), in the sweep frame `fr` (as `sweep::to_local` gives it).
 pub(crate) fn gather_block(
     tile: &mut Vec<State>,
     u: &[f64],
     nvar: usize,
-    pencils: &Pencils,
-    block: (usize, usize),
+    block: &Block,
     fr: &[Option<usize>; 3],
 ) {
-    tile.resize(block.1 * pencils.n, [0.0; NQ]);
+    tile.resize(block.count * block.n, [0.0; NQ]);
     let map = local_index(nvar, fr);
     match nvar {
-        3 => gather_cells::<3>(tile, u, pencils, block, &map),
-        4 => gather_cells::<4>(tile, u, pencils, block, &map),
-        _ => gather_cells::<5>(tile, u, pencils, block, &map),
+        3 => gather_cells::<3>(tile, u, block, &map),
+        4 => gather_cells::<4>(tile, u, block, &map),
+        _ => gather_cells::<5>(tile, u, block, &map),
     }
 }
 
@@ -54,18 +85,11 @@ fn local_index(nvar: usize, fr: &[Option<usize>; 3]) -> [usize; NQ] {
 }
 
 /// [`gather_block`] for `NV` stored values per cell (copies of a fixed size, no branches).
-fn gather_cells<const NV: usize>(
-    tile: &mut [State],
-    u: &[f64],
-    pencils: &Pencils,
-    (p0, count): (usize, usize),
-    map: &[usize; NQ],
-) {
-    let n = pencils.n;
-    let bases = block_bases(pencils, p0, count);
+fn gather_cells<const NV: usize>(tile: &mut [State], u: &[f64], block: &Block, map: &[usize; NQ]) {
+    let n = block.n;
     for m in 0..n {
-        let along = m * pencils.stride;
-        for (k, &base) in bases[..count].iter().enumerate() {
+        let along = m * block.stride;
+        for (k, &base) in block.bases[..block.count].iter().enumerate() {
             let c = base + along;
             let cell: &[f64; NV] = u[c * NV..(c + 1) * NV].try_into().expect("NV values");
             // The inactive velocity slots of a 1-D or 2-D state stay 0.
@@ -76,12 +100,6 @@ fn gather_cells<const NV: usize>(
             tile[k * n + m] = local;
         }
     }
-}
-
-/// The first cells of the pencils `p0 .. p0 + count` (`count` ≤ [`BLOCK_PENCILS`]).
-fn block_bases(pencils: &Pencils, p0: usize, count: usize) -> [usize; BLOCK_PENCILS] {
-    assert!(count <= BLOCK_PENCILS, "{count} pencils in a block");
-    std::array::from_fn(|k| if k < count { pencils.base(p0 + k) } else { 0 })
 }
 
 /// The output state of a sweep, which every block writes at the cells of its own pencils.
@@ -107,8 +125,8 @@ impl<'a> CellWriter<'a> {
         }
     }
 
-    /// Writes `tile` (as [`gather_block`] fills it, the pencils `p0 .. p0 + count`) into the
-    /// cells of those pencils (as `sweep::from_local` does).
+    /// Writes `tile` (as [`gather_block`] fills it) into the cells of the pencils of `block` (as
+    /// `sweep::from_local` does).
     ///
     /// # Safety
     /// No other thread accesses the cells of these pencils while this runs: each block of a
@@ -117,17 +135,16 @@ impl<'a> CellWriter<'a> {
         &self,
         tile: &[State],
         nvar: usize,
-        pencils: &Pencils,
-        block: (usize, usize),
+        block: &Block,
         fr: &[Option<usize>; 3],
     ) {
         let map = local_index(nvar, fr);
         // SAFETY: passed on from the caller.
         unsafe {
             match nvar {
-                3 => self.scatter_cells::<3>(tile, pencils, block, &map),
-                4 => self.scatter_cells::<4>(tile, pencils, block, &map),
-                _ => self.scatter_cells::<5>(tile, pencils, block, &map),
+                3 => self.scatter_cells::<3>(tile, block, &map),
+                4 => self.scatter_cells::<4>(tile, block, &map),
+                _ => self.scatter_cells::<5>(tile, block, &map),
             }
         }
     }
@@ -139,15 +156,13 @@ impl<'a> CellWriter<'a> {
     unsafe fn scatter_cells<const NV: usize>(
         &self,
         tile: &[State],
-        pencils: &Pencils,
-        (p0, count): (usize, usize),
+        block: &Block,
         map: &[usize; NQ],
     ) {
-        let n = pencils.n;
-        let bases = block_bases(pencils, p0, count);
+        let n = block.n;
         for m in 0..n {
-            let along = m * pencils.stride;
-            for (k, &base) in bases[..count].iter().enumerate() {
+            let along = m * block.stride;
+            for (k, &base) in block.bases[..block.count].iter().enumerate() {
                 let c = base + along;
                 assert!((c + 1) * NV <= self.len, "cell {c} outside the state");
                 // SAFETY: in bounds (asserted); the caller guarantees that no other thread

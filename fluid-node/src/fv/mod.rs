@@ -81,6 +81,8 @@ pub mod sweep;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_isa;
 
 pub use comm::{Comm, Serial};
 pub use isa::Isa;

@@ -11,14 +11,13 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
-use crate::fv::block::{CellWriter, gather_block};
+use crate::fv::block::{Block, CellWriter, gather_block};
 use crate::fv::euler::{NQ, State, flux_hlle, flux_lax_friedrichs, primitive_floored};
 use crate::fv::line::{LineScratch, LineSetup, LineStats, advance_line};
 use crate::fv::state::{BoundaryKind, FluidParams};
 use crate::grid::Grid;
 
-/// Pencils per parallel block (fixed partition).
-pub const BLOCK_PENCILS: usize = 16;
+pub use crate::fv::block::BLOCK_PENCILS;
 
 /// The pencils along one axis.
 #[derive(Clone, Copy, Debug)]
@@ -488,8 +487,10 @@ pub fn sweep_axis(
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             let line = &mut *guard;
             line.resize(n_line, ng);
-            let pencils_of_block = (block * BLOCK_PENCILS, rep_block.len());
-            gather_block(&mut line.tile, u_in, nvar, &pencils, pencils_of_block, &fr);
+            let p0 = block * BLOCK_PENCILS;
+            let bases = (p0..p0 + rep_block.len()).map(|p| pencils.base(p));
+            let cells = Block::new(bases, pencils.n, pencils.stride);
+            gather_block(&mut line.tile, u_in, nvar, &cells, &fr);
             for (k, rep) in rep_block.iter_mut().enumerate() {
                 let p = block * BLOCK_PENCILS + k;
                 gather(
@@ -550,7 +551,7 @@ pub fn sweep_axis(
             }
             // SAFETY: this block alone writes the cells of its pencils (a cell lies on one
             // pencil along `axis`, a pencil in one block), and `u_in` is another buffer.
-            unsafe { writer.scatter_block(&line.tile, nvar, &pencils, pencils_of_block, &fr) };
+            unsafe { writer.scatter_block(&line.tile, nvar, &cells, &fr) };
         });
 }
 
