@@ -5,11 +5,12 @@
 //! `cargo bench -p fluid-node --no-default-features --bench fv_blast3d` (env: `THREADS`,
 //! default 1; `CELLS`, per axis, default the scene's; `ORDER`, default the scene's; `STEPS`,
 //! stop after that many steps, for throughput measurements; `DIM` = 1 or 2, the same blast in
-//! fewer dimensions).
+//! fewer dimensions; `ISA` = baseline, avx2 or avx512, the instruction set of the line kernel,
+//! default the CPU's best).
 
 use std::time::Instant;
 
-use fluid_node::fv::FluidSolver;
+use fluid_node::fv::{FluidSolver, Isa};
 
 fn main() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/blast-3d.toml");
@@ -58,6 +59,13 @@ fn main() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(1);
     let mut solver = FluidSolver::from_scene(&fluid, threads).expect("solver");
+    let isa = match std::env::var("ISA").as_deref() {
+        Ok("baseline") => Isa::Baseline,
+        Ok("avx2") => Isa::Avx2,
+        Ok("avx512") => Isa::Avx512,
+        _ => Isa::best(),
+    };
+    solver.set_isa(isa);
     let t0 = solver.totals();
     let n_cells = solver.grid().n_cells();
     let start = Instant::now();
@@ -83,7 +91,7 @@ fn main() {
     let wall = start.elapsed().as_secs_f64();
     let t1 = solver.totals();
     println!(
-        "blast-3d {:?} osmp{} threads {threads}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
+        "blast-3d {:?} osmp{} threads {threads} {isa:?}: t = {:.6} in {steps} steps, wall {wall:.2} s, {:.3e} cell updates/s",
         fluid.cells,
         fluid.flux.order,
         solver.time(),

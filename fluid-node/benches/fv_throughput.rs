@@ -1,11 +1,12 @@
 //! Cell updates per second of full split steps: 1-D (4096 cells, one pencil: no thread parallelism), 2-D 512², 3-D 128³, at
-//! OSMP orders 3, 5, 7, with 1 and 2 threads. A "cell update" is one cell advanced by one
+//! OSMP orders 3, 5, 7, with 1 and 2 threads; and 3-D OSMP5 on one thread on each instruction set
+//! the CPU has (`isa_3d`), and on 32³, 64³ and 128³ (`size_3d`). A "cell update" is one cell advanced by one
 //! whole step (all sweeps). Initial state: a blast with a swirl (all waves active).
 //!
 //! `cargo bench -p fluid-node --no-default-features --bench fv_throughput -- --warm-up-time 1 --measurement-time 3`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind};
+use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind, Isa};
 use fluid_node::grid::Grid;
 
 fn blast(dim: usize, n: usize, order: u32, threads: usize) -> FluidSolver {
@@ -56,6 +57,40 @@ fn throughput(c: &mut Criterion) {
         }
         group.finish();
     }
+    // 3-D OSMP5 on one thread as the grid grows past the caches (32³: 1.3 MB of state, in L2;
+    // 64³: 10 MB; 128³: 84 MB): what the state's traffic costs a cell update.
+    let mut group = c.benchmark_group("size_3d");
+    group.sample_size(10);
+    for n in [32usize, 64, 128] {
+        group.throughput(Throughput::Elements(n.pow(3) as u64));
+        let mut solver = blast(3, n, 5, 1);
+        group.bench_function(BenchmarkId::new("osmp5", n), |b| {
+            b.iter(|| {
+                let dt = solver.max_dt();
+                let rep = solver.advance(dt);
+                assert!(rep.ok());
+                rep.hlle_faces
+            })
+        });
+    }
+    group.finish();
+    // The same step on each instruction set this CPU has (the rows above run on the best).
+    let mut group = c.benchmark_group("isa_3d");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(128u64.pow(3)));
+    for isa in Isa::available() {
+        let mut solver = blast(3, 128, 5, 1);
+        solver.set_isa(isa);
+        group.bench_function(BenchmarkId::new("osmp5", format!("{isa:?}")), |b| {
+            b.iter(|| {
+                let dt = solver.max_dt();
+                let rep = solver.advance(dt);
+                assert!(rep.ok());
+                rep.hlle_faces
+            })
+        });
+    }
+    group.finish();
 }
 
 criterion_group!(benches, throughput);

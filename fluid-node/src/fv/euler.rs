@@ -36,7 +36,7 @@ pub fn primitive(u: &State, gamma: f64) -> Primitive {
 /// that a Lax–Friedrichs step emptied keeps ~1e-18 of momentum, and the next step may give it
 /// ρ ~ 1e-32), so `ρu / ρ` would be a velocity of 1e14 m/s and `E − ½ρ|u|²` a pressure of
 /// −1e-4. Identical to [`primitive`] where ρ ≥ `rho_floor`.
-#[inline]
+#[inline(always)]
 pub fn primitive_floored(u: &State, gamma: f64, rho_floor: f64) -> Primitive {
     let rho = u[0];
     // NOTE: a vacuum cell (ρ = 0) has no velocity; taking 0 keeps the Lax–Friedrichs flux of
@@ -69,7 +69,7 @@ pub fn conserved(w: &Primitive, gamma: f64) -> State {
 }
 
 /// Physical flux along the sweep axis, `F(U) = (ρu, ρu²+p, ρu v, ρu w, u(E+p))`.
-#[inline]
+#[inline(always)]
 pub fn physical_flux(u: &State, w: &Primitive) -> State {
     let un = w.vel[0];
     [
@@ -141,7 +141,7 @@ pub struct RoeSide {
 
 impl RoeSide {
     /// The side of state `u` with primitives `w`.
-    #[inline]
+    #[inline(always)]
     pub fn new(u: &State, w: &Primitive) -> RoeSide {
         RoeSide {
             sqrt_rho: w.rho.sqrt(),
@@ -153,7 +153,7 @@ impl RoeSide {
     /// Roe average of sides `l` and `r`; valid only if `sides_ok` (both densities positive,
     /// no vacuum) and the average is physical (`c² > 0`, finite). An invalid average is all
     /// zeros. Branch-free, so that the line kernel's loop over interfaces vectorises.
-    #[inline]
+    #[inline(always)]
     pub fn average(l: &RoeSide, r: &RoeSide, gamma: f64, sides_ok: bool) -> RoeAverage {
         let (sl, sr) = (l.sqrt_rho, r.sqrt_rho);
         let inv = 1.0 / (sl + sr);
@@ -180,7 +180,7 @@ pub fn roe_eigenvalues(roe: &RoeAverage) -> [f64; NQ] {
 }
 
 /// Wave strengths `α = L ΔU` (Toro 2009, eqs. 11.68–11.70), in the wave order.
-#[inline]
+#[inline(always)]
 pub fn roe_strengths(roe: &RoeAverage, du: &State, gamma: f64) -> [f64; NQ] {
     let [u, v, w] = roe.vel;
     let c = roe.c;
@@ -198,7 +198,7 @@ pub fn roe_strengths(roe: &RoeAverage, du: &State, gamma: f64) -> [f64; NQ] {
 }
 
 /// Right eigenvector `k` (wave order) of the Roe matrix.
-#[inline]
+#[inline(always)]
 pub fn roe_eigenvector(roe: &RoeAverage, k: usize) -> State {
     let [u, v, w] = roe.vel;
     let c = roe.c;
@@ -214,7 +214,7 @@ pub fn roe_eigenvector(roe: &RoeAverage, k: usize) -> State {
 /// Whether the two star states of the linearised Roe solution have ρ > 0 and p > 0.
 ///
 /// They are `U_L + α₋ r₋` and `U_R − α₊ r₊` (the states on either side of the contact).
-#[inline]
+#[inline(always)]
 pub fn roe_star_states_positive(
     ul: &State,
     ur: &State,

@@ -65,10 +65,12 @@
 // Index loops over the state components read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+mod block;
 pub mod comm;
 pub mod euler;
 pub mod exact_riemann;
 pub mod init;
+pub mod isa;
 pub mod line;
 pub mod osmp;
 pub mod scene;
@@ -81,9 +83,12 @@ pub mod sweep;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_isa;
+#[cfg(test)]
 mod tests_vacuum;
 
 pub use comm::{Comm, Serial};
+pub use isa::Isa;
 pub use line::FluxKind;
 pub use scene::{ConfigError, from_scene};
 pub use slab::Slab;

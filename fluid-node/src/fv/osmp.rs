@@ -66,7 +66,7 @@ fn fmax(a: f64, b: f64) -> f64 {
 ///
 /// Branch-free: `max(min, 0) + min(max, 0)` is the smallest positive value when all are
 /// positive, the largest negative one when all are negative, and 0 otherwise.
-#[inline]
+#[inline(always)]
 pub fn minmod4(a: f64, b: f64, c: f64, d: f64) -> f64 {
     let lo = fmin(fmin(a, b), fmin(c, d));
     let hi = fmax(fmax(a, b), fmax(c, d));
@@ -75,7 +75,7 @@ pub fn minmod4(a: f64, b: f64, c: f64, d: f64) -> f64 {
 
 /// Suresh–Huynh curvature `d^{M4}_{l+1/2} = minmod(4d_l − d_{l+1}, 4d_{l+1} − d_l, d_l, d_{l+1})`
 /// (JCP 136, 1997, eq. 2.19) from the curvatures `d_l`, `d_{l+1}` of the two adjacent cells.
-#[inline]
+#[inline(always)]
 pub fn curvature_m4(d_l: f64, d_r: f64) -> f64 {
     minmod4(4.0 * d_l - d_r, 4.0 * d_r - d_l, d_l, d_r)
 }
@@ -113,6 +113,7 @@ impl SpeedLine {
 
     /// Fills everything but `lam` from `lam` for order `order` and `sigma = Δt/Δx` [s/m]
     /// (`inv_sigma = 1/sigma`).
+    #[inline(always)]
     pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
         let n = self.lam.len();
         let lam = &self.lam[..n];
@@ -180,6 +181,7 @@ impl WaveLine {
 
     /// Fills `d` and `dm4` for order `order` from `alpha` and the wave's `speed` (already
     /// filled).
+    #[inline(always)]
     pub fn fill(&mut self, order: u32, speed: &SpeedLine) {
         let n = self.alpha.len();
         let (alpha, nu) = (&self.alpha[..n], &speed.nu[..n]);
@@ -266,6 +268,7 @@ impl Window {
 /// strength (Suresh–Huynh/MITgcm form, Note 2), which needs no division by `α_0`; (d) the UL
 /// bound `2 (1−ν_up) α_up / max(ν_up, ν_0)` (see the note in the loop). Orders are
 /// checked numerically in `fv::tests` (scalar) and the integration test `fv_accuracy` (Euler).
+#[inline(always)]
 pub fn psi_line<const ORDER: u32, const LIMITED: bool>(
     speed: &SpeedLine,
     wave: &WaveLine,

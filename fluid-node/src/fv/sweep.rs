@@ -3,21 +3,21 @@
 //!
 //! Parallelism: pencils are cut into blocks of [`BLOCK_PENCILS`] (a fixed partition that does
 //! not depend on the thread count) and blocks run on rayon. Each pencil's result depends only
-//! on the input state, so the result is bit-identical for any number of threads. Results are
-//! written pencil-major into a second buffer (contiguous per block, so no `unsafe` is needed)
-//! and transposed back to the x-fastest layout afterwards (a no-op swap for the x sweep).
+//! on the input state, so the result is bit-identical for any number of threads. A block reads
+//! its cells into a tile and writes its results from a tile, straight into a second buffer in
+//! the x-fastest layout (`block.rs`), which the caller swaps with the state.
 
 use std::sync::Mutex;
 
 use rayon::prelude::*;
 
+use crate::fv::block::{Block, CellWriter, gather_block};
 use crate::fv::euler::{NQ, State, flux_hlle, flux_local_lax_friedrichs, primitive_floored};
 use crate::fv::line::{LineScratch, LineSetup, LineStats, advance_line};
 use crate::fv::state::{BoundaryKind, FluidParams};
 use crate::grid::Grid;
 
-/// Pencils per parallel block (fixed partition).
-pub const BLOCK_PENCILS: usize = 16;
+pub use crate::fv::block::BLOCK_PENCILS;
 
 /// The pencils along one axis.
 #[derive(Clone, Copy, Debug)]
@@ -205,13 +205,14 @@ impl SlabHalo<'_> {
     }
 }
 
-/// Fills the line of pencil `p` (interior and ghosts) from `u`, and from the halo planes of
-/// `halo` where a neighbour rank is: the line then holds `n + k_lo + k_hi` updated cells
-/// (`k` = [`SlabHalo::overlap`] on each side with a neighbour) and `ng` ghosts beyond them.
+/// Fills the line of pencil `p` (interior and ghosts) from its interior cells `cells` (in the
+/// sweep frame, [`gather_block`]), and from the halo planes of `halo` where a neighbour rank
+/// is: the line then holds `n + k_lo + k_hi` updated cells (`k` = [`SlabHalo::overlap`] on
+/// each side with a neighbour) and `ng` ghosts beyond them.
 #[allow(clippy::too_many_arguments)]
 fn gather(
     line: &mut [State],
-    u: &[f64],
+    cells: &[State],
     nvar: usize,
     pencils: &Pencils,
     p: usize,
@@ -225,11 +226,7 @@ fn gather(
     let own = pencils.n;
     let [k_lo, k_hi] = halo.overlaps();
     let n = own + k_lo + k_hi;
-    let base = pencils.base(p);
-    for m in 0..own {
-        let c = base + m * pencils.stride;
-        line[ng + k_lo + m] = to_local(&u[c * nvar..(c + 1) * nvar], dim, fr);
-    }
+    line[ng + k_lo..ng + k_lo + own].copy_from_slice(&cells[..own]);
     // Pencils along the slab axis are numbered like the cells of a plane.
     let plane = pencils.count;
     let from_plane = |planes: &[f64], t: usize| {
@@ -422,8 +419,8 @@ fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Ve
     blocks
 }
 
-/// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states pencil-major into
-/// `out`, one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
+/// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states into `out` (the
+/// layout of `u_in`), one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
 /// the neighbours' planes of a sweep along the decomposed axis ([`SlabHalo::none`] otherwise).
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_axis(
@@ -478,22 +475,27 @@ pub fn sweep_axis(
         None => (&[], None, &mut []),
     };
     let mut taps = tap_blocks(offsets, flux, pencils.count);
-    out.par_chunks_mut(BLOCK_PENCILS * n * nvar)
-        .zip(pencil_out.par_chunks_mut(BLOCK_PENCILS))
+    let writer = CellWriter::new(&mut out[..u_in.len()]);
+    pencil_out
+        .par_chunks_mut(BLOCK_PENCILS)
         .zip(taps.par_iter_mut())
         .enumerate()
-        .for_each(|(block, ((out_block, rep_block), (offsets, kept)))| {
+        .for_each(|(block, (rep_block, (offsets, kept)))| {
             let thread = rayon::current_thread_index().unwrap_or(0) % scratch.len();
             let mut guard = scratch[thread]
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             let line = &mut *guard;
             line.resize(n_line, ng);
+            let p0 = block * BLOCK_PENCILS;
+            let bases = (p0..p0 + rep_block.len()).map(|p| pencils.base(p));
+            let cells = Block::new(bases, pencils.n, pencils.stride);
+            gather_block(&mut line.tile, u_in, nvar, &cells, &fr);
             for (k, rep) in rep_block.iter_mut().enumerate() {
                 let p = block * BLOCK_PENCILS + k;
                 gather(
                     &mut line.u,
-                    u_in,
+                    &line.tile[k * n..(k + 1) * n],
                     nvar,
                     &pencils,
                     p,
@@ -510,16 +512,8 @@ pub fn sweep_axis(
                 } else {
                     advance_segments(line, &setup, &walls[lo..hi], &fr, halo)
                 };
-                let dst = &mut out_block[k * n * nvar..(k + 1) * n * nvar];
+                line.tile[k * n..(k + 1) * n].copy_from_slice(&line.new[k_lo..k_lo + n]);
                 let base = pencils.base(p);
-                for m in 0..n {
-                    from_local(
-                        &line.new[k_lo + m],
-                        dim,
-                        &fr,
-                        &mut dst[m * nvar..(m + 1) * nvar],
-                    );
-                }
                 if let Some(positions) = positions {
                     let (lo, hi) = (offsets[k] as usize, offsets[k + 1] as usize);
                     let first = offsets[0] as usize;
@@ -555,6 +549,9 @@ pub fn sweep_axis(
                     trouble,
                 };
             }
+            // SAFETY: this block alone writes the cells of its pencils (a cell lies on one
+            // pencil along `axis`, a pencil in one block), and `u_in` is another buffer.
+            unsafe { writer.scatter_block(&line.tile, nvar, &cells, &fr) };
         });
 }
 
@@ -694,35 +691,4 @@ fn run_faces(
             };
         }
     }
-}
-
-/// Copies the pencil-major `src` of a sweep along `axis` back to the x-fastest `dst`.
-pub fn pencil_to_cells(grid: &Grid, axis: usize, src: &[f64], dst: &mut [f64]) {
-    match grid.dim {
-        1 => transpose::<3>(grid, axis, src, dst),
-        2 => transpose::<4>(grid, axis, src, dst),
-        _ => transpose::<5>(grid, axis, src, dst),
-    }
-}
-
-/// [`pencil_to_cells`] for `NV` values per cell (a compile-time size, so each cell is copied
-/// by a few moves instead of a `memmove` call).
-fn transpose<const NV: usize>(grid: &Grid, axis: usize, src: &[f64], dst: &mut [f64]) {
-    let pencils = Pencils::new(grid, axis);
-    let nx = grid.cells[0];
-    let (s, n) = (pencils.stride, pencils.n);
-    dst.par_chunks_mut(nx * NV)
-        .enumerate()
-        .for_each(|(row, dst_row)| {
-            // Cell `c = i + nx row` is cell `m` of pencil `lo + hi s`; along the row only `lo`
-            // changes (`nx` divides `s` for a sweep along y or z), by one per cell.
-            let first = nx * row;
-            let (lo0, m, hi) = (first % s, (first / s) % n, first / (s * n));
-            let start = ((lo0 + hi * s) * n + m) * NV;
-            for (i, cell) in dst_row.chunks_exact_mut(NV).enumerate() {
-                let from = start + i * n * NV;
-                let v: &[f64; NV] = src[from..from + NV].try_into().expect("NV values");
-                cell.copy_from_slice(v);
-            }
-        });
 }

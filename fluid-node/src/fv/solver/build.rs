@@ -7,6 +7,7 @@ use protocol::scene::FluidConfig;
 
 use crate::fv::comm::{Comm, Serial};
 use crate::fv::euler::NQ;
+use crate::fv::isa::Isa;
 use crate::fv::line::{FluxKind, LineScratch};
 use crate::fv::scene::{ConfigError, from_scene};
 use crate::fv::slab::{Slab, SlabError};
@@ -202,6 +203,19 @@ impl FluidSolver {
             time: 0.0,
             outflow: [0.0; NQ],
         })
+    }
+
+    /// Runs the line kernel on `isa` from now on ([`Isa::best`] by default); every ISA gives
+    /// the same bits (`fv::isa`), so this is for the tests that check it and for benchmarks.
+    ///
+    /// # Panics
+    /// If this CPU does not have `isa` ([`Isa::supported`]).
+    pub fn set_isa(&mut self, isa: Isa) {
+        for s in &self.scratch {
+            s.lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .set_isa(isa);
+        }
     }
 
     /// This rank's grid: the cells of [`FluidSolver::state`] (the whole grid on one rank;

@@ -12,7 +12,7 @@ use crate::fv::solver::{
     FluidSolver, MAX_TROUBLES, RefusedTimeStep, SplitHooks, StepReport, Trouble, TroubleKind,
 };
 use crate::fv::state::BoundaryKind;
-use crate::fv::sweep::{Pencils, SlabHalo, pencil_to_cells, sweep_axis};
+use crate::fv::sweep::{Pencils, SlabHalo, sweep_axis};
 
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
 /// steps cover all permutations.
@@ -198,12 +198,7 @@ impl FluidSolver {
                 grid, params, axis, dt, u, buffer, scratch, pencil_out, tap, walls, &halo,
             );
         });
-        if axis == 0 {
-            std::mem::swap(&mut self.state.u, &mut self.buffer);
-        } else {
-            let (src, dst) = (&self.buffer, &mut self.state.u);
-            self.pool.install(|| pencil_to_cells(grid, axis, src, dst));
-        }
+        std::mem::swap(&mut self.state.u, &mut self.buffer);
     }
 
     /// What this rank's pencils of the sweep along `axis` found: the outflow partials (`area`

@@ -1,0 +1,178 @@
+//! The cells of a block of pencils, read from and written to the x-fastest state in one pass
+//! each (`sweep.rs`).
+//!
+//! A block is [`BLOCK_PENCILS`] consecutive pencils; along y or z they are neighbours along x,
+//! so the block's cells at one position `m` along the axis are one contiguous run of the state
+//! (16 cells, 640 bytes in 3-D). [`gather_block`] reads
+//! the block's interior cells run by run into a tile (pencil-major, sweep frame), from which
+//! each pencil's line is filled in cache; [`CellWriter::scatter_block`] writes the tile of the
+//! updated cells back the same way, straight into the x-fastest output.
+//!
+//! NOTE: before, each pencil read its cells one by one at the axis stride (a page apart along
+//! z on 128³), wrote its cells pencil-major into a second buffer, and a transpose pass copied
+//! that buffer back to the x-fastest layout: three passes over the state per y or z sweep
+//! instead of two, and one 40-byte cell per page touched. Writing in place needs the blocks to
+//! share the output: each cell lies on exactly one pencil, so the blocks' writes are disjoint
+//! ([`CellWriter`]).
+
+use std::marker::PhantomData;
+
+use crate::fv::euler::{NQ, State};
+
+/// Pencils per parallel block of a sweep (a fixed partition, `sweep.rs`).
+pub const BLOCK_PENCILS: usize = 16;
+
+/// The cells of one block: the first cell of each of its pencils, the cells a pencil and the
+/// index distance between consecutive cells of a pencil.
+pub(crate) struct Block {
+    bases: [usize; BLOCK_PENCILS],
+    count: usize,
+    n: usize,
+    stride: usize,
+}
+
+impl Block {
+    /// The block of the pencils whose first cells are `bases` (at most [`BLOCK_PENCILS`]), of
+    /// `n` cells `stride` apart.
+    pub(crate) fn new(bases: impl Iterator<Item = usize>, n: usize, stride: usize) -> Block {
+        let mut block = Block {
+            bases: [0; BLOCK_PENCILS],
+            count: 0,
+            n,
+            stride,
+        };
+        for base in bases {
+            assert!(
+                block.count < BLOCK_PENCILS,
+                "more than {BLOCK_PENCILS} pencils"
+            );
+            block.bases[block.count] = base;
+            block.count += 1;
+        }
+        block
+    }
+}
+
+/// Fills `tile` with the cells of the pencils of `block`, pencil after pencil (`tile[k n + m]`
+/// is cell `m` of its pencil `k`), in the sweep frame `fr` (as `sweep::to_local` gives it).
+pub(crate) fn gather_block(
+    tile: &mut Vec<State>,
+    u: &[f64],
+    nvar: usize,
+    block: &Block,
+    fr: &[Option<usize>; 3],
+) {
+    tile.resize(block.count * block.n, [0.0; NQ]);
+    let map = local_index(nvar, fr);
+    match nvar {
+        3 => gather_cells::<3>(tile, u, block, &map),
+        4 => gather_cells::<4>(tile, u, block, &map),
+        _ => gather_cells::<5>(tile, u, block, &map),
+    }
+}
+
+/// The sweep-frame component of each stored component of a cell (`sweep::to_local`: density
+/// first, energy last, the velocity of storage axis `a` in the slot of `a` in `fr`).
+fn local_index(nvar: usize, fr: &[Option<usize>; 3]) -> [usize; NQ] {
+    let mut map = [0; NQ];
+    map[nvar - 1] = NQ - 1;
+    for (slot, a) in fr.iter().enumerate() {
+        if let Some(a) = a {
+            map[1 + a] = 1 + slot;
+        }
+    }
+    map
+}
+
+/// [`gather_block`] for `NV` stored values per cell (copies of a fixed size, no branches).
+fn gather_cells<const NV: usize>(tile: &mut [State], u: &[f64], block: &Block, map: &[usize; NQ]) {
+    let n = block.n;
+    for m in 0..n {
+        let along = m * block.stride;
+        for (k, &base) in block.bases[..block.count].iter().enumerate() {
+            let c = base + along;
+            let cell: &[f64; NV] = u[c * NV..(c + 1) * NV].try_into().expect("NV values");
+            // The inactive velocity slots of a 1-D or 2-D state stay 0.
+            let mut local = [0.0; NQ];
+            for j in 0..NV {
+                local[map[j]] = cell[j];
+            }
+            tile[k * n + m] = local;
+        }
+    }
+}
+
+/// The output state of a sweep, which every block writes at the cells of its own pencils.
+pub(crate) struct CellWriter<'a> {
+    ptr: *mut f64,
+    len: usize,
+    _out: PhantomData<&'a mut [f64]>,
+}
+
+// SAFETY: a `CellWriter` is shared only by the blocks of one sweep, and they write disjoint
+// cells (see `scatter_block`); nothing reads the output until the sweep is over.
+unsafe impl Sync for CellWriter<'_> {}
+// SAFETY: as for `Sync`: it is a `&mut [f64]` split by cells.
+unsafe impl Send for CellWriter<'_> {}
+
+impl<'a> CellWriter<'a> {
+    /// Shares `out` (borrowed for the writer's life).
+    pub(crate) fn new(out: &'a mut [f64]) -> CellWriter<'a> {
+        CellWriter {
+            ptr: out.as_mut_ptr(),
+            len: out.len(),
+            _out: PhantomData,
+        }
+    }
+
+    /// Writes `tile` (as [`gather_block`] fills it) into the cells of the pencils of `block` (as
+    /// `sweep::from_local` does).
+    ///
+    /// # Safety
+    /// No other thread accesses the cells of these pencils while this runs: each block of a
+    /// sweep scatters its own pencils, and a cell lies on one pencil along an axis.
+    pub(crate) unsafe fn scatter_block(
+        &self,
+        tile: &[State],
+        nvar: usize,
+        block: &Block,
+        fr: &[Option<usize>; 3],
+    ) {
+        let map = local_index(nvar, fr);
+        // SAFETY: passed on from the caller.
+        unsafe {
+            match nvar {
+                3 => self.scatter_cells::<3>(tile, block, &map),
+                4 => self.scatter_cells::<4>(tile, block, &map),
+                _ => self.scatter_cells::<5>(tile, block, &map),
+            }
+        }
+    }
+
+    /// [`CellWriter::scatter_block`] for `NV` stored values per cell.
+    ///
+    /// # Safety
+    /// As for [`CellWriter::scatter_block`].
+    unsafe fn scatter_cells<const NV: usize>(
+        &self,
+        tile: &[State],
+        block: &Block,
+        map: &[usize; NQ],
+    ) {
+        let n = block.n;
+        for m in 0..n {
+            let along = m * block.stride;
+            for (k, &base) in block.bases[..block.count].iter().enumerate() {
+                let c = base + along;
+                assert!((c + 1) * NV <= self.len, "cell {c} outside the state");
+                // SAFETY: in bounds (asserted); the caller guarantees that no other thread
+                // touches this cell, and `_out` that the slice outlives the writer.
+                let cell = unsafe { &mut *self.ptr.add(c * NV).cast::<[f64; NV]>() };
+                let local = &tile[k * n + m];
+                for j in 0..NV {
+                    cell[j] = local[map[j]];
+                }
+            }
+        }
+    }
+}

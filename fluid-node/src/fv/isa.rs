@@ -1,0 +1,78 @@
+//! The instruction set the line kernel runs on, chosen at run time.
+//!
+//! The kernel (`line::advance_line` and everything it inlines: the cell and interface passes,
+//! OSMP's `Ψ`, the face fluxes, the update) is one body of source compiled several times: for
+//! the x86-64 baseline (SSE2), and under `#[target_feature]` for AVX2 and for AVX-512F. The
+//! loops of that body run over one array per quantity along the pencil (structure of arrays,
+//! `osmp.rs`, `line.rs`), with selects instead of branches on the regular faces, so the
+//! compiler vectorises them 2, 4 or 8 lanes wide. One binary runs on any x86-64 CPU:
+//! [`Isa::best`] asks the CPU (`is_x86_feature_detected!`) once, and each worker's
+//! [`LineScratch`](crate::fv::line::LineScratch) holds the ISA it runs
+//! ([`FluidSolver::set_isa`](crate::fv::FluidSolver::set_isa) forces one, for the tests that
+//! compare them).
+//!
+//! Every path gives the same bits. The source has no `mul_add` and no reassociation, and Rust
+//! never contracts `a * b + c` into an FMA nor reorders a sum (LLVM does either only under
+//! fast-math flags, which Rust does not set): each lane of a vector instruction does the IEEE
+//! operation the scalar code names, in the same order (`+ − × ÷ √` are correctly rounded in
+//! SSE2, AVX2 and AVX-512 alike, and `min`/`max` are written as the compare-and-select that
+//! `minpd`/`maxpd` are). The AVX2 path enables `avx2` alone, not `fma`, so that even an FMA
+//! the compiler might form could not exist. The tests `fv::tests_isa` run every path the CPU
+//! has on the same states (a line with every kind of face; 3-D steps on one and two threads)
+//! and compare the bits.
+//!
+//! On aarch64 the baseline is NEON (2 lanes of f64), which every aarch64 CPU has, so the
+//! baseline path there is already the vector one; an SVE path would be one more
+//! `#[target_feature(enable = "sve")]` copy chosen with `is_aarch64_feature_detected!("sve")`,
+//! under the same rules (Rust does not contract FMAs on aarch64 either).
+
+/// An instruction set the line kernel is compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Isa {
+    /// The target's baseline (SSE2 on x86-64, NEON on aarch64).
+    Baseline,
+    /// x86-64 with AVX2 (4 lanes of f64).
+    Avx2,
+    /// x86-64 with AVX-512F (8 lanes of f64).
+    Avx512,
+}
+
+impl Isa {
+    /// Every ISA this CPU can run, baseline first.
+    pub fn available() -> Vec<Isa> {
+        [Isa::Baseline, Isa::Avx2, Isa::Avx512]
+            .into_iter()
+            .filter(|isa| isa.supported())
+            .collect()
+    }
+
+    /// Whether this CPU runs `self`.
+    pub fn supported(self) -> bool {
+        match self {
+            Isa::Baseline => true,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The widest ISA this CPU runs (asked once per process).
+    pub fn best() -> Isa {
+        static BEST: std::sync::OnceLock<Isa> = std::sync::OnceLock::new();
+        *BEST.get_or_init(|| {
+            Isa::available()
+                .pop()
+                .expect("the baseline is always available")
+        })
+    }
+}
+
+impl Default for Isa {
+    /// [`Isa::best`].
+    fn default() -> Isa {
+        Isa::best()
+    }
+}

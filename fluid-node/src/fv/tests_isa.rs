@@ -1,0 +1,156 @@
+//! Every instruction set the line kernel is compiled for gives the same bits (`isa.rs`): a line
+//! with every kind of face, and 3-D steps on one and two threads, on each ISA this CPU has.
+
+use crate::fv::euler::State;
+use crate::fv::isa::Isa;
+use crate::fv::line::{FluxKind, LineScratch, LineSetup, LineStats, advance_line};
+use crate::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState};
+use crate::grid::Grid;
+
+const GAMMA: f64 = 1.4;
+
+fn conserved(rho: f64, vel: [f64; 3], p: f64) -> State {
+    let ke = 0.5 * rho * (vel[0] * vel[0] + vel[1] * vel[1] + vel[2] * vel[2]);
+    [
+        rho,
+        rho * vel[0],
+        rho * vel[1],
+        rho * vel[2],
+        p / (GAMMA - 1.0) + ke,
+    ]
+}
+
+/// A line with every kind of face: smooth flow, Sod's and Toro's 123 and blast states, and
+/// a gap of vacuum and near-vacuum cells (Lax–Friedrichs, HLLE fallback, positivity fix).
+fn line_states(len: usize) -> Vec<State> {
+    (0..len)
+        .map(|i| {
+            let x = i as f64 / len as f64;
+            let (rho, u, p) = match i * 8 / len {
+                0 | 1 => (
+                    1.0 + 0.2 * (6.0 * x).sin(),
+                    0.3 * (9.0 * x).cos(),
+                    1.0 + 0.1 * (4.0 * x).sin(),
+                ),
+                2 => (1.0, 0.75, 1.0),
+                3 => (0.125, 0.0, 0.1),
+                4 => (1.0, -2.0, 0.4),
+                5 => (1.0, 2.0, 0.4),
+                6 if i % 3 == 0 => (0.0, 0.0, 0.0),
+                6 => (1e-9, 1.0, 1e-9),
+                _ => (5.99924, 19.5975, 460.894),
+            };
+            conserved(rho, [u, 0.1 * (3.0 * x).sin(), -0.2 * x], p)
+        })
+        .collect()
+}
+
+/// The line kernel on `isa`: the bits of the new states and the face fluxes, and the counters.
+fn run_line(isa: Isa, flux: FluxKind, u: &[State]) -> (Vec<u64>, LineStats) {
+    let ng = flux.ghost_cells();
+    let n = u.len() - 2 * ng;
+    let setup = LineSetup {
+        n,
+        ng,
+        flux,
+        sigma: 0.02,
+        gamma: GAMMA,
+        n_shear: 2,
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+        wall: [false, true],
+        own: [0, n],
+        end_face: true,
+    };
+    let mut s = LineScratch::default();
+    s.set_isa(isa);
+    s.resize(n, ng);
+    s.u.copy_from_slice(u);
+    let stats = advance_line(&mut s, &setup);
+    let bits = s.new.iter().chain(&s.face).flatten().map(|x| x.to_bits());
+    (bits.collect(), stats)
+}
+
+/// Every instruction set this CPU has gives the line kernel's states, fluxes and counters
+/// to the bit, on regular faces and on each special one (vacuum, HLLE fallback).
+#[test]
+fn isa_paths_give_the_same_line_to_the_bit() {
+    let isas = Isa::available();
+    assert_eq!(isas[0], Isa::Baseline);
+    for flux in [
+        FluxKind::Osmp(3),
+        FluxKind::Osmp(5),
+        FluxKind::Osmp(7),
+        FluxKind::MusclHancock,
+    ] {
+        let u = line_states(203);
+        let (reference, stats) = run_line(Isa::Baseline, flux, &u);
+        assert!(
+            stats.lax_friedrichs > 0,
+            "{flux:?}: no vacuum face in {stats:?}"
+        );
+        if let FluxKind::Osmp(_) = flux {
+            assert!(stats.hlle > 0, "{flux:?}: no HLLE face in {stats:?}");
+        }
+        for &isa in &isas[1..] {
+            let (bits, other) = run_line(isa, flux, &u);
+            assert_eq!(other, stats, "{flux:?} on {isa:?}");
+            let first = bits.iter().zip(&reference).position(|(a, b)| a != b);
+            assert_eq!(first, None, "{flux:?} on {isa:?}: first differing value");
+        }
+    }
+}
+
+/// A 3-D blast (blocks of pencils cut short at the grid's ends along every axis) gives the
+/// same bits on every instruction set and with one or two threads.
+#[test]
+fn isa_paths_and_threads_give_the_same_3d_steps_to_the_bit() {
+    let cells = [11, 13, 9];
+    let grid = Grid::new(&[0.0; 3], &[1.1, 1.3, 0.9], &cells).expect("grid");
+    let mut state = FluidState::zeros(3, grid.n_cells());
+    for idx in 0..grid.n_cells() {
+        let x = grid.cell_center(grid.ijk(idx));
+        let r2: f64 = (0..3).map(|a| (x[a] - 0.4).powi(2)).sum();
+        let (rho, p) = if r2 < 0.09 { (4.0, 50.0) } else { (1.0, 1.0) };
+        let vel = [0.3 * x[1], -0.2 * x[2], 0.1 * x[0]];
+        state.set_primitive(idx, rho, vel, p, GAMMA);
+    }
+    let params = FluidParams {
+        gamma: GAMMA,
+        cfl: 0.8,
+        flux: crate::fv::FluxKind::Osmp(5),
+        boundary: [
+            [BoundaryKind::Wall; 2],
+            [BoundaryKind::Periodic; 2],
+            [BoundaryKind::Outflow, BoundaryKind::Wall],
+        ],
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+    };
+    let run = |isa: Isa, threads: usize| {
+        let mut solver =
+            FluidSolver::new(grid.clone(), params.clone(), state.clone(), threads).expect("solver");
+        solver.set_isa(isa);
+        for _ in 0..4 {
+            let rep = solver.advance(solver.max_dt());
+            assert!(rep.ok(), "{rep:?}");
+        }
+        solver
+            .state()
+            .u
+            .iter()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let reference = run(Isa::Baseline, 1);
+    for isa in Isa::available() {
+        for threads in [1, 2] {
+            let bits = run(isa, threads);
+            let first = bits.iter().zip(&reference).position(|(a, b)| a != b);
+            assert_eq!(
+                first, None,
+                "{isa:?}, {threads} threads: first differing value"
+            );
+        }
+    }
+}
