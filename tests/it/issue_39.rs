@@ -13,38 +13,10 @@ fn a_coupled_run_writes_vtk_series_that_vtks_readers_load() {
     let dir = out_dir("issue-39-vtk");
     std::fs::create_dir_all(&dir).expect("dir");
     let scene = dir.join("beam.toml");
+    // The beam of issue_39_views (which reads the same run's Foxglove channels), named apart.
     std::fs::write(
         &scene,
-        r#"name = "vtkbeam"
-[run]
-t_end = 1.0
-max_steps = 4
-[fluid]
-lower = [0.0, 0.0]
-upper = [2.0, 1.0]
-cells = [64, 48]
-boundary = { x = ["periodic", "periodic"], y = ["wall", "wall"] }
-[[fluid.init]]
-region = "all"
-rho = 1.4
-p = 12.0
-[[fluid.init]]
-region = { box = { lower = [0.0, 0.0], upper = [0.95, 1.0] } }
-rho = 8.0
-p = 116.5
-[solid]
-density = 100.0
-young = 7000.0
-poisson = 0.0
-[[solid.bodies]]
-shape = { box = { center = [1.0, 0.3375], size = [0.2, 0.75] } }
-divisions = [3, 10]
-[[solid.constraints]]
-region = { box = { lower = [0.5, -1.0], upper = [1.5, 0.1125] } }
-motion = "fixed"
-[output]
-every = 0.004
-"#,
+        crate::issue_39_views::SCENE.replace("\"viewbeam\"", "\"vtkbeam\""),
     )
     .expect("scene");
     let out = dir.join("out");

@@ -63,7 +63,8 @@ const FIELD: &[&str] = &["name", "offset", "type"];
 const POSE: &[&str] = &["position", "orientation"];
 const TIME: &[&str] = &["sec", "nsec"];
 
-/// The beam of issue_39's VTK test: 4 steps, 2 outputs, nothing breaks.
+/// The beam of issue_39's VTK test (which names it "vtkbeam"): 4 steps, 2 outputs, nothing
+/// breaks.
 pub(crate) const SCENE: &str = r#"name = "viewbeam"
 [run]
 t_end = 1.0

@@ -21,6 +21,16 @@ rho = 1.0
 p = 1.0
 "#;
 
+/// One output at t = 0.1 and a ledger of two steps.
+fn write_outputs_and_ledger(run: &std::path::Path) {
+    std::fs::write(run.join("outputs.csv"), "k,t\n0,0.1\n").expect("outputs");
+    std::fs::write(
+        run.join("ledger.csv"),
+        "t,step,mass_rel_err,energy_rel_err\n0.05,0,1e-16,2e-7\n0.1,1,3e-16,1e-7\n",
+    )
+    .expect("ledger");
+}
+
 fn run_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("cosim-report-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -59,12 +69,7 @@ fn figures_plot_the_probes_and_draw_each_field() {
         "element,particle,wet,x0,y0,x1,y1\n0,0,1,0.5,0.5,1.5,0.5\n",
     )
     .expect("surface");
-    std::fs::write(run.join("outputs.csv"), "k,t\n0,0.1\n").expect("outputs");
-    std::fs::write(
-        run.join("ledger.csv"),
-        "t,step,mass_rel_err,energy_rel_err\n0.05,0,1e-16,2e-7\n0.1,1,3e-16,1e-7\n",
-    )
-    .expect("ledger");
+    write_outputs_and_ledger(&run);
     std::fs::write(
         run.join("summary.json"),
         r#"{"scene":"tiny","status":"completed","steps":2,"coupling_iterations":{"mean":1.5,"max":2}}"#,
@@ -264,12 +269,7 @@ fn the_report_page_loads_every_image_in_a_browser() {
         fluid.push_str(&format!("{x},{y},{},0,0,{},1\n", 1.0 + x, 1e5 * (1.0 + y)));
     }
     std::fs::write(run.join("fluid_0.csv"), fluid).expect("fluid");
-    std::fs::write(run.join("outputs.csv"), "k,t\n0,0.1\n").expect("outputs");
-    std::fs::write(
-        run.join("ledger.csv"),
-        "t,step,mass_rel_err,energy_rel_err\n0.05,0,1e-16,2e-7\n0.1,1,3e-16,1e-7\n",
-    )
-    .expect("ledger");
+    write_outputs_and_ledger(&run);
     std::fs::write(
         run.join("probe_tip.csv"),
         "t,x,y,sigma_n\n0,1.02,1,0\n0.05,1.02001,1.00002,1e6\n0.1,1.02003,1.00001,3e6\n",

@@ -189,6 +189,23 @@ fn print(v: f64, n: usize, o: &Outcome) {
     );
 }
 
+/// Walls everywhere: the fluid keeps its mass, its energy changes by the piston's work only,
+/// and no cell holds ρ < 0 or p < 0.
+fn conserving_and_physical(o: &Outcome) {
+    assert!(o.mass_drift <= 1e-13, "mass {:e}", o.mass_drift);
+    assert!(
+        o.energy_imbalance <= 1e-13,
+        "energy {:e}",
+        o.energy_imbalance
+    );
+    assert!(
+        o.min_rho >= 0.0 && o.min_p >= 0.0,
+        "rho {} p {}",
+        o.min_rho,
+        o.min_p
+    );
+}
+
 /// The L1 errors of the density on 50, 100 and 200 cells, each run checked for conservation
 /// (walls everywhere: the fluid keeps its mass, and its energy changes by the piston's work
 /// only) and positivity.
@@ -199,18 +216,7 @@ fn converging(v: f64, t_end: f64) -> Vec<Outcome> {
             let o = run(v, n, t_end).unwrap_or_else(|e| panic!("V = {v}, N = {n}: {e}"));
             print(v, n, &o);
             // NOTE: measured 1.8e-16 (mass) and 3.0e-16 (energy) at most.
-            assert!(o.mass_drift <= 1e-13, "mass {:e}", o.mass_drift);
-            assert!(
-                o.energy_imbalance <= 1e-13,
-                "energy {:e}",
-                o.energy_imbalance
-            );
-            assert!(
-                o.min_rho >= 0.0 && o.min_p >= 0.0,
-                "rho {} p {}",
-                o.min_rho,
-                o.min_p
-            );
+            conserving_and_physical(&o);
             o
         })
         .collect();
@@ -278,12 +284,7 @@ fn piston_withdrawn_faster_than_the_escape_speed_keeps_the_vacuum_positive_on_a_
     print(10.0, 400, &o);
     // NOTE: measured in 1030 steps: mass 0, energy 1.3e-16, min rho 1.3e-28, min p 3.3e-27,
     // L1 1.59e-3 (ratio 1.79 to N = 200), vacuum rho 1.4e-10.
-    assert!(o.mass_drift <= 1e-13, "mass {:e}", o.mass_drift);
-    assert!(
-        o.energy_imbalance <= 1e-13,
-        "energy {:e}",
-        o.energy_imbalance
-    );
+    conserving_and_physical(&o);
     assert!(
         o.min_rho > 0.0 && o.min_p > 0.0,
         "rho {} p {}",
