@@ -29,12 +29,14 @@
 //! slower scalar path.
 
 use crate::fv::euler::{
-    NQ, Primitive, RoeAverage, RoeSide, State, flux_hllc, flux_hlle, flux_lax_friedrichs,
-    flux_local_lax_friedrichs, physical_flux, primitive, primitive_floored, roe_eigenvector,
+    NQ, Primitive, RoeAverage, RoeSide, State, flux_hlle, flux_lax_friedrichs,
+    flux_local_lax_friedrichs, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
 use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
+
+mod muscl;
 
 /// Rounds of the a-posteriori positivity fix.
 pub const MAX_FIXES: usize = 3;
@@ -361,7 +363,7 @@ fn advance_line_body(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
         FluxKind::Osmp(5) => osmp_faces::<5>(s, setup),
         FluxKind::Osmp(7) => osmp_faces::<7>(s, setup),
         FluxKind::Osmp(order) => panic!("osmp order {order} (3, 5 or 7; checked at setup)"),
-        FluxKind::MusclHancock => muscl_faces(s, setup),
+        FluxKind::MusclHancock => muscl::muscl_faces(s, setup),
     }
     for side in 0..2 {
         if setup.wall[side] {
@@ -653,20 +655,36 @@ fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
     }
     for fi in 0..=n {
         let f = ng - 1 + fi;
-        let (ul, ur) = (&s.u[f], &s.u[f + 1]);
-        if s.vacuum[f] && s.vacuum[f + 1] {
-            s.face[fi] = flux_local_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho);
-            s.kind[fi] = FaceFlux::LocalLaxFriedrichs;
-        } else if s.vacuum[f] || s.vacuum[f + 1] {
-            s.face[fi] = flux_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho);
-            s.kind[fi] = FaceFlux::LaxFriedrichs;
-        } else if s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius] || !s.star_ok[fi] {
-            s.face[fi] = flux_hlle(ul, ur, gamma);
+        if vacuum_face(s, setup, fi, f) {
+            continue;
+        }
+        if s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius] || !s.star_ok[fi] {
+            s.face[fi] = flux_hlle(&s.u[f], &s.u[f + 1], gamma);
             s.kind[fi] = FaceFlux::Hlle;
         } else {
             s.kind[fi] = FaceFlux::Regular;
         }
     }
+}
+
+/// The flux of face `fi` (between the line's cells `f` and `f + 1`) when either side is a
+/// vacuum cell: Lax–Friedrichs (paper 000 §3.2), in its local form between two vacuum cells
+/// (docs/cut-cells.md §4). Returns whether it was such a face.
+fn vacuum_face(s: &mut LineScratch, setup: &LineSetup, fi: usize, f: usize) -> bool {
+    let (l, r) = (s.vacuum[f], s.vacuum[f + 1]);
+    let (ul, ur, sigma, gamma) = (&s.u[f], &s.u[f + 1], setup.sigma, setup.gamma);
+    (s.face[fi], s.kind[fi]) = match (l, r) {
+        (false, false) => return false,
+        (true, true) => (
+            flux_local_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho),
+            FaceFlux::LocalLaxFriedrichs,
+        ),
+        _ => (
+            flux_lax_friedrichs(ul, ur, sigma, gamma, setup.vacuum_rho),
+            FaceFlux::LaxFriedrichs,
+        ),
+    };
+    true
 }
 
 /// The regular flux of every face `j` of `cells` (faces between cells `j` and `j + 1`) into
@@ -723,86 +741,5 @@ fn face_loop(
         [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
         let (ul, ur) = (cells.state(j), cells.state(j + 1));
         star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
-    }
-}
-
-/// Monotonized-central limited slope `minmod(2a, 2b, (a+b)/2)` (van Leer 1977), TVD.
-///
-/// NOTE: MC rather than minmod or van Leer's harmonic limiter: it is the sharpest of the three
-/// and brings the reference scheme's Sod error at N = 400 near the 9.6e-4 quoted in the issue.
-#[inline]
-fn slope_mc(a: f64, b: f64) -> f64 {
-    if a * b <= 0.0 {
-        0.0
-    } else {
-        let m = (2.0 * a.abs()).min(2.0 * b.abs()).min(0.5 * (a + b).abs());
-        m.copysign(a)
-    }
-}
-
-fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
-    let LineSetup {
-        n,
-        ng,
-        gamma,
-        sigma,
-        ..
-    } = *setup;
-    // Boundary-extrapolated, half-step-evolved states of cells ng−1 ..= ng+n (Toro §14.4.2).
-    for i in ng - 1..=ng + n {
-        let (wm, w0, wp) = (s.cells.prim[i - 1], s.cells.prim[i], s.cells.prim[i + 1]);
-        let field = |w: &Primitive| [w.rho, w.vel[0], w.vel[1], w.vel[2], w.p];
-        let (am, a0, ap) = (field(&wm), field(&w0), field(&wp));
-        let mut lo = Primitive::default();
-        let mut hi = Primitive::default();
-        let mut lo_f = [0.0; NQ];
-        let mut hi_f = [0.0; NQ];
-        for q in 0..NQ {
-            let slope = slope_mc(a0[q] - am[q], ap[q] - a0[q]);
-            lo_f[q] = a0[q] - 0.5 * slope;
-            hi_f[q] = a0[q] + 0.5 * slope;
-        }
-        for (w, f) in [(&mut lo, lo_f), (&mut hi, hi_f)] {
-            w.rho = f[0];
-            w.vel = [f[1], f[2], f[3]];
-            w.p = f[4];
-        }
-        let ul = crate::fv::euler::conserved(&lo, gamma);
-        let ur = crate::fv::euler::conserved(&hi, gamma);
-        let fl = physical_flux(&ul, &lo);
-        let fr = physical_flux(&ur, &hi);
-        let mut el = ul;
-        let mut er = ur;
-        for q in 0..NQ {
-            let d = 0.5 * sigma * (fl[q] - fr[q]);
-            el[q] += d;
-            er[q] += d;
-        }
-        let ok = |u: &State| {
-            let w = primitive(u, gamma);
-            u[0] > 0.0 && w.p > 0.0 && lo.rho > 0.0 && lo.p > 0.0 && hi.rho > 0.0 && hi.p > 0.0
-        };
-        if ok(&el) && ok(&er) {
-            s.left[i] = el;
-            s.right[i] = er;
-        } else {
-            // NOTE: first order in this cell when the reconstruction is not physical.
-            s.left[i] = s.u[i];
-            s.right[i] = s.u[i];
-        }
-    }
-    for fi in 0..=n {
-        let f = ng - 1 + fi;
-        if s.vacuum[f] && s.vacuum[f + 1] {
-            s.face[fi] =
-                flux_local_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma, setup.vacuum_rho);
-            s.kind[fi] = FaceFlux::LocalLaxFriedrichs;
-        } else if s.vacuum[f] || s.vacuum[f + 1] {
-            s.face[fi] = flux_lax_friedrichs(&s.u[f], &s.u[f + 1], sigma, gamma, setup.vacuum_rho);
-            s.kind[fi] = FaceFlux::LaxFriedrichs;
-        } else {
-            s.face[fi] = flux_hllc(&s.right[f], &s.left[f + 1], gamma);
-            s.kind[fi] = FaceFlux::Regular;
-        }
     }
 }
