@@ -357,6 +357,7 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             channel,
             recover,
         } => {
+            end_quietly_on_a_closed_pipe();
             if export == Some(ExportArg::Csv) && !recover {
                 let steps = step.map(|s| s..=s).or(steps).unwrap_or(0..=u64::MAX);
                 let filter = crate::inspect::TableFilter {
@@ -370,6 +371,18 @@ fn dispatch(args: Args) -> anyhow::Result<ExitCode> {
             }
             inspect(&file, step, export, recover)
         }
+    }
+}
+
+/// `inspect` piped into `head` ends when its reader does, silently, as Unix tools do: Rust
+/// ignores SIGPIPE, so `print!` panicked on the closed pipe ("failed printing to stdout") and a
+/// streamed export reported a write error. Only for `inspect`, which writes nothing but its
+/// output: `run` keeps ignoring SIGPIPE and finishes its record whoever reads its progress.
+fn end_quietly_on_a_closed_pipe() {
+    // SAFETY: `signal` with SIG_DFL installs no handler; this runs on the main thread before
+    // any other thread of this command exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 
