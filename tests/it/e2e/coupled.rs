@@ -77,6 +77,7 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     assert_eq!(da.len() as u64, s["steps"].as_u64().expect("steps"));
     assert!(da == db, "1 and 2 threads recorded different diagnostics");
     check_ledger_csv_and_record(&a);
+    inspect_ends_quietly_on_a_closed_pipe(&a);
     // The bus carries exactly what the in-process run exchanges, on every channel.
     let text = std::fs::read_to_string(coupled_scene(&dir, 1)).expect("scene");
     let scene = protocol::scene::Scene::from_toml_str(&text, "coupled").expect("scene");
@@ -266,4 +267,44 @@ fn doubles_stand_in_for_either_node_beside_the_real_other() {
     assert_eq!(s["status"], "completed", "{s}");
     assert_eq!(s["nodes"]["fluid"], "pressure");
     let _ = std::fs::remove_dir_all(dir);
+}
+
+/// `inspect` piped into a reader that stops after one line (`| head -1`) ends on SIGPIPE,
+/// silently (it panicked in `print!`, and the streamed export reported a write error).
+fn inspect_ends_quietly_on_a_closed_pipe(out: &Path) {
+    // The whole table of this record is larger than a pipe's buffer (64 KiB).
+    for args in [
+        &["inspect", "--export", "csv"][..],
+        &["inspect", "--export", "json", "--step", "1"][..],
+    ] {
+        let mut child = coupler()
+            .args(args)
+            .arg(out.join("exchange.mcap"))
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("inspect starts");
+        let mut first = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(child.stdout.take().expect("stdout")),
+            &mut first,
+        )
+        .expect("a first line");
+        let r = child.wait_with_output().expect("inspect ends");
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert!(!first.is_empty() && stderr.is_empty(), "{args:?}: {stderr}");
+        use std::os::unix::process::ExitStatusExt;
+        assert!(
+            r.status.success() || r.status.signal() == Some(13),
+            "{args:?}: {:?}",
+            r.status
+        );
+        if args[2] == "csv" {
+            assert_eq!(
+                r.status.signal(),
+                Some(13),
+                "the whole table outgrows the pipe"
+            );
+        }
+    }
 }
