@@ -46,7 +46,7 @@ pub(crate) fn solid_states(run: &InProcess) -> Vec<SolidState> {
         .collect()
 }
 
-const REST_2D: &str = r#"
+pub(crate) const REST_2D: &str = r#"
     name = "rest-2d"
     [run]
     t_end = 0.25

@@ -8,7 +8,7 @@ use cosim_tests::{InProcess, run_in_process};
 use protocol::scene::SolidSubsteps;
 use protocol::wire::NodeKind;
 
-use crate::coupled::{completed, parse, solid_states, totals};
+use crate::coupled::{REST_2D, completed, parse, solid_states, totals};
 
 /// The `solid_substeps` of every step's diagnostics (`None` where absent).
 fn substeps(run: &InProcess) -> Vec<Option<u64>> {
@@ -22,29 +22,6 @@ fn substeps(run: &InProcess) -> Vec<Option<u64>> {
         .collect()
 }
 
-const REST_2D: &str = r#"
-    name = "rest-2d"
-    [run]
-    t_end = 0.1
-    scheme = "semi-implicit"
-    record = "none"
-    [fluid]
-    lower = [0.0, 0.0]
-    upper = [1.0, 1.0]
-    cells = [40, 40]
-    boundary = { x = ["wall", "wall"], y = ["wall", "wall"] }
-    [[fluid.init]]
-    region = "all"
-    rho = 1.4
-    p = 1.0
-    [solid]
-    density = 10.0
-    young = 1e4
-    poisson = 0.0
-    [[solid.bodies]]
-    shape = { particles = [ { vertices = [[0.4, 0.35], [0.65, 0.45], [0.55, 0.7], [0.3, 0.6]] } ] }
-"#;
-
 #[test]
 fn a_free_particle_in_gas_at_rest_stays_for_any_k() {
     for setting in [
@@ -53,7 +30,8 @@ fn a_free_particle_in_gas_at_rest_stays_for_any_k() {
         SolidSubsteps::Fixed(64),
         SolidSubsteps::AUTO,
     ] {
-        let mut scene = parse(REST_2D);
+        // coupled's particle at rest in gas at rest, to t = 0.1 s.
+        let mut scene = parse(&REST_2D.replace("t_end = 0.25", "t_end = 0.1"));
         scene.run.solid_substeps = Some(setting);
         let run = run_in_process(&scene);
         completed(&run);
