@@ -40,6 +40,7 @@ fn config(shape: Shape, divisions: Vec<u32>, steel: bool, contact: bool) -> Soli
         init: vec![],
         prescribed: None,
         contact: contact.then(ContactConfig::default),
+        walls: None,
     }
 }
 

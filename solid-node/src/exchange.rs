@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use protocol::scene::{MAX_SOLID_SUBSTEPS, OutputFormat, Scene, SolidSubsteps};
+use protocol::scene::{MAX_SOLID_SUBSTEPS, OutputFormat, Scene, SolidSubsteps, SolidWalls};
 use protocol::session::{NodeModel, StepLimit};
 use protocol::vtk::Series;
 use protocol::wire::{
@@ -50,7 +50,10 @@ impl RealSolid {
     pub fn from_scene(scene: &Scene) -> Result<RealSolid, BuildError> {
         let cfg = scene.solid.as_ref().ok_or(BuildError::NoSolidSection)?;
         let dim = scene.dim();
-        let solid = Solid::from_scene(cfg, dim, scene.run.threads as usize)?;
+        let mut solid = Solid::from_scene(cfg, dim, scene.run.threads as usize)?;
+        if let (Some(fluid), SolidWalls::Hold) = (&scene.fluid, cfg.walls.unwrap_or_default()) {
+            solid.set_walls(&fluid.lower, &fluid.upper, &fluid.boundary);
+        }
         if cfg.face_inertia == Some(protocol::scene::FaceInertia::Unweighted) {
             tracing::warn!(
                 "solid.face_inertia = \"unweighted\": the link faces' second moments are the \

@@ -36,6 +36,7 @@ pub use run::{
 pub use solid::{
     BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FaceInertia, FractureConfig, LinksConfig,
     Motion, ParticleSpec, PrescribedConfig, PrescribedMotion, Shape, SolidConfig, SolidInit,
+    SolidWalls,
 };
 
 use error::{Check, shorten_lines};

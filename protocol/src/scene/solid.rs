@@ -54,6 +54,24 @@ pub struct SolidConfig {
     /// Contact between particles that are not linked; absent: none is computed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactConfig>,
+    /// What the fluid domain's `wall` sides do to the solid (default `"hold"`). Left out of the
+    /// resolved scene when absent, so a scene without it hashes as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub walls: Option<SolidWalls>,
+}
+
+/// `solid.walls`: what the fluid domain's `wall` sides do to the solid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolidWalls {
+    /// A wall holds the solid: rigid, frictionless and perfectly inelastic. A particle's vertex
+    /// on or beyond a wall plane cannot move further into it; the kinetic energy that takes out
+    /// is counted as dissipated. A body resting flush against a wall stays at rest.
+    #[default]
+    Hold,
+    /// The solid passes through walls (the fluid's walls bound the gas only): fragments leave
+    /// the domain, and what lies beyond a side is ignored by the fluid.
+    Pass,
 }
 
 /// `[solid.contact]`: contact between particles that are not linked (never linked, or whose

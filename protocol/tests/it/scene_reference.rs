@@ -201,6 +201,7 @@ fn solid(motion: PrescribedMotion) -> SolidConfig {
             motion,
         }),
         contact: Some(ContactConfig::default()),
+        walls: Some(SolidWalls::Hold),
     }
 }
 

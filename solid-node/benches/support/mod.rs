@@ -27,6 +27,7 @@ pub(crate) fn lattice(threads: usize) -> Solid {
         init: vec![],
         prescribed: None,
         contact: None,
+        walls: None,
     };
     let mut solid = Solid::from_scene(&cfg, 3, threads).expect("bench scene builds");
     // Seeded deformation: a few steps from seeded velocities.

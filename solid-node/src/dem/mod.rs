@@ -81,6 +81,7 @@ pub mod rattle;
 pub mod report;
 pub mod solid;
 pub mod stability;
+pub mod walls;
 pub mod wet;
 
 #[cfg(test)]

@@ -136,6 +136,7 @@ fn box_config(dim: usize, divisions: Vec<u32>, poisson: f64) -> SolidConfig {
         init: vec![],
         prescribed: None,
         contact: None,
+        walls: None,
     }
 }
 

@@ -15,5 +15,6 @@ mod dem_stability;
 mod dem_substeps;
 mod dem_support;
 mod dem_top;
+mod dem_walls;
 mod dem_wave;
 mod dem_wet;

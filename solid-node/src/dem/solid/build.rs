@@ -3,7 +3,7 @@
 
 use nalgebra::Matrix3;
 
-use protocol::scene::{FaceInertia, Motion, SolidConfig, SolidInit};
+use protocol::scene::{BoundaryConfig, FaceInertia, Motion, SolidConfig, SolidInit};
 
 use crate::dem::contact::{Contact, ContactError, ContactParams};
 use crate::dem::lattice::{LatticeError, build_lattice};
@@ -16,6 +16,7 @@ use crate::dem::solid::limits::min_limit;
 use crate::dem::solid::orientation::quat_arr;
 use crate::dem::solid::state::{ParticleTrial, Solid, State, Substeps, Trial};
 use crate::dem::stability::elastic_limit;
+use crate::dem::walls::Walls;
 use crate::dem::wet::{WetSurfaceData, build_elements};
 
 /// Why a [`Solid`] could not be built from its scene (the text names the scene key).
@@ -299,11 +300,18 @@ impl Solid {
             bench_loads: (Vec::new(), Vec::new()),
             before_step: (Vec::new(), Vec::new()),
             substeps: Substeps::default(),
+            walls: Walls::default(),
             model,
         };
         solid.rebuild_wet_topology();
         solid.update_forces();
         solid.update_wet();
         solid
+    }
+
+    /// Makes the `wall` sides of the box `[lower, upper]` (the fluid's domain) hold the solid
+    /// (`solid.walls = "hold"`, [`Walls`]). Without it the solid passes through them.
+    pub fn set_walls(&mut self, lower: &[f64], upper: &[f64], boundary: &BoundaryConfig) {
+        self.walls = Walls::new(&self.model, lower, upper, boundary);
     }
 }

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::dem::contact::Contact;
 use crate::dem::model::Model;
 use crate::dem::solid::forces::ForceScratch;
+use crate::dem::walls::Walls;
 use crate::dem::wet::{WetSurfaceData, WetTopology};
 
 /// Serializable dynamic state (the checkpoint).
@@ -48,6 +49,10 @@ pub(super) struct ParticleTrial {
     pub(super) omega: [f64; 3],
     pub(super) angle: f64,
     pub(super) residual: f64,
+    /// The walls acted at the first half kick ([`crate::dem::walls`]); then `load` holds that
+    /// kick's force and torque (space frame), for the energy they took (`commit.rs`).
+    pub(super) held: bool,
+    pub(super) load: [[f64; 3]; 2],
 }
 
 /// Positions and velocities of a trial step (not yet committed).
@@ -128,6 +133,8 @@ pub struct Solid {
     pub(super) before_step: (Vec<[f64; 3]>, Vec<[f64; 4]>),
     /// The sub-steps of the step being computed (K = 1: none; `substep.rs`).
     pub(super) substeps: Substeps,
+    /// The fluid domain's walls, where they hold the solid (none: [`Solid::set_walls`]).
+    pub(super) walls: Walls,
 }
 
 /// The sub-steps of one coupling step (`Solid::begin_substeps`).

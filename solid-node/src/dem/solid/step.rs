@@ -10,6 +10,7 @@ use crate::dem::rattle::{compose, dmv_drift};
 use crate::dem::report::StepReport;
 use crate::dem::solid::orientation::{quat, quat_arr, rotate_body};
 use crate::dem::solid::state::{ParticleTrial, Solid, State, Trial};
+use crate::dem::walls::{Held, Walls};
 use crate::dem::wet::{write_connectivity, write_geometry};
 
 impl Solid {
@@ -78,9 +79,10 @@ impl Solid {
             self.gravity,
         );
         let damping = &self.state.contact_damping;
+        let walls = &self.walls;
         par_fill(self.pool.as_ref(), &mut self.particle_trial, |p| {
             let (f, t) = with_damping(damping, p, fi[p], ti[p]);
-            trial_particle(model, state, p, dt, f, t, fe[p], te[p], g)
+            trial_particle(model, state, walls, p, dt, (f, t), (fe[p], te[p]), g)
         });
     }
 
@@ -165,16 +167,16 @@ pub(super) fn with_damping(
 }
 
 /// First half kick and drift of one particle (003 eq. (4)–(7)).
+/// The walls act on the half-step velocities at `Xⁿ` ([`Walls::hold`]).
 #[allow(clippy::too_many_arguments)]
 fn trial_particle(
     model: &Model,
     state: &State,
+    walls: &Walls,
     p: usize,
     dt: f64,
-    f_int: [f64; 3],
-    t_int: [f64; 3],
-    f_ext: [f64; 3],
-    t_ext: [f64; 3],
+    (f_int, t_int): ([f64; 3], [f64; 3]),
+    (f_ext, t_ext): ([f64; 3], [f64; 3]),
     gravity: [f64; 3],
 ) -> ParticleTrial {
     let part = &model.particles[p];
@@ -198,12 +200,27 @@ fn trial_particle(
         ParticleMotion::Free => {}
     }
     let f = Vector3::from(f_int) + Vector3::from(f_ext) + Vector3::from(gravity) * part.mass;
-    let v_half = Vector3::from(state.v[p]) + f * (0.5 * dt / part.mass);
-    let x_new = x + v_half * dt;
+    let mut v_half = Vector3::from(state.v[p]) + f * (0.5 * dt / part.mass);
     let tau = Vector3::from(t_int) + Vector3::from(t_ext);
+    let mut ang_half = if model.dim == 3 {
+        let q = quat(&state.rot[p]);
+        Vector3::from(state.ang[p]) + q.inverse_transform_vector(&tau) * (0.5 * dt)
+    } else {
+        Vector3::new(
+            0.0,
+            0.0,
+            state.ang[p][2] + 0.5 * dt * tau.z / part.inertia[0],
+        )
+    };
+    let mut held = false;
+    if let Some(h) = hold(model, walls, p, &x, &state.rot[p], (v_half, ang_half)) {
+        (v_half, ang_half, held) = (h.v, h.ang, true);
+    }
+    let load = [f.into(), tau.into()];
+    let x_new = x + v_half * dt;
     if model.dim == 3 {
         let q = quat(&state.rot[p]);
-        let m_half = Vector3::from(state.ang[p]) + q.inverse_transform_vector(&tau) * (0.5 * dt);
+        let m_half = ang_half;
         let drift = dmv_drift(&m_half, &part.inertia, dt);
         let q_new = compose(&q, &drift.increment);
         let size = drift.increment.vector().norm().max(1e-300);
@@ -219,9 +236,11 @@ fn trial_particle(
             } else {
                 drift.residual
             },
+            held,
+            load,
         }
     } else {
-        let w_half = state.ang[p][2] + 0.5 * dt * tau.z / part.inertia[0];
+        let w_half = ang_half.z;
         let theta = state.rot[p][0] + dt * w_half;
         ParticleTrial {
             x: x_new.into(),
@@ -231,6 +250,37 @@ fn trial_particle(
             omega: [0.0, 0.0, w_half],
             angle: (dt * w_half).abs(),
             residual: 0.0,
+            held,
+            load,
         }
     }
+}
+
+/// [`Walls::hold`] for particle `p` at centre `x` and stored orientation `rot`, velocities
+/// `(v, ang)` in the state's convention.
+pub(super) fn hold(
+    model: &Model,
+    walls: &Walls,
+    p: usize,
+    x: &Vector3<f64>,
+    rot: &[f64; 4],
+    (v, ang): (Vector3<f64>, Vector3<f64>),
+) -> Option<Held> {
+    if walls.is_empty() {
+        return None;
+    }
+    let part = &model.particles[p];
+    let dim = model.dim;
+    let q = quat(rot);
+    let turn = |r: &Vector3<f64>| rotate_body(dim, rot, r);
+    let to_body = |n: &Vector3<f64>| q.inverse_transform_vector(n);
+    walls.hold(
+        dim,
+        p,
+        x,
+        &turn,
+        &to_body,
+        (part.mass, part.inertia, part.size),
+        (v, ang),
+    )
 }

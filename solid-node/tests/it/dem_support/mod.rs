@@ -39,6 +39,7 @@ pub fn box_config(
         init: vec![],
         prescribed: None,
         contact: None,
+        walls: None,
     }
 }
 
