@@ -36,41 +36,37 @@ fn bodies_reaching_the_walls_keep_every_invariant() {
     }
 }
 
-/// What the sample tolerates today (issue 35, open, `docs/corpus.md`): a rigid body at rest flush
-/// against walls drifts into them (its flush faces take no pressure and nothing holds it
-/// there). Every other outcome is a failure.
-fn open_defect(case: &corpus::Case, outcome: &Outcome) -> bool {
-    use corpus::{Kept, Placement};
-    matches!(outcome, Outcome::Drift(_))
-        && case.kept == Kept::Rest
-        && matches!(case.placement, Placement::Wall | Placement::Corner)
+/// Rigid boxes at rest flush against walls or in corners, 2-D and 3-D (issue 35 item 6, the
+/// rest state kept): the gas pushed them into the walls, whose flush faces take no pressure,
+/// and nothing held them (drift 3.5 % to 52 % of the state); the walls now hold the solid
+/// (`solid.walls`, `solid_node::dem::walls`). In a 3-D corner the box's faces lay within
+/// round-off of the sides, split across them, and the part beyond was lost to the flush faces:
+/// the gas moved at 0.24 c in the first step (seed 2003, `cutcell::clip::slab_range`).
+#[test]
+fn bodies_at_rest_flush_against_walls_and_in_corners_keep_the_gas_at_rest() {
+    for seed in [19, 147, 176, 2003] {
+        let (outcome, toml) = outcome(seed);
+        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
+    }
 }
 
 /// A fixed sample of the generator, seeds nobody looked at while the fixes were made (2000 to
-/// 2063): no case stops on a non-physical state, loses mass or breaks an energy balance, and
-/// every case keeps every invariant but for the open defects of [`open_defect`] (measured: 62
-/// of 64 keep every invariant; 2 drift).
+/// 2063): every case keeps every invariant (measured: 64 of 64; 62 before the walls held the
+/// solid, 2 drifting).
 #[test]
 fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
-    let (mut ok, mut open, mut failed) = (0, Vec::new(), Vec::new());
+    let mut failed = Vec::new();
     for seed in 2000..2064 {
         let (outcome, _) = outcome(seed);
-        let case = corpus::generate(seed);
-        if outcome == Outcome::Ok {
-            ok += 1;
-        } else if open_defect(&case, &outcome) {
-            open.push((seed, outcome));
-        } else {
+        if outcome != Outcome::Ok {
             failed.push((seed, outcome));
         }
     }
-    println!("{ok} of 64 keep every invariant; open defects: {open:?}");
     assert!(
         failed.is_empty(),
         "{} cases failed: {failed:?}",
         failed.len()
     );
-    assert!(ok >= 62, "{ok} of 64 keep every invariant");
 }
 
 /// Two touching lattices, with and without fracture, at rest or moving: the gap between them

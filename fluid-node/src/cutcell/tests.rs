@@ -158,3 +158,45 @@ fn a_polygon_in_a_grid_plane_up_to_round_off_splits_into_parts_that_add_up() {
     }
     assert!(a[0] > 0.0 && b[0] > 0.0, "{a:?} {b:?}");
 }
+
+/// A face of a box flush against the lower side y = 0 of the domain, its vertices at ±1e-17 of
+/// the plane (turned by the box's principal axes; corpus seed 2003): it lies wholly in the
+/// cells above the side, as an exact one does, whichever signs its vertices have; so does one
+/// on the upper side, beyond it, as the tie rule puts an exact one. A face 1e-9 off the side
+/// is cut as before.
+#[test]
+fn a_face_in_a_side_of_the_domain_up_to_round_off_lies_where_an_exact_one_does() {
+    let g = grid3();
+    let count = |poly: &Polygon, axis: usize| {
+        let mut slabs = Vec::new();
+        clip_polygon(&g, poly, &mut |cell, piece| {
+            let (m, _, _) = polygon_measures(piece, [0.0, -1.0, 0.0]);
+            slabs.push((cell[axis], m[1].abs()));
+        });
+        slabs
+    };
+    for ys in [
+        [-1e-17, 3e-18, 0.0],
+        [-1e-17, -3.5e-18, -2e-17],
+        [1e-17, 2e-17, 0.0],
+    ] {
+        let poly = Polygon::from_slice(&[
+            [0.05, ys[0], 0.05],
+            [0.35, ys[1], 0.05],
+            [0.35, ys[2], 0.25],
+        ]);
+        let pieces = count(&poly, 1);
+        assert!(pieces.iter().all(|p| p.0 == 0), "{ys:?}: {pieces:?}");
+        let area: f64 = pieces.iter().map(|p| p.1).sum();
+        assert!((area - 0.03).abs() < 1e-15, "{ys:?}: {area}");
+        let top = Polygon::from_slice(&[
+            [0.05, 1.0 + ys[0], 0.05],
+            [0.35, 1.0 + ys[1], 0.05],
+            [0.35, 1.0 + ys[2], 0.25],
+        ]);
+        assert!(count(&top, 1).iter().all(|p| p.0 == 10), "{ys:?}");
+    }
+    let off = Polygon::from_slice(&[[0.05, -1e-9, 0.05], [0.35, 1e-9, 0.05], [0.35, 0.0, 0.25]]);
+    let slabs: Vec<i32> = count(&off, 1).iter().map(|p| p.0).collect();
+    assert!(slabs.contains(&-1) && slabs.contains(&0), "{slabs:?}");
+}

@@ -292,16 +292,25 @@ impl Embedded {
 
     /// Solid faces flush against the domain boundary: `(cell, 2 axis + side, area)`, sorted.
     fn flush_faces(&self) -> Vec<(usize, usize, f64)> {
-        let mut flush: Vec<(usize, usize, f64)> = Vec::new();
+        let mut pieces: Vec<(usize, usize, f64)> = Vec::new();
         for s in &self.scratch.trial.subfaces {
             if let Some((a, side)) = domain_face(&self.config.grid, s) {
-                match flush.last_mut() {
-                    Some(f) if f.0 == s.cell as usize && f.1 == 2 * a + side => f.2 += s.area,
-                    _ => flush.push((s.cell as usize, 2 * a + side, s.area)),
-                }
+                pieces.push((s.cell as usize, 2 * a + side, s.area));
             }
         }
-        flush.sort_by_key(|f| (f.0, f.1));
+        // NOTE: the pieces of one domain face need not be consecutive (two triangles of a flush
+        // box face, and the flush faces of a body in a corner, in one cell): merging only
+        // consecutive ones before sorting left duplicates, of which the search took one, and a
+        // box at rest in a 3-D corner set the gas moving at 0.24 c in its first step (corpus
+        // seed 2003).
+        pieces.sort_by_key(|f| (f.0, f.1));
+        let mut flush: Vec<(usize, usize, f64)> = Vec::with_capacity(pieces.len());
+        for (cell, face, area) in pieces {
+            match flush.last_mut() {
+                Some(f) if f.0 == cell && f.1 == face => f.2 += area,
+                _ => flush.push((cell, face, area)),
+            }
+        }
         flush
     }
 
