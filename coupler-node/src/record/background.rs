@@ -9,7 +9,22 @@
 //! of the last step written. A write error ends the thread and comes back at the next call,
 //! with the committed bytes to cut the record back to.
 
+//! The record written on a thread of its own: the coupler hands each step over whole and goes
+//! on, while the thread serialises, compresses and writes its chunk (issue 39 item 4:
+//! recording off the coupler's thread).
+//!
+//! The calls are those of [`Recorder`], in the same order, so the file holds the same bytes.
+//! The coupler's thread only copies each message into the open step ([`Batch`], one buffer for
+//! the step's bytes, reused from step to step, so a run allocates and faults in its pages once)
+//! and hands the step over at [`Background::end_step`]: one hand-over and one wake-up of the
+//! record's thread per step, not one per message. [`Background::end_step`] lets at most one
+//! step be in flight: it returns once the step before it is written (the step's chunk and the
+//! provisional end), so a killed run loses at most the step it was writing, as before plus one,
+//! and [`Background::committed`] is the end of the last step written. A write error ends the
+//! thread and comes back at the next step, with the committed bytes to cut the record back to.
+
 use std::io::{BufWriter, Write};
+use std::ops::Range;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::JoinHandle;
 
@@ -17,23 +32,50 @@ use protocol::wire::NodeKind;
 
 use super::{RecordError, Recorder};
 
-/// Messages handed over and not yet written, at most (about one step of the largest scenes:
-/// a step of `clamped-beam-2d` records 27).
-const QUEUE: usize = 64;
+/// Steps handed over and not yet written, at most (one in flight, one returned buffer).
+const QUEUE: usize = 4;
+
+/// One message of a step: what [`Recorder`] is called with, its bytes a range of
+/// [`Batch::bytes`].
+enum Item {
+    Frame(NodeKind, NodeKind, f64, u64, Range<usize>),
+    Checkpoint(NodeKind, f64, u64, Range<usize>),
+    Diagnostics(f64, u64, Range<usize>),
+    Views(std::path::PathBuf, u32, f64, Vec<[u32; 2]>),
+}
+
+/// The messages of one step, in the order they were handed over, and their bytes end to end.
+#[derive(Default)]
+struct Batch {
+    items: Vec<Item>,
+    bytes: Vec<u8>,
+}
+
+impl Batch {
+    /// Copies `data` to the end of the step's bytes; returns where it lies.
+    fn push(&mut self, data: &[u8]) -> Range<usize> {
+        let at = self.bytes.len();
+        self.bytes.extend_from_slice(data);
+        at..self.bytes.len()
+    }
+
+    fn clear(&mut self) {
+        self.items.clear();
+        self.bytes.clear();
+    }
+}
 
 enum Job {
-    Frame(NodeKind, NodeKind, f64, u64, Vec<u8>),
-    Checkpoint(NodeKind, f64, u64, Vec<u8>),
-    Diagnostics(f64, u64, Vec<u8>),
-    Views(std::path::PathBuf, u32, f64, Vec<[u32; 2]>),
-    EndStep,
+    /// A step's messages; `true`: then [`Recorder::end_step`] (a step's end), `false`: the
+    /// messages of a step that will not end (before a finish).
+    Step(Batch, bool),
     Finish,
 }
 
 /// What the thread says after each step, and at the end.
 enum Done {
-    /// A step written: the record's committed bytes.
-    Step(u64),
+    /// A step written: the record's committed bytes, and the step's emptied batch for reuse.
+    Step(u64, Batch),
     /// The record finished (summary and footer written).
     Finished,
     /// A write failed: the error, and the bytes of the last complete step.
@@ -45,6 +87,10 @@ pub struct Background<W: Write + std::io::Seek + Send + 'static> {
     jobs: Option<SyncSender<Job>>,
     done: Receiver<Done>,
     worker: Option<JoinHandle<Option<W>>>,
+    /// The step being handed over.
+    open: Batch,
+    /// An emptied batch back from the thread, the next step's.
+    spare: Option<Batch>,
     /// Steps handed over and not yet written.
     in_flight: usize,
     committed: u64,
@@ -63,6 +109,8 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             jobs: Some(jobs),
             done,
             worker: Some(worker),
+            open: Batch::default(),
+            spare: None,
             in_flight: 0,
             committed: 0,
         }
@@ -77,7 +125,11 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), RecordError> {
-        self.send(Job::Frame(from, to, t, wall_ns, frame.to_vec()))
+        let bytes = self.open.push(frame);
+        self.open
+            .items
+            .push(Item::Frame(from, to, t, wall_ns, bytes));
+        Ok(())
     }
 
     /// [`Recorder::record_checkpoint`].
@@ -88,7 +140,11 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         wall_ns: u64,
         frame: &[u8],
     ) -> Result<(), RecordError> {
-        self.send(Job::Checkpoint(node, t, wall_ns, frame.to_vec()))
+        let bytes = self.open.push(frame);
+        self.open
+            .items
+            .push(Item::Checkpoint(node, t, wall_ns, bytes));
+        Ok(())
     }
 
     /// [`Recorder::record_diagnostics`].
@@ -98,7 +154,9 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         wall_ns: u64,
         json: &[u8],
     ) -> Result<(), RecordError> {
-        self.send(Job::Diagnostics(t, wall_ns, json.to_vec()))
+        let bytes = self.open.push(json);
+        self.open.items.push(Item::Diagnostics(t, wall_ns, bytes));
+        Ok(())
     }
 
     /// [`Recorder::record_views`]: the files are read and converted on the record's thread.
@@ -109,12 +167,17 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         t: f64,
         broken: &[[u32; 2]],
     ) -> Result<(), RecordError> {
-        self.send(Job::Views(dir.to_path_buf(), k, t, broken.to_vec()))
+        self.open
+            .items
+            .push(Item::Views(dir.to_path_buf(), k, t, broken.to_vec()));
+        Ok(())
     }
 
-    /// [`Recorder::end_step`], handed over; returns once the step before it is written.
+    /// [`Recorder::end_step`]: hands the step over; returns once the step before it is written.
     pub fn end_step(&mut self) -> Result<(), RecordError> {
-        self.send(Job::EndStep)?;
+        let next = self.spare.take().unwrap_or_default();
+        let step = std::mem::replace(&mut self.open, next);
+        self.send(Job::Step(step, true))?;
         self.in_flight += 1;
         while self.in_flight > 1 {
             self.wait()?;
@@ -127,13 +190,15 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         self.committed
     }
 
-    /// Writes every step handed over, then the summary and footer; returns the writer.
+    /// Writes every step handed over (and the messages of a step not ended), then the summary
+    /// and footer; returns the writer.
     pub fn finish(mut self) -> Result<W, RecordError> {
+        self.hand_over_the_rest()?;
         self.send(Job::Finish)?;
         self.jobs = None;
         loop {
             match self.done.recv() {
-                Ok(Done::Step(bytes)) => self.committed = bytes,
+                Ok(Done::Step(bytes, _)) => self.committed = bytes,
                 Ok(Done::Finished) => break,
                 Ok(Done::Failed(err, bytes)) => {
                     self.committed = bytes;
@@ -147,6 +212,15 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             .and_then(|w| w.join().ok())
             .flatten()
             .ok_or_else(gone)
+    }
+
+    /// Hands over the messages of a step that did not end, if any.
+    fn hand_over_the_rest(&mut self) -> Result<(), RecordError> {
+        if self.open.items.is_empty() {
+            return Ok(());
+        }
+        let rest = std::mem::take(&mut self.open);
+        self.send(Job::Step(rest, false))
     }
 
     fn send(&mut self, job: Job) -> Result<(), RecordError> {
@@ -179,9 +253,10 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
 
     fn take(&mut self, done: Done) -> Result<(), RecordError> {
         match done {
-            Done::Step(bytes) => {
+            Done::Step(bytes, batch) => {
                 self.committed = bytes;
                 self.in_flight = self.in_flight.saturating_sub(1);
+                self.spare = Some(batch);
                 Ok(())
             }
             Done::Finished => Ok(()),
@@ -198,6 +273,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Drop for Background<W> {
     fn drop(&mut self) {
         // Dropped without `finish` (a run that ends on an error): the thread writes what it was
         // handed, then the summary, as the recorder's own drop did.
+        let _ = self.hand_over_the_rest();
         self.jobs = None;
         if let Some(worker) = self.worker.take() {
             let _ = worker.join();
@@ -216,36 +292,23 @@ fn work<W: Write + std::io::Seek>(
     queue: &Receiver<Job>,
     tell: &SyncSender<Done>,
 ) -> Option<W> {
-    while let Ok(job) = queue.recv() {
-        let done = match job {
-            Job::Frame(from, to, t, wall, bytes) => recorder
-                .record_frame(from, to, t, wall, &bytes)
-                .map(|()| None),
-            Job::Checkpoint(node, t, wall, bytes) => recorder
-                .record_checkpoint(node, t, wall, &bytes)
-                .map(|()| None),
-            Job::Diagnostics(t, wall, bytes) => {
-                recorder.record_diagnostics(t, wall, &bytes).map(|()| None)
-            }
-            Job::Views(dir, k, t, broken) => {
-                recorder.record_views(&dir, k, t, &broken).map(|()| None)
-            }
-            Job::EndStep => recorder
-                .end_step()
-                .map(|()| Some(Done::Step(recorder.committed()))),
-            Job::Finish => break,
-        };
-        match done {
-            Ok(None) => {}
-            Ok(Some(step)) => {
-                let _ = tell.send(step);
-            }
-            Err(err) => {
-                let committed = recorder.committed();
-                std::mem::forget(recorder);
-                let _ = tell.send(Done::Failed(err, committed));
-                return None;
-            }
+    while let Ok(Job::Step(mut batch, end)) = queue.recv() {
+        let mut done = batch
+            .items
+            .drain(..)
+            .try_for_each(|item| write_item(&mut recorder, &batch.bytes, item));
+        if end {
+            done = done.and_then(|()| recorder.end_step());
+        }
+        if let Err(err) = done {
+            let committed = recorder.committed();
+            std::mem::forget(recorder);
+            let _ = tell.send(Done::Failed(err, committed));
+            return None;
+        }
+        if end {
+            batch.clear();
+            let _ = tell.send(Done::Step(recorder.committed(), batch));
         }
     }
     let committed = recorder.committed();
@@ -262,5 +325,21 @@ fn work<W: Write + std::io::Seek>(
             let _ = tell.send(Done::Failed(err, committed));
             None
         }
+    }
+}
+
+/// Writes one message of a step.
+fn write_item<W: Write + std::io::Seek>(
+    recorder: &mut Recorder<W>,
+    bytes: &[u8],
+    item: Item,
+) -> Result<(), RecordError> {
+    match item {
+        Item::Frame(from, to, t, wall, at) => recorder.record_frame(from, to, t, wall, &bytes[at]),
+        Item::Checkpoint(node, t, wall, at) => {
+            recorder.record_checkpoint(node, t, wall, &bytes[at])
+        }
+        Item::Diagnostics(t, wall, at) => recorder.record_diagnostics(t, wall, &bytes[at]),
+        Item::Views(dir, k, t, broken) => recorder.record_views(&dir, k, t, &broken),
     }
 }

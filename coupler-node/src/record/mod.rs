@@ -57,8 +57,9 @@
 //! `make_reader`, the mcap crate's `MessageStream`) read up to the last completed step; only a
 //! kill during the write itself leaves one unfinished record at the end. [`Recorder::finish`]
 //! writes the real data end, summary and footer over the provisional end. In a run the
-//! recorder works on a thread of its own ([`Background`]): the coupler hands each message over
-//! and goes on, and waits at the end of a step for the step before it to be written.
+//! recorder works on a thread of its own ([`Background`]): the coupler copies each message into
+//! the open step, hands the step over whole at its end, and waits then for the step before it
+//! to be written; the thread builds, compresses (zstd level -1 by default) and writes the chunk.
 //!
 //! # Reading
 //!

@@ -22,6 +22,7 @@ use protocol::mcap_read::{End, PROVISIONAL_END, ScanError};
 use protocol::scene::{RecordCompression, RecordLevel};
 use protocol::wire::*;
 
+mod background;
 mod damaged;
 mod export;
 

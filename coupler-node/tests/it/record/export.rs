@@ -212,3 +212,63 @@ fn the_streamed_table_is_the_table_read_in_any_pieces() {
     assert!(expected.len() > 1 && summary.messages > 0);
     assert_eq!(summary.steps, Some((0, 3)));
 }
+
+/// An uncompressed record of `n_steps` steps, each with a fluid checkpoint of `cp_bytes` bytes.
+fn record_with_checkpoints(n_steps: u64, cp_bytes: usize) -> Vec<u8> {
+    let mut rec = Recorder::new(
+        Cursor::new(Vec::new()),
+        RecordLevel::Exchange,
+        RecordCompression::None,
+        "unit-scene",
+        SCENE,
+    )
+    .unwrap();
+    for step in 0..n_steps {
+        record_step(&mut rec, step);
+        let cp = Message::Checkpoint(Checkpoint {
+            stamp: Stamp::step(step),
+            node: NodeKind::Fluid,
+            bytes: vec![step as u8; cp_bytes],
+        });
+        let frame = codec::encode(NodeKind::Fluid, &cp);
+        rec.record_checkpoint(NodeKind::Fluid, step_start(step), 0, &frame)
+            .unwrap();
+        rec.end_step().unwrap();
+    }
+    rec.finish().unwrap().into_inner()
+}
+
+/// Issue 39, item 5: the streamed export holds the same heap whatever the record's size, a few
+/// times its largest message: a checkpoint's bytes never become JSON numbers (2 MB of bytes held
+/// 64 MB as a `serde_json::Value` array, the 105 MB peak of `inspect --export csv` on the
+/// 310 MB record of `clamped-beam-2d`).
+#[test]
+fn the_streamed_export_holds_the_same_memory_whatever_the_record_size() {
+    let cp = 2 << 20;
+    let peak = |n_steps: u64| {
+        let bytes = record_with_checkpoints(n_steps, cp);
+        let (summary, peak) = crate::peak::peak_of(|| {
+            stream_table(&bytes[..], &TableFilter::default(), &mut std::io::sink()).unwrap()
+        });
+        assert_eq!(summary.steps, Some((0, n_steps - 1)));
+        (bytes.len(), peak)
+    };
+    let (small_len, small) = peak(3);
+    let (big_len, big) = peak(12);
+    assert!(big_len > 3 * small_len);
+    // Measured: 9.5 MB for the 6.3 MB and the 25 MB record (the 1 MiB read buffer, the
+    // record's bytes and the chunk read from them, the message and its decoded frame); 76.6 MB
+    // for both before the checkpoint's bytes were kept out of JSON.
+    assert!(
+        big <= 8 * cp,
+        "{big} bytes held for a record of {big_len} bytes (largest message {cp} bytes)"
+    );
+    assert!(
+        big.abs_diff(small) <= cp / 2,
+        "{small} bytes held for {small_len} record bytes, {big} for {big_len}"
+    );
+    // The checkpoint shows as its length in the JSON export.
+    let rec = read_recording(&record_with_checkpoints(1, 10)).unwrap();
+    let json = export_step(&rec, 0, ExportFormat::Json).unwrap();
+    assert!(json.contains("\"bytes\": \"<10 bytes>\""), "{json}");
+}
