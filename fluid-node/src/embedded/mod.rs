@@ -65,6 +65,7 @@ mod correct;
 mod crack;
 mod error;
 mod frame;
+mod levers;
 mod loads;
 mod memory;
 mod mix;
