@@ -14,9 +14,10 @@
 //!     r = ½ [(X_f − X^{n+1}) + (X_f^n − X^n)],
 //!
 //! `X_f^n` the preimage of the sub-face's centroid on its element at `t^n` (same barycentric
-//! coordinates, as the swept prisms take it): the torque is the trapezoid's, `s (θ^n + θ^{n+1})/2`,
-//! which gives no work over a cycle, and `V̄ + Ω̄ × r` is the face point's mean velocity over the
-//! step to O(φ³) for a rigid motion (`V̄`, `Ω̄` the step's mean motion the solid sends).
+//! coordinates, as the swept prisms take it): the torque is the trapezoid's,
+//! `s (θ^n + θ^{n+1})/2`, whose work over the step, `s (θ^{n+1}² − θ^n²)/2`, telescopes, and
+//! `V̄ + Ω̄ × r` is the face point's mean velocity over the step to O(φ³) for a rigid motion
+//! (`V̄`, `Ω̄` the step's mean motion the solid sends).
 
 use std::borrow::Cow;
 
