@@ -218,7 +218,7 @@ impl std::fmt::Display for CheckSummary {
             Some(SolidSubsteps::Auto(_)) => {
                 write!(
                     f,
-                    ", solid sub-steps auto (per step: dt over the solid's stable step, at most {MAX_SOLID_SUBSTEPS}"
+                    ", solid sub-steps auto (per step: dt over half the solid's stable step, at most {MAX_SOLID_SUBSTEPS}"
                 )?;
                 match &self.first_substeps {
                     Some(FirstSubsteps::Expected {

@@ -56,8 +56,8 @@ pub enum StepError {
     },
     /// `run.solid_substeps = "auto"` would need more sub-steps than allowed.
     #[error(
-        "step {step}: dt {dt:?} s needs {needed} solid sub-steps of at most {bound:?} s (the \
-         stable step set by particle {particle}), more than {max}"
+        "step {step}: dt {dt:?} s needs {needed} solid sub-steps of at most {bound:?} s (half \
+         the stable step set by particle {particle}), more than {max}"
     )]
     TooManySubsteps {
         /// Coupling step.

@@ -4,7 +4,9 @@
 use std::io::Write;
 use std::path::Path;
 
-use protocol::scene::{MAX_SOLID_SUBSTEPS, OutputFormat, Scene, SolidSubsteps, SolidWalls};
+use protocol::scene::{
+    AUTO_SUBSTEP_FRACTION, MAX_SOLID_SUBSTEPS, OutputFormat, Scene, SolidSubsteps, SolidWalls,
+};
 use protocol::session::{NodeModel, StepLimit};
 use protocol::vtk::Series;
 use protocol::wire::{
@@ -333,7 +335,8 @@ impl SolidModel for RealSolid {
             .map_err(|needed| StepError::TooManySubsteps {
                 step: plan.stamp.step,
                 dt: plan.dt,
-                bound,
+                // Only "auto" runs out: its sub-steps stay within this part of the bound.
+                bound: bound * AUTO_SUBSTEP_FRACTION,
                 needed,
                 max: MAX_SOLID_SUBSTEPS,
                 particle: self.solid.elastic_dt_limit().1.0,

@@ -45,7 +45,7 @@ pub enum CouplerError {
     /// `run.solid_substeps = "auto"` would need more sub-steps than allowed.
     #[error(
         "step {step} (t = {t:e}): dt {dt:e} s needs {needed} solid sub-steps of at most {bound:e} s \
-         ({limiter}), more than {max}"
+         (half the stable step of {limiter}), more than {max}"
     )]
     TooManySubsteps {
         /// Step.

@@ -6,7 +6,7 @@ use protocol::wire::{
     NodeKind, Scheme, Shutdown, ShutdownReason, SolidState, Stamp, StepPlan,
 };
 
-use protocol::scene::{MAX_SOLID_SUBSTEPS, SolidSubsteps};
+use protocol::scene::{AUTO_SUBSTEP_FRACTION, MAX_SOLID_SUBSTEPS, SolidSubsteps};
 
 use crate::dt::{self, Agreed, Proposal};
 use crate::scheme::action::{Action, Finish, StepReport};
@@ -129,7 +129,8 @@ impl Coupler {
                 step: self.step,
                 t: self.t,
                 dt,
-                bound: bound.dt_max,
+                // Only "auto" runs out: its sub-steps stay within this part of the bound.
+                bound: bound.dt_max * AUTO_SUBSTEP_FRACTION,
                 limiter: format!("{}:{}", bound.node.name(), bound.limiter),
                 needed,
                 max: MAX_SOLID_SUBSTEPS,

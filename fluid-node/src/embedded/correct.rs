@@ -12,6 +12,7 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
+use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{Surface, compute, face_index, subface_swept_volumes};
@@ -462,8 +463,9 @@ impl Embedded {
 
     /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`.
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
-    /// 7). Explicit: on those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads
-    /// came from, so that the exchange balances exactly.
+    /// 7), or with the mid-step levers of [`Levers`] (the same as the loads'). Explicit: on
+    /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
+    /// that the exchange balances exactly.
     fn solid_flux(
         &mut self,
         dt: f64,
@@ -490,6 +492,9 @@ impl Embedded {
         } else {
             (&self.scratch.trial, accepted)
         };
+        // Explicit: on `F^n`, the surface of the solid's loads, at its end.
+        let mid = self.config.mid_step_levers && !explicit;
+        let levers = Levers::new(mid, &self.state.current, flux_frame);
         let mut sum = std::mem::take(&mut self.scratch.odd);
         sum.clear();
         for s in &flux_geom.subfaces {
@@ -510,12 +515,7 @@ impl Embedded {
                 pi[a] = self.near.hooks.pressures[a][kp] * s.normal[a] * s.area;
             }
             let p = s.particle as usize;
-            let x = flux_frame.center(p);
-            let r = [
-                s.centroid[0] - x[0],
-                s.centroid[1] - x[1],
-                s.centroid[2] - x[2],
-            ];
+            let r = levers.lever(s);
             let w = accepted.rigid_velocity(p, r);
             let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
             for a in 0..dim {

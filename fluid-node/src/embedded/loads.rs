@@ -5,6 +5,7 @@ use protocol::sum::OddSum;
 
 use super::cells::{domain_face, pressure_cell, touches_gas};
 use super::error::Reach;
+use super::levers::Levers;
 use super::{Embedded, EmbeddedError, SolidFrame};
 use crate::cutcell::compute;
 
@@ -19,8 +20,8 @@ pub struct Loads {
 
 impl Embedded {
     /// Force and torque per particle from `p̄` over the wet sub-faces of a trial surface
-    /// (eq. 23–25 of paper 003; torques about the trial centres of mass). The error names no
-    /// step: the caller adds it ([`EmbeddedError::at_step`]).
+    /// (eq. 23–25 of paper 003; torques about the trial centres of mass, with the lever arms
+    /// of [`Levers`]). The error names no step: the caller adds it ([`EmbeddedError::at_step`]).
     pub fn loads(&mut self, trial: &SolidFrame) -> Result<Loads, EmbeddedError> {
         let grid = &self.config.grid;
         let d = grid.dim;
@@ -28,6 +29,7 @@ impl Embedded {
         let np = trial.n_particles();
         compute(grid, &trial.surface(), &mut self.scratch.trial);
         let geom = &self.scratch.trial;
+        let levers = Levers::new(self.config.mid_step_levers, &self.state.current, trial);
         let mut loads = Loads {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],
@@ -56,12 +58,7 @@ impl Embedded {
             for a in 0..d {
                 sum.push(p * d + a, f[a]);
             }
-            let x = trial.center(p);
-            let r = [
-                s.centroid[0] - x[0],
-                s.centroid[1] - x[1],
-                s.centroid[2] - x[2],
-            ];
+            let r = levers.lever(s);
             push_moment(&mut sum, np * d, d, p, r, f);
         }
         add_loads(&mut sum, &mut loads, np * d);

@@ -48,13 +48,16 @@
 //! - Vacuum where nothing can reach (paper 000 §3.2 extended): a cell covered at t^n whose face
 //!   neighbours are all covered or beyond the domain is sealed; what the solid uncovers of it
 //!   holds vacuum, as a crack does (`crack.rs`, docs/cut-cells.md).
+//! - With the solid sub-cycled (`run.solid_substeps` other than 1) and the semi-implicit scheme,
+//!   the torques' lever arms, in the loads and the solid flux alike, are taken at mid-step
+//!   (`levers.rs`, docs/subcycling.md): held over a long step, the end surface's led the motion.
 //!
 //! The files follow the step: `state` (configuration, what persists between steps, the step's
 //! near-surface data and the scratch, apart), `frame` (the solid as the core sees it), `cells`
 //! (per-cell helpers every stage uses), `near_wall` (the wall in a near cell, for the ghost
-//! states), `predict` (step 1), `loads` (step 2), `crack` (cells a crack opens), `correct`
-//! (eq. 12 and the solid flux), `mix` (small-cell mixing), `beyond` (elements beyond the domain),
-//! `memory` (heap bytes by part) and `error`.
+//! states), `predict` (step 1), `loads` (step 2), `levers` (the loads' lever arms), `crack`
+//! (cells a crack opens), `correct` (eq. 12 and the solid flux), `mix` (small-cell mixing),
+//! `beyond` (elements beyond the domain), `memory` (heap bytes by part) and `error`.
 
 // Index loops over the axes read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
@@ -65,6 +68,7 @@ mod correct;
 mod crack;
 mod error;
 mod frame;
+mod levers;
 mod loads;
 mod memory;
 mod mix;

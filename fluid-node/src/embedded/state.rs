@@ -40,6 +40,9 @@ pub(super) struct Config {
     /// Whether cracks may open in the solid (`[solid] fracture`, or separate bodies that touch
     /// and part): faces between two cells covered at t^n then carry no flux in the correct.
     pub(super) fracture: bool,
+    /// Whether the semi-implicit loads and solid flux take their lever arms at mid-step
+    /// (`levers.rs`; set with `run.solid_substeps` other than 1).
+    pub(super) mid_step_levers: bool,
     pub(super) grid: Grid,
     /// Ghost cells of the sweeps' stencil.
     pub(super) ng: usize,
@@ -158,6 +161,7 @@ impl Embedded {
             },
             config: Config {
                 fracture: false,
+                mid_step_levers: false,
                 ng: params.ghost_cells(),
                 gamma: params.gamma,
                 vacuum: (params.vacuum_rho, params.vacuum_p),
@@ -193,6 +197,12 @@ impl Embedded {
     /// face 2.6e-5 open, the mirror of the gas beyond the wall, and went negative).
     pub fn set_fracture(&mut self, fracture: bool) {
         self.config.fracture = fracture;
+    }
+
+    /// Declares that the semi-implicit loads and solid flux take their lever arms at mid-step
+    /// (`levers.rs`): the loads held over a long coupling step then no longer lead the motion.
+    pub fn set_mid_step_levers(&mut self, mid: bool) {
+        self.config.mid_step_levers = mid;
     }
 
     /// Replaces the accepted surface and kinematics (start of a run, or after a restore).

@@ -1,5 +1,6 @@
-//! A body whose faces lie within round-off of grid planes: the loads of a trial surface are
-//! continuous as it crosses a plane (issue 37, the thin shell's fixed point).
+//! Issue 37, the thin shell: a body whose faces lie within round-off of grid planes (the loads
+//! of a trial surface are continuous as it crosses a plane, the fixed point), and the mid-step
+//! levers of the sub-cycled semi-implicit loads (`embedded/levers.rs`).
 
 use crate::embedded_support;
 
@@ -66,5 +67,60 @@ fn the_load_is_continuous_across_the_grid_plane_beside_one_covered_cell() {
         "before {:.17e}, after {:.17e}",
         before.force[0],
         after.force[0]
+    );
+}
+
+/// A particle of a thin shell, 0.06 m thick and 0.36 m high, wet on its two long faces only (the
+/// short ones face its neighbours); `shear` slides the right face up and the left one down by
+/// it, as the mean-vertex wet surface does when the shell's particles turn together by
+/// `θ = asin(2 shear / thickness)`. The centre stays at (0.44, 0.5).
+fn shell_particle(shear: f64) -> fluid_node::embedded::SolidFrame {
+    let (x0, x1, y0, y1) = (0.41, 0.47, 0.32, 0.68);
+    let mut frame = polygon_2d(
+        &[
+            [x0, y0 - shear],
+            [x1, y0 + shear],
+            [x1, y1 + shear],
+            [x0, y1 - shear],
+        ],
+        [0.0, 0.0],
+        0.0,
+    );
+    frame.position = vec![0.44, 0.5];
+    // Elements: bottom, right, top, left.
+    frame.wet = vec![false, true, false, true];
+    frame
+}
+
+#[test]
+fn mid_step_levers_give_the_mean_of_the_end_torques_of_f_n_and_f_n_plus_1() {
+    // Issue 37: a pressure p on the two long faces, slid by ±δ, torques the particle by
+    // p h 2δ in the sense it turns, a negative stiffness; taken on the end surface and held
+    // over the step it leads the motion. The mid-step levers take the trapezoid's torque.
+    let mut solver = solver(&at_rest_in_unit_box("levers", &[20, 20]));
+    let mut embedded = Embedded::new(&solver, shell_particle(0.0)).unwrap();
+    let dt = 0.1 * solver.max_dt();
+    let report = embedded.predict(&mut solver, dt);
+    assert!(report.ok(), "predict: {:?}", report.troubles);
+    let delta = 0.004;
+    let on_n = embedded.loads(&shell_particle(0.0)).unwrap();
+    let end = embedded.loads(&shell_particle(delta)).unwrap();
+    embedded.set_mid_step_levers(true);
+    let mid = embedded.loads(&shell_particle(delta)).unwrap();
+    println!(
+        "torque on F^n {:e}, on F^(n+1): end levers {:e}, mid-step {:e}",
+        on_n.torque[0], end.torque[0], mid.torque[0]
+    );
+    // Gas at rest: p̄ = 1 to round-off; the end torque p h 2δ.
+    assert!(on_n.torque[0].abs() <= 1e-15, "{:e}", on_n.torque[0]);
+    assert!((end.torque[0] - 0.36 * 2.0 * delta).abs() <= 1e-15);
+    // The levers move no force, and the mid-step torque is the mean of the end ones.
+    assert_eq!(mid.force, end.force);
+    let mean = 0.5 * (on_n.torque[0] + end.torque[0]);
+    assert!(
+        (mid.torque[0] - mean).abs() <= 1e-15,
+        "mid {:.17e}, mean {:.17e}",
+        mid.torque[0],
+        mean
     );
 }

@@ -30,8 +30,9 @@ pub use memory::{MemoryError, MemoryEstimate, RecordEstimate};
 pub use output::{OutputConfig, OutputFormat, ProbeConfig};
 pub use region::Region;
 pub use run::{
-    DT_MIN_OF_T_END, DT_MIN_RELATIVE, MAX_SOLID_SUBSTEPS, Predictor, RECORD_MIN_BYTES,
-    RecordCompression, RecordLevel, Relaxation, RunConfig, SchemeName, SolidSubsteps,
+    AUTO_SUBSTEP_FRACTION, DT_MIN_OF_T_END, DT_MIN_RELATIVE, MAX_SOLID_SUBSTEPS, Predictor,
+    RECORD_MIN_BYTES, RecordCompression, RecordLevel, Relaxation, RunConfig, SchemeName,
+    SolidSubsteps,
 };
 pub use solid::{
     BodyConfig, BoxSpec, ConstraintConfig, ContactConfig, FaceInertia, FractureConfig, LinksConfig,

@@ -1,6 +1,6 @@
 //! `run.solid_substeps`: parsing, validation and the K a step takes (docs/subcycling.md).
 
-use protocol::scene::{MAX_SOLID_SUBSTEPS, Scene, SolidSubsteps};
+use protocol::scene::{AUTO_SUBSTEP_FRACTION, MAX_SOLID_SUBSTEPS, Scene, SolidSubsteps};
 
 fn run_with(value: &str) -> Result<Scene, String> {
     let line = if value.is_empty() {
@@ -31,18 +31,21 @@ fn the_key_takes_an_integer_from_1_to_256_or_auto() {
 }
 
 #[test]
-fn auto_takes_the_smallest_k_whose_sub_step_is_within_the_bound() {
+fn auto_takes_the_smallest_k_whose_sub_step_is_within_half_the_bound() {
+    assert_eq!(AUTO_SUBSTEP_FRACTION, 0.5);
     let auto = SolidSubsteps::AUTO;
+    assert_eq!(auto.for_step(1.0, 4.0), Ok(1));
     assert_eq!(auto.for_step(1.0, 2.0), Ok(1));
-    assert_eq!(auto.for_step(1.0, 1.0), Ok(1));
-    assert_eq!(auto.for_step(1.0, 0.5), Ok(2));
-    assert_eq!(auto.for_step(1.0, 0.4999), Ok(3));
+    assert_eq!(auto.for_step(1.0, 1.0), Ok(2));
+    assert_eq!(auto.for_step(1.0, 0.5), Ok(4));
+    assert_eq!(auto.for_step(1.0, 0.4999), Ok(5));
     assert_eq!(auto.for_step(1.0, f64::INFINITY), Ok(1));
     // Thin-shell's numbers: the fluid's 1.68e-4 s over the solid's 1.5e-5 s.
     let (dt, bound) = (1.6849455e-4, 1.5038e-5);
     let k = auto.for_step(dt, bound).expect("within 256");
+    let half = bound * AUTO_SUBSTEP_FRACTION;
     assert!(
-        dt / f64::from(k) <= bound && dt / f64::from(k - 1) > bound,
+        dt / f64::from(k) <= half && dt / f64::from(k - 1) > half,
         "{k}"
     );
     for (dt, bound) in [
@@ -51,12 +54,13 @@ fn auto_takes_the_smallest_k_whose_sub_step_is_within_the_bound() {
         (1e-3, 1e-3 / 7.0),
         (3.3e-5, 1.1e-6),
     ] {
+        let half = bound * AUTO_SUBSTEP_FRACTION;
         let k = auto.for_step(dt, bound).expect("within 256");
-        assert!(dt / f64::from(k) <= bound, "{dt} {bound} {k}");
-        assert!(k == 1 || dt / f64::from(k - 1) > bound, "{dt} {bound} {k}");
+        assert!(dt / f64::from(k) <= half, "{dt} {bound} {k}");
+        assert!(k == 1 || dt / f64::from(k - 1) > half, "{dt} {bound} {k}");
     }
-    assert_eq!(auto.for_step(1.0, 1.0 / 256.0), Ok(MAX_SOLID_SUBSTEPS));
-    assert_eq!(auto.for_step(1.0, 1.0 / 1000.0), Err(1000));
+    assert_eq!(auto.for_step(1.0, 1.0 / 128.0), Ok(MAX_SOLID_SUBSTEPS));
+    assert_eq!(auto.for_step(1.0, 1.0 / 1000.0), Err(2000));
     assert_eq!(auto.for_step(1.0, 0.0), Err(u64::MAX));
     assert_eq!(SolidSubsteps::Fixed(5).for_step(1.0, 1e-9), Ok(5));
 }
