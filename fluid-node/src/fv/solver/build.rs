@@ -12,6 +12,7 @@ use crate::fv::line::{FluxKind, LineScratch};
 use crate::fv::scene::{ConfigError, from_scene};
 use crate::fv::slab::{Slab, SlabError};
 use crate::fv::solver::hooks::LocalHooks;
+use crate::fv::solver::pages;
 use crate::fv::state::{FluidParams, FluidState};
 use crate::fv::sweep::PencilOut;
 use crate::grid::Grid;
@@ -183,12 +184,14 @@ impl FluidSolver {
             .map(|a| grid.n_cells() / grid.cells[a])
             .max()
             .unwrap_or(1);
+        let mut state = state;
+        state.u = pages::huge_vec(state.u.len(), Some(&state.u));
         Ok(FluidSolver {
             slab,
             comm,
             halo,
             local: LocalHooks::default(),
-            buffer: vec![0.0; state.u.len()],
+            buffer: pages::huge_vec(state.u.len(), None),
             pencil_out: vec![PencilOut::default(); max_pencils],
             scratch: (0..threads)
                 .map(|_| Mutex::new(LineScratch::default()))
