@@ -66,7 +66,7 @@ impl FluidSolver {
     /// trouble: it is listed in the report and the caller stops the run.
     pub fn advance(&mut self, dt: f64) -> StepReport {
         let mut report = self.sweeps(dt, None);
-        report.totals = self.totals();
+        report.totals = self.totals_and_max_dt();
         report
     }
 

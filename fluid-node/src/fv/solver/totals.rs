@@ -5,6 +5,7 @@ use rayon::prelude::*;
 
 use crate::fv::comm::{bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
+use crate::fv::solver::cfl::fastest;
 use crate::fv::solver::{FluidSolver, Totals};
 use crate::fv::state::FluidState;
 
@@ -34,26 +35,65 @@ impl FluidSolver {
         }
     }
 
+    /// [`FluidSolver::totals`] and, in the same pass over the cells, the CFL step of the state
+    /// into the cache [`FluidSolver::max_dt`] reads (one rank; on several the step is left to
+    /// `max_dt`): the step after [`FluidSolver::advance`] then reads the state once less.
+    pub(super) fn totals_and_max_dt(&self) -> Totals {
+        if self.slab.ranks > 1 {
+            return self.totals();
+        }
+        let (totals, fastest_cell) = self.totals_with_rate(None, true);
+        let _ = self.dt_cache.set(self.finish_max_dt(fastest_cell));
+        totals
+    }
+
     fn totals_by(&self, solid_fraction: Option<&[f64]>) -> Totals {
+        self.totals_with_rate(solid_fraction, false).0
+    }
+
+    /// The totals, and with `rate` the fastest `(rate, cell)` of the CFL step as
+    /// `compute_max_dt` finds it (the same rates and the same choice among them, `fastest`;
+    /// planes here, blocks of cells there, which the choice does not depend on).
+    fn totals_with_rate(
+        &self,
+        solid_fraction: Option<&[f64]>,
+        rate: bool,
+    ) -> (Totals, (f64, usize)) {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         let plane = self.slab.plane();
         // NOTE: compensated sums per plane and over planes, so that the totals are exact to a
         // few ulps and a conservation check measures the scheme, not the sum; planes of the
         // slab axis are the blocks, so that a rank sums whole blocks.
-        let mut partial = vec![[CompensatedSum::default(); NQ]; self.grid.cells[self.slab.axis]];
+        let n_planes = self.grid.cells[self.slab.axis];
+        let mut partial = vec![[CompensatedSum::default(); NQ]; n_planes];
+        let mut fast: Vec<(f64, usize)> = vec![(0.0, usize::MAX); n_planes];
         let u = &self.state.u;
+        let rates = self.rate_params();
         self.pool.install(|| {
             partial
                 .par_iter_mut()
+                .zip(fast.par_iter_mut())
                 .zip(u.par_chunks(plane * nvar))
                 .enumerate()
-                .for_each(|(block, (acc, cells))| match solid_fraction {
-                    None => match nvar {
-                        3 => sum_cells::<3>(acc, cells),
-                        4 => sum_cells::<4>(acc, cells),
-                        _ => sum_cells::<5>(acc, cells),
-                    },
+                .for_each(|(block, ((acc, fast), cells))| match solid_fraction {
+                    None => {
+                        *fast = (0.0, block * plane);
+                        let each = |k: usize, cell: &[f64]| {
+                            if !rate || fast.0.is_nan() {
+                                return;
+                            }
+                            let r = rates.cell_rate(cell);
+                            if r.is_nan() || r > fast.0 {
+                                *fast = (r, block * plane + k);
+                            }
+                        };
+                        match nvar {
+                            3 => sum_cells::<3>(acc, cells, each),
+                            4 => sum_cells::<4>(acc, cells, each),
+                            _ => sum_cells::<5>(acc, cells, each),
+                        }
+                    }
                     Some(lambda) => {
                         let lambda = &lambda[block * plane..];
                         for (cell, l) in cells.chunks_exact(nvar).zip(lambda) {
@@ -92,14 +132,16 @@ impl FluidSolver {
         }
         let sum: [f64; NQ] = std::array::from_fn(|q| total[q].value());
         let v = self.grid.cell_volume();
-        Totals {
+        let fastest_cell = fast.into_iter().fold((0.0, usize::MAX), fastest);
+        let totals = Totals {
             mass: sum[0] * v,
             momentum: [sum[1] * v, sum[2] * v, sum[3] * v],
             energy: sum[4] * v,
             outflow_mass: self.outflow[0],
             outflow_momentum: [self.outflow[1], self.outflow[2], self.outflow[3]],
             outflow_energy: self.outflow[4],
-        }
+        };
+        (totals, fastest_cell)
     }
 
     /// The whole grid's conserved state, gathered on rank 0 (`None` on the other ranks;
@@ -127,12 +169,18 @@ impl FluidSolver {
 /// into `acc` in place kept its ten values in memory (the compiler cannot keep a `&mut` array
 /// in registers across the loop), so every addition waited on the store of the one before:
 /// the totals took 8 % of a 3-D step. Same operations in the same order, so the same bits.
+/// `each(k, cell)` sees every cell `k` of `cells` in the same pass (the CFL rate, or nothing).
 #[inline(always)]
-fn sum_cells<const NV: usize>(acc: &mut [CompensatedSum; NQ], cells: &[f64]) {
+fn sum_cells<const NV: usize>(
+    acc: &mut [CompensatedSum; NQ],
+    cells: &[f64],
+    mut each: impl FnMut(usize, &[f64]),
+) {
     let slot = |j: usize| if j == NV - 1 { NQ - 1 } else { j };
     let mut sum: [f64; NV] = std::array::from_fn(|j| acc[slot(j)].sum);
     let mut comp: [f64; NV] = std::array::from_fn(|j| acc[slot(j)].comp);
-    for cell in cells.chunks_exact(NV) {
+    for (k, cell) in cells.chunks_exact(NV).enumerate() {
+        each(k, cell);
         for j in 0..NV {
             let mut c = CompensatedSum {
                 sum: sum[j],
