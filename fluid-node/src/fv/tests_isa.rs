@@ -158,7 +158,8 @@ fn isa_paths_and_threads_give_the_same_3d_steps_to_the_bit() {
 
 /// The CFL step [`FluidSolver::advance`] takes in the pass of its totals (for the next step)
 /// is `max_dt`'s own pass to the bit, with the same limiting cell: on gas with one and two
-/// threads, and on a state with a non-finite cell (NaN, the first such cell).
+/// threads, and on a state with a non-finite cell (NaN, the first such cell); and the totals
+/// it keeps for the state are those summed again.
 #[test]
 fn the_cfl_step_of_the_totals_pass_is_max_dts_own() {
     let cells = [10, 7, 12];
@@ -191,8 +192,22 @@ fn the_cfl_step_of_the_totals_pass_is_max_dts_own() {
             let rep = solver.advance(dt);
             assert_eq!(rep.ok(), step < 3, "step {step}: {rep:?}");
             let taken = (solver.max_dt(), solver.limiting_cell());
-            let _ = solver.state_mut(); // forgets the step taken with the totals
+            let kept = totals_bits(&solver.totals());
+            let _ = solver.state_mut(); // forgets the step and the sums taken with the totals
             let own = (solver.max_dt(), solver.limiting_cell());
+            assert_eq!(
+                kept,
+                totals_bits(&solver.totals()),
+                "{threads} threads, step {step}"
+            );
+            // A changed state is summed again, not read from what was kept (NaN at step 3).
+            solver.state_mut().u[0] += 1.0;
+            assert_eq!(
+                step == 3,
+                kept == totals_bits(&solver.totals()),
+                "step {step}"
+            );
+            solver.state_mut().u[0] -= 1.0;
             assert_eq!(
                 taken.0.to_bits(),
                 own.0.to_bits(),
@@ -202,4 +217,14 @@ fn the_cfl_step_of_the_totals_pass_is_max_dts_own() {
             assert_eq!(step == 3, own.0.is_nan(), "step {step}: {own:?}");
         }
     }
+}
+
+fn totals_bits(t: &crate::fv::Totals) -> [u64; 5] {
+    [
+        t.mass.to_bits(),
+        t.momentum[0].to_bits(),
+        t.momentum[1].to_bits(),
+        t.momentum[2].to_bits(),
+        t.energy.to_bits(),
+    ]
 }

@@ -80,6 +80,9 @@ pub struct FluidSolver {
     /// `max_dt` of the current state and the cell that limits it, once computed (reset whenever
     /// the state changes).
     pub(super) dt_cache: OnceLock<(f64, usize)>,
+    /// The compensated sums of the conserved totals of the current state, once computed (one
+    /// rank; reset whenever the state changes, ghost states and vacuum cells included).
+    pub(super) sums_cache: OnceLock<[f64; NQ]>,
     pub(super) step: u64,
     pub(super) time: f64,
     pub(super) outflow: [f64; NQ],
@@ -199,6 +202,7 @@ impl FluidSolver {
             pool,
             pbar: Vec::new(),
             dt_cache: OnceLock::new(),
+            sums_cache: OnceLock::new(),
             grid,
             params,
             state,
@@ -256,6 +260,7 @@ impl FluidSolver {
     /// Mutable conserved state (initial conditions of tests and benches).
     pub fn state_mut(&mut self) -> &mut FluidState {
         self.dt_cache = OnceLock::new();
+        self.sums_cache = OnceLock::new();
         &mut self.state
     }
 

@@ -110,6 +110,7 @@ impl FluidSolver {
             .map(|a| dt * self.grid.cell_volume() / self.grid.dx[a])
             .collect();
         self.dt_cache = OnceLock::new();
+        self.sums_cache = OnceLock::new();
         let mut summaries: Vec<SweepSummary> = Vec::with_capacity(order.len());
         for &axis in &order {
             self.prepare_sweep(axis, hooks.as_mut().map(|(h, _)| &mut **h));
