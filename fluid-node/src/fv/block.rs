@@ -85,21 +85,40 @@ fn local_index(nvar: usize, fr: &[Option<usize>; 3]) -> [usize; NQ] {
 }
 
 /// [`gather_block`] for `NV` stored values per cell (copies of a fixed size, no branches).
+///
+/// NOTE: each sweep-frame value is loaded from the stored cell at its index (`src`) and the
+/// state is built in registers. Storing the values one by one into a local array at indices
+/// read at run time and copying that array into the tile (as before) made every cell wait on
+/// a failed store-to-load forwarding (16-byte loads of 8-byte stores): 40 % of the samples
+/// of the gather sat on that one load, and the gather was 13 % of a 3-D step.
 fn gather_cells<const NV: usize>(tile: &mut [State], u: &[f64], block: &Block, map: &[usize; NQ]) {
+    let (src, keep) = source_index::<NV>(map);
     let n = block.n;
     for m in 0..n {
         let along = m * block.stride;
         for (k, &base) in block.bases[..block.count].iter().enumerate() {
             let c = base + along;
             let cell: &[f64; NV] = u[c * NV..(c + 1) * NV].try_into().expect("NV values");
-            // The inactive velocity slots of a 1-D or 2-D state stay 0.
-            let mut local = [0.0; NQ];
-            for j in 0..NV {
-                local[map[j]] = cell[j];
-            }
-            tile[k * n + m] = local;
+            tile[k * n + m] = if NV == NQ {
+                std::array::from_fn(|q| cell[src[q]])
+            } else {
+                // The inactive velocity slots of a 1-D or 2-D state stay 0.
+                std::array::from_fn(|q| if keep[q] { cell[src[q]] } else { 0.0 })
+            };
         }
     }
+}
+
+/// The inverse of `map` (stored component → sweep-frame component): the stored component each
+/// sweep-frame component reads (`src`), and whether it reads one (`keep`; the inactive
+/// velocity slots of a 1-D or 2-D state do not).
+fn source_index<const NV: usize>(map: &[usize; NQ]) -> ([usize; NQ], [bool; NQ]) {
+    let (mut src, mut keep) = ([0; NQ], [false; NQ]);
+    for (j, &q) in map[..NV].iter().enumerate() {
+        src[q] = j;
+        keep[q] = true;
+    }
+    (src, keep)
 }
 
 /// The output state of a sweep, which every block writes at the cells of its own pencils.

@@ -164,8 +164,6 @@ pub struct WaveLine {
     pub d: [Vec<f64>; 6],
     /// `d^{M4}` at each interface (curvature of `λα`).
     pub dm4: Vec<f64>,
-    /// `λα` and its differences (scratch of the curvatures).
-    la: Vec<f64>,
 }
 
 impl WaveLine {
@@ -176,7 +174,6 @@ impl WaveLine {
             v.resize(n_interfaces, 0.0);
         }
         self.dm4.resize(n_interfaces, 0.0);
-        self.la.resize(n_interfaces, 0.0);
     }
 
     /// Fills `d` and `dm4` for order `order` from `alpha` and the wave's `speed` (already
@@ -210,23 +207,23 @@ impl WaveLine {
                 d5[l] = c5[l] * x;
             }
         }
-        // Curvatures on interfaces 1 ..= n−2 (0 at the two ends): `la[l]` becomes
-        // `λα(l+1) − λα(l)`, the curvature of cell l+1.
-        let (lam, la, dm4) = (&speed.lam[..n], &mut self.la[..n], &mut self.dm4[..n]);
-        for l in 0..n {
-            la[l] = lam[l] * alpha[l];
-        }
-        for l in 0..n.saturating_sub(1) {
-            la[l] = la[l + 1] - la[l];
-        }
+        // Curvatures on interfaces 1 ..= n−2 (0 at the two ends): interface l + 1 takes the
+        // curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and `λα(l+2) − λα(l+1)`.
+        // NOTE: one pass from λ and α (each product formed where it is used, the same bits):
+        // the products stored first and differenced in place (`la[l] = la[l+1] − la[l]`) made
+        // two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
+        // step on its one line).
+        let (lam, dm4) = (&speed.lam[..n], &mut self.dm4[..n]);
         dm4.fill(0.0);
         if n < 4 {
             return;
         }
-        let (left, right) = (&la[..n - 2], &la[1..n - 1]);
+        let (lam0, lam1, lam2) = (&lam[..n - 2], &lam[1..n - 1], &lam[2..n]);
+        let (al0, al1, al2) = (&alpha[..n - 2], &alpha[1..n - 1], &alpha[2..n]);
         let out = &mut dm4[1..n - 1];
         for l in 0..n - 2 {
-            out[l] = curvature_m4(left[l], right[l]);
+            let (p0, p1, p2) = (lam0[l] * al0[l], lam1[l] * al1[l], lam2[l] * al2[l]);
+            out[l] = curvature_m4(p1 - p0, p2 - p1);
         }
     }
 }

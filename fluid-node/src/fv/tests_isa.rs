@@ -1,5 +1,6 @@
 //! Every instruction set the line kernel is compiled for gives the same bits (`isa.rs`): a line
-//! with every kind of face, and 3-D steps on one and two threads, on each ISA this CPU has.
+//! with every kind of face, and 3-D steps on one and two threads, on each ISA this CPU has; and
+//! the CFL step a step's totals pass takes is `max_dt`'s own to the bit.
 
 use crate::fv::euler::State;
 use crate::fv::isa::Isa;
@@ -153,4 +154,77 @@ fn isa_paths_and_threads_give_the_same_3d_steps_to_the_bit() {
             );
         }
     }
+}
+
+/// The CFL step [`FluidSolver::advance`] takes in the pass of its totals (for the next step)
+/// is `max_dt`'s own pass to the bit, with the same limiting cell: on gas with one and two
+/// threads, and on a state with a non-finite cell (NaN, the first such cell); and the totals
+/// it keeps for the state are those summed again.
+#[test]
+fn the_cfl_step_of_the_totals_pass_is_max_dts_own() {
+    let cells = [10, 7, 12];
+    let grid = Grid::new(&[0.0; 3], &[1.0, 0.7, 1.2], &cells).expect("grid");
+    let mut state = FluidState::zeros(3, grid.n_cells());
+    for idx in 0..grid.n_cells() {
+        let x = grid.cell_center(grid.ijk(idx));
+        let r2: f64 = (0..3).map(|a| (x[a] - 0.5).powi(2)).sum();
+        let (rho, p) = if r2 < 0.04 { (6.0, 80.0) } else { (1.2, 1.0) };
+        state.set_primitive(idx, rho, [0.2 * x[2], 0.4 * x[0], -0.3 * x[1]], p, GAMMA);
+    }
+    let params = FluidParams {
+        gamma: GAMMA,
+        cfl: 0.7,
+        flux: crate::fv::FluxKind::Osmp(5),
+        boundary: [[BoundaryKind::Wall; 2]; 3],
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+    };
+    for threads in [1, 2] {
+        let mut solver =
+            FluidSolver::new(grid.clone(), params.clone(), state.clone(), threads).expect("solver");
+        for step in 0..4 {
+            if step == 3 {
+                // Non-finite cells from here: the step reports them, the CFL step is NaN.
+                let nvar = solver.state().nvar;
+                solver.state_mut().u[(333 * nvar)..(334 * nvar)].fill(f64::NAN);
+            }
+            let dt = if step == 3 { 1e-4 } else { solver.max_dt() };
+            let rep = solver.advance(dt);
+            assert_eq!(rep.ok(), step < 3, "step {step}: {rep:?}");
+            let taken = (solver.max_dt(), solver.limiting_cell());
+            let kept = totals_bits(&solver.totals());
+            let _ = solver.state_mut(); // forgets the step and the sums taken with the totals
+            let own = (solver.max_dt(), solver.limiting_cell());
+            assert_eq!(
+                kept,
+                totals_bits(&solver.totals()),
+                "{threads} threads, step {step}"
+            );
+            // A changed state is summed again, not read from what was kept (NaN at step 3).
+            solver.state_mut().u[0] += 1.0;
+            assert_eq!(
+                step == 3,
+                kept == totals_bits(&solver.totals()),
+                "step {step}"
+            );
+            solver.state_mut().u[0] -= 1.0;
+            assert_eq!(
+                taken.0.to_bits(),
+                own.0.to_bits(),
+                "{threads} threads, step {step}"
+            );
+            assert_eq!(taken.1, own.1, "{threads} threads, step {step}");
+            assert_eq!(step == 3, own.0.is_nan(), "step {step}: {own:?}");
+        }
+    }
+}
+
+fn totals_bits(t: &crate::fv::Totals) -> [u64; 5] {
+    [
+        t.mass.to_bits(),
+        t.momentum[0].to_bits(),
+        t.momentum[1].to_bits(),
+        t.momentum[2].to_bits(),
+        t.energy.to_bits(),
+    ]
 }

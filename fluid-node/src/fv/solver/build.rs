@@ -12,6 +12,7 @@ use crate::fv::line::{FluxKind, LineScratch};
 use crate::fv::scene::{ConfigError, from_scene};
 use crate::fv::slab::{Slab, SlabError};
 use crate::fv::solver::hooks::LocalHooks;
+use crate::fv::solver::pages;
 use crate::fv::state::{FluidParams, FluidState};
 use crate::fv::sweep::PencilOut;
 use crate::grid::Grid;
@@ -79,6 +80,9 @@ pub struct FluidSolver {
     /// `max_dt` of the current state and the cell that limits it, once computed (reset whenever
     /// the state changes).
     pub(super) dt_cache: OnceLock<(f64, usize)>,
+    /// The compensated sums of the conserved totals of the current state, once computed (one
+    /// rank; reset whenever the state changes, ghost states and vacuum cells included).
+    pub(super) sums_cache: OnceLock<[f64; NQ]>,
     pub(super) step: u64,
     pub(super) time: f64,
     pub(super) outflow: [f64; NQ],
@@ -183,12 +187,14 @@ impl FluidSolver {
             .map(|a| grid.n_cells() / grid.cells[a])
             .max()
             .unwrap_or(1);
+        let mut state = state;
+        state.u = pages::huge_vec(state.u.len(), Some(&state.u));
         Ok(FluidSolver {
             slab,
             comm,
             halo,
             local: LocalHooks::default(),
-            buffer: vec![0.0; state.u.len()],
+            buffer: pages::huge_vec(state.u.len(), None),
             pencil_out: vec![PencilOut::default(); max_pencils],
             scratch: (0..threads)
                 .map(|_| Mutex::new(LineScratch::default()))
@@ -196,6 +202,7 @@ impl FluidSolver {
             pool,
             pbar: Vec::new(),
             dt_cache: OnceLock::new(),
+            sums_cache: OnceLock::new(),
             grid,
             params,
             state,
@@ -253,6 +260,7 @@ impl FluidSolver {
     /// Mutable conserved state (initial conditions of tests and benches).
     pub fn state_mut(&mut self) -> &mut FluidState {
         self.dt_cache = OnceLock::new();
+        self.sums_cache = OnceLock::new();
         &mut self.state
     }
 

@@ -25,12 +25,7 @@ impl FluidSolver {
     /// the lowest cell index, so the cell does not depend on the thread or rank count (a max
     /// is exact in any order).
     fn compute_max_dt(&self) -> (f64, usize) {
-        let grid = &self.grid;
-        let gamma = self.params.gamma;
-        let vacuum_rho = self.params.vacuum_rho;
-        let vacuum_p = self.params.vacuum_p;
-        let nvar = self.state.nvar;
-        let dim = grid.dim;
+        let (nvar, rates) = (self.state.nvar, self.rate_params());
         let u = &self.state.u;
         let (rate, cell) = self.pool.install(|| {
             u.par_chunks(nvar * BLOCK_CELLS)
@@ -39,39 +34,35 @@ impl FluidSolver {
                     let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
                     for (k, cell) in chunk.chunks_exact(nvar).enumerate() {
                         let idx = block * BLOCK_CELLS + k;
-                        let w = crate::fv::euler::primitive_floored(
-                            &to_full(cell, dim),
-                            gamma,
-                            vacuum_rho,
-                        );
-                        // Below the vacuum density and pressure, ρ, ρu and E are round-off (a
-                        // covered cell beside a crack held ρ = 2e-30 and E = 1e-16, a sound
-                        // speed of 5e6 m/s that collapsed the step): its speeds are taken at the
-                        // vacuum density, as its velocity is. A gas of real pressure at such a
-                        // density keeps its sound speed, so that its collapsing step stops the
-                        // run (issue 11).
-                        let floor = w.rho < vacuum_rho && w.p < vacuum_p;
-                        let c = sound_speed(
-                            &crate::fv::euler::Primitive {
-                                rho: if floor { vacuum_rho } else { w.rho },
-                                ..w
-                            },
-                            gamma,
-                        );
-                        for a in 0..dim {
-                            let r = (w.vel[a].abs() + c) / grid.dx[a];
-                            if !r.is_finite() {
-                                return (f64::NAN, idx);
-                            }
-                            if r > acc.0 {
-                                acc = (r, idx);
-                            }
+                        let r = rates.cell_rate(cell);
+                        if r.is_nan() {
+                            return (f64::NAN, idx);
+                        }
+                        if r > acc.0 {
+                            acc = (r, idx);
                         }
                     }
                     acc
                 })
                 .reduce(|| (0.0, usize::MAX), fastest)
         });
+        self.finish_max_dt((rate, cell))
+    }
+
+    /// What [`RateParams::cell_rate`] needs of this solver.
+    pub(super) fn rate_params(&self) -> RateParams<'_> {
+        RateParams {
+            dim: self.grid.dim,
+            gamma: self.params.gamma,
+            vacuum_rho: self.params.vacuum_rho,
+            vacuum_p: self.params.vacuum_p,
+            dx: &self.grid.dx,
+        }
+    }
+
+    /// `(max_dt, limiting cell)` from this rank's fastest `(rate, local cell)` (collective).
+    pub(super) fn finish_max_dt(&self, (rate, cell): (f64, usize)) -> (f64, usize) {
+        let grid = &self.grid;
         let global = &self.slab.global;
         let mut best = (rate, self.slab.to_global(cell.min(grid.n_cells() - 1)));
         if self.slab.ranks > 1 {
@@ -93,9 +84,51 @@ impl FluidSolver {
     }
 }
 
+/// The constants of the CFL rate of a cell.
+pub(super) struct RateParams<'a> {
+    dim: usize,
+    gamma: f64,
+    vacuum_rho: f64,
+    vacuum_p: f64,
+    dx: &'a [f64],
+}
+
+impl RateParams<'_> {
+    /// The fastest rate `max_a (|u_a| + c)/Δx_a` of a stored cell; NaN if one is not finite.
+    #[inline]
+    pub(super) fn cell_rate(&self, cell: &[f64]) -> f64 {
+        let (gamma, vacuum_rho, vacuum_p) = (self.gamma, self.vacuum_rho, self.vacuum_p);
+        let w = crate::fv::euler::primitive_floored(&to_full(cell, self.dim), gamma, vacuum_rho);
+        // Below the vacuum density and pressure, ρ, ρu and E are round-off (a covered cell
+        // beside a crack held ρ = 2e-30 and E = 1e-16, a sound speed of 5e6 m/s that collapsed
+        // the step): its speeds are taken at the vacuum density, as its velocity is. A gas of
+        // real pressure at such a density keeps its sound speed, so that its collapsing step
+        // stops the run (issue 11).
+        let floor = w.rho < vacuum_rho && w.p < vacuum_p;
+        let c = sound_speed(
+            &crate::fv::euler::Primitive {
+                rho: if floor { vacuum_rho } else { w.rho },
+                ..w
+            },
+            gamma,
+        );
+        let mut rate = 0.0;
+        for a in 0..self.dim {
+            let r = (w.vel[a].abs() + c) / self.dx[a];
+            if !r.is_finite() {
+                return f64::NAN;
+            }
+            if r > rate {
+                rate = r;
+            }
+        }
+        rate
+    }
+}
+
 /// The faster of two `(rate, cell)` candidates of the CFL step: a NaN rate first (the lowest
 /// cell among NaNs), else the larger rate, the lower cell among equal ones.
-fn fastest(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+pub(super) fn fastest(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
     match (a.0.is_nan(), b.0.is_nan()) {
         (true, true) => {
             if a.1 <= b.1 {

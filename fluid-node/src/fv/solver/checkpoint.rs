@@ -109,6 +109,7 @@ impl FluidSolver {
             }
         }
         self.dt_cache = OnceLock::new();
+        self.sums_cache = OnceLock::new();
         Ok(())
     }
 }

@@ -37,6 +37,7 @@ impl FluidSolver {
     /// Sets the cells of `cells` (whole grid) on this rank to vacuum (every conserved
     /// quantity zero).
     pub fn apply_vacuum(&mut self, cells: &[u32]) {
+        self.sums_cache = std::sync::OnceLock::new();
         let nvar = self.state.nvar;
         let range = self.slab.global_range();
         for &c in cells {
@@ -51,6 +52,7 @@ impl FluidSolver {
     /// along `axis`. Along the slab axis of a decomposed grid the halo is exchanged first, since
     /// a ghost may mirror a neighbour's cell (collective then).
     pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
+        self.sums_cache = std::sync::OnceLock::new();
         let decomposed = axis == self.slab.axis && self.slab.decomposed();
         if decomposed {
             self.exchange_halo();
@@ -210,5 +212,6 @@ impl FluidSolver {
             }
         }
         self.dt_cache = std::sync::OnceLock::new();
+        self.sums_cache = std::sync::OnceLock::new();
     }
 }

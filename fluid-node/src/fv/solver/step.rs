@@ -66,7 +66,7 @@ impl FluidSolver {
     /// trouble: it is listed in the report and the caller stops the run.
     pub fn advance(&mut self, dt: f64) -> StepReport {
         let mut report = self.sweeps(dt, None);
-        report.totals = self.totals();
+        report.totals = self.totals_and_max_dt();
         report
     }
 
@@ -110,6 +110,7 @@ impl FluidSolver {
             .map(|a| dt * self.grid.cell_volume() / self.grid.dx[a])
             .collect();
         self.dt_cache = OnceLock::new();
+        self.sums_cache = OnceLock::new();
         let mut summaries: Vec<SweepSummary> = Vec::with_capacity(order.len());
         for &axis in &order {
             self.prepare_sweep(axis, hooks.as_mut().map(|(h, _)| &mut **h));
