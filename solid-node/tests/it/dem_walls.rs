@@ -236,7 +236,11 @@ fn a_lattice_thrown_at_a_wall_closes_its_balance_to_second_order() {
             let mut e_max = 0.0f64;
             for k in 0..(0.02 / dt) as usize {
                 let r = solid.step_free(dt);
-                assert!(r.diagnostics.is_empty(), "{dim}-D step {k}: {:?}", r.diagnostics);
+                assert!(
+                    r.diagnostics.is_empty(),
+                    "{dim}-D step {k}: {:?}",
+                    r.diagnostics
+                );
                 e_max = e_max.max((r.energies.total() - e0.total()).abs());
             }
             drift.push(e_max / e0.kinetic_translation);
@@ -246,6 +250,9 @@ fn a_lattice_thrown_at_a_wall_closes_its_balance_to_second_order() {
         let order = drift[0] / drift[1];
         assert!((3.6..4.4).contains(&order), "{dim}-D: {drift:?}");
         assert!(drift[0] < 2e-3, "{dim}-D: {drift:?}");
-        assert!((taken[0] - taken[1]).abs() < 1e-5 && taken[0] > 0.3, "{dim}-D: {taken:?}");
+        assert!(
+            (taken[0] - taken[1]).abs() < 1e-5 && taken[0] > 0.3,
+            "{dim}-D: {taken:?}"
+        );
     }
 }
