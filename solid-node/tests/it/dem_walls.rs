@@ -34,6 +34,30 @@ fn block(dim: usize, gap: f64, gravity: bool) -> Solid {
     build(&cfg, dim, 1)
 }
 
+/// Runs `steps` free steps of `dt`, calling `each` after every one, and returns the largest
+/// departure of the energy balance (`Energies::total`) from its start.
+fn run(
+    solid: &mut Solid,
+    dim: usize,
+    dt: f64,
+    steps: usize,
+    mut each: impl FnMut(&Solid, usize),
+) -> f64 {
+    let e0 = solid.energies().total();
+    let mut e_max = 0.0f64;
+    for k in 0..steps {
+        let r = solid.step_free(dt);
+        assert!(
+            r.diagnostics.is_empty(),
+            "{dim}-D step {k}: {:?}",
+            r.diagnostics
+        );
+        e_max = e_max.max((r.energies.total() - e0).abs());
+        each(solid, k);
+    }
+    e_max
+}
+
 fn norm(v: [f64; 3]) -> f64 {
     v.iter().map(|c| c * c).sum::<f64>().sqrt()
 }
@@ -112,18 +136,8 @@ fn a_block_dropped_flat_onto_a_wall_stops_and_slides_and_the_balance_closes() {
         v0[0] = 0.3;
         solid.set_velocity(p, &v0);
         let dt = 2e-3;
-        let e0 = solid.energies().total();
         let mass = solid.model().particles[0].mass;
-        let mut e_max = 0.0f64;
-        for k in 0..300 {
-            let r = solid.step_free(dt);
-            assert!(
-                r.diagnostics.is_empty(),
-                "{dim}-D step {k}: {:?}",
-                r.diagnostics
-            );
-            e_max = e_max.max((r.energies.total() - e0).abs());
-        }
+        let e_max = run(&mut solid, dim, dt, 300, |_, _| {});
         let scale = mass * 9.81 * 0.05;
         println!(
             "{dim}-D drop: drift {:e}, dissipated {:e}",
@@ -166,24 +180,15 @@ fn a_spinning_block_lands_on_a_corner_and_settles() {
         };
         solid.set_angular_velocity(p, &w);
         let dt = 1e-3;
-        let e0 = solid.energies().total();
         let mass = solid.model().particles[0].mass;
-        let mut e_max = 0.0f64;
-        for k in 0..2000 {
-            let r = solid.step_free(dt);
-            assert!(
-                r.diagnostics.is_empty(),
-                "{dim}-D step {k}: {:?}",
-                r.diagnostics
-            );
-            e_max = e_max.max((r.energies.total() - e0).abs());
+        let e_max = run(&mut solid, dim, dt, 2000, |solid, k| {
             let lowest = solid.wet_surface().vertices.chunks(dim).map(|y| y[1]);
             let lowest = lowest.fold(f64::INFINITY, f64::min);
             assert!(
                 lowest >= -9.81 * dt * dt * 50.0 - 5.0 * dt * SIDE,
                 "{dim}-D step {k}"
             );
-        }
+        });
         let scale = mass * 9.81 * 0.1;
         println!(
             "{dim}-D spin: drift {:e}, dissipated {:e}",
@@ -233,16 +238,7 @@ fn a_lattice_thrown_at_a_wall_closes_its_balance_to_second_order() {
             }
             let dt = frac * solid.max_dt(f64::INFINITY);
             let e0 = solid.energies();
-            let mut e_max = 0.0f64;
-            for k in 0..(0.02 / dt) as usize {
-                let r = solid.step_free(dt);
-                assert!(
-                    r.diagnostics.is_empty(),
-                    "{dim}-D step {k}: {:?}",
-                    r.diagnostics
-                );
-                e_max = e_max.max((r.energies.total() - e0.total()).abs());
-            }
+            let e_max = run(&mut solid, dim, dt, (0.02 / dt) as usize, |_, _| {});
             drift.push(e_max / e0.kinetic_translation);
             taken.push(solid.energies().dissipated / e0.kinetic_translation);
         }
