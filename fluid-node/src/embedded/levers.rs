@@ -11,7 +11,9 @@
 //! rotational mode grows. The mid-step levers take `r` between the mid-step positions of the
 //! face point and of the centre,
 //!
-//!     r = ½ [(X_f − X^{n+1}) + (X_f^n − X^n)],
+//! ```text
+//! r = ½ [(X_f − X^{n+1}) + (X_f^n − X^n)],
+//! ```
 //!
 //! `X_f^n` the preimage of the sub-face's centroid on its element at `t^n` (same barycentric
 //! coordinates, as the swept prisms take it): the torque is the trapezoid's,

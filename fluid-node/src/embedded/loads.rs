@@ -21,7 +21,8 @@ pub struct Loads {
 impl Embedded {
     /// Force and torque per particle from `p̄` over the wet sub-faces of a trial surface
     /// (eq. 23–25 of paper 003; torques about the trial centres of mass, with the lever arms
-    /// of [`Levers`]). The error names no step: the caller adds it ([`EmbeddedError::at_step`]).
+    /// of `embedded::levers`). The error names no step: the caller adds it
+    /// ([`EmbeddedError::at_step`]).
     pub fn loads(&mut self, trial: &SolidFrame) -> Result<Loads, EmbeddedError> {
         let grid = &self.config.grid;
         let d = grid.dim;
