@@ -56,7 +56,7 @@ fn main() {
             .or_default()
             .entry(category)
             .or_default() += 1;
-        if outcome != Outcome::Ok {
+        if !outcome.passed() {
             let _ = std::fs::write(dir.join("scene.toml"), &case.toml);
             failures.push((
                 seed,

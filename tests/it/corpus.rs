@@ -5,8 +5,15 @@ use cosim_tests::corpus::{self, Outcome};
 
 /// Runs the case of `seed` in a folder of its own and returns its outcome.
 fn outcome(seed: u64) -> (Outcome, String) {
+    // NOTE: two tests may run the same seed at once (2003 is in the fixed sample too); the
+    // folder of one was removed under the other ("writing outputs to ...: No such file").
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let case = corpus::generate(seed);
-    let dir = std::env::temp_dir().join(format!("cosim-it-corpus-{}-{seed}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "cosim-it-corpus-{}-{seed}-{run}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     let outcome = corpus::check(&case, &dir);
     let _ = std::fs::remove_dir_all(&dir);
@@ -20,7 +27,7 @@ fn outcome(seed: u64) -> (Outcome, String) {
 fn fast_bodies_at_the_step_the_nodes_propose_keep_every_invariant() {
     for seed in [102, 107, 362, 778, 869, 892, 924] {
         let (outcome, toml) = outcome(seed);
-        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
+        assert!(outcome.passed(), "seed {seed}: {outcome:?}\n{toml}");
     }
 }
 
@@ -31,20 +38,13 @@ fn fast_bodies_at_the_step_the_nodes_propose_keep_every_invariant() {
 ///
 /// Since the walls hold the solid (`solid.walls`), the lattice with fracture (seed 220) lands on
 /// the wall particle by particle, each stopped dead while its links still push, and its solid
-/// energy balance is off by Verlet's error over those impacts: 1.28 % of its energies against
-/// the corpus's 1 % (open, `docs/corpus.md`; it converges at second order, `solid-node`
-/// `dem_walls`). It keeps every other invariant: mass, the fluid's balance and the exchange.
+/// energy balance is off by Verlet's error: 1.28 % of its energies against the corpus's 1 %,
+/// which the same run with every step halved divides by about 4 ([`Outcome::Converging`]).
 #[test]
 fn bodies_reaching_the_walls_keep_every_invariant() {
-    for seed in [44, 155, 262, 527, 984] {
+    for seed in [44, 155, 220, 262, 527, 984] {
         let (outcome, toml) = outcome(seed);
-        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
-    }
-    let (outcome, toml) = outcome(220);
-    match outcome {
-        Outcome::Ok => {}
-        Outcome::SolidEnergy(e) => assert!(e < 0.0135, "seed 220: {e}\n{toml}"),
-        other => panic!("seed 220: {other:?}\n{toml}"),
+        assert!(outcome.passed(), "seed {seed}: {outcome:?}\n{toml}");
     }
 }
 
@@ -58,7 +58,7 @@ fn bodies_reaching_the_walls_keep_every_invariant() {
 fn bodies_at_rest_flush_against_walls_and_in_corners_keep_the_gas_at_rest() {
     for seed in [19, 147, 176, 2003] {
         let (outcome, toml) = outcome(seed);
-        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
+        assert!(outcome.passed(), "seed {seed}: {outcome:?}\n{toml}");
     }
 }
 
@@ -70,7 +70,7 @@ fn a_fixed_sample_of_generated_scenes_keeps_every_invariant() {
     let mut failed = Vec::new();
     for seed in 2000..2064 {
         let (outcome, _) = outcome(seed);
-        if outcome != Outcome::Ok {
+        if !outcome.passed() {
             failed.push((seed, outcome));
         }
     }
@@ -93,7 +93,7 @@ fn touching_bodies_closing_a_gap_keep_every_invariant() {
     for seed in [29, 38, 67, 261, 379, 565, 593, 643, 712, 729, 906, 2048] {
         let (outcome, _) = outcome(seed);
         println!("seed {seed}: {outcome:?}");
-        if outcome != Outcome::Ok {
+        if !outcome.passed() {
             failed.push((seed, outcome));
         }
     }
@@ -107,6 +107,24 @@ fn touching_bodies_closing_a_gap_keep_every_invariant() {
 fn lattices_of_touching_boxes_keep_every_invariant() {
     for seed in [42, 70, 116, 181, 488, 688, 765] {
         let (outcome, toml) = outcome(seed);
-        assert_eq!(outcome, Outcome::Ok, "seed {seed}:\n{toml}");
+        assert!(outcome.passed(), "seed {seed}: {outcome:?}\n{toml}");
+    }
+}
+
+/// A lattice at rest in a corner, pushed into it by the gas (seed 908): its links vibrate at
+/// about 20 steps a period (`ω Δt ≈ 0.31`), and Verlet's bounded energy error of order
+/// `(ω Δt)²/4` is 2.9 % of the solid's energies, above the corpus's 1 %. Halving every step
+/// divides it by 4.0 (measured 0.0287, 0.0070, 0.0018 at Δt, Δt/2, Δt/4): the integrator's
+/// error, not a missing term, which is what [`Outcome::Converging`] asks.
+#[test]
+fn a_lattice_pushed_into_a_corner_has_verlets_second_order_energy_error() {
+    let (outcome, toml) = outcome(908);
+    match outcome {
+        Outcome::Converging(error, halved) => {
+            assert!((0.025..0.032).contains(&error), "{error}\n{toml}");
+            let ratio = halved / error;
+            assert!((0.22..0.28).contains(&ratio), "{ratio}\n{toml}");
+        }
+        other => panic!("seed 908: {other:?}\n{toml}"),
     }
 }
