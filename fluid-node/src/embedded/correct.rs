@@ -37,6 +37,8 @@ pub struct CorrectReport {
     pub merged_groups: usize,
     /// Cells those groups took in.
     pub widened_cells: usize,
+    /// Cells the widest of them took in.
+    pub widest_group: usize,
     /// Largest round-off residue dropped from a covered cell (content per unit volume, any
     /// component; at most 1e-13 of that cell's state).
     pub dropped: f64,

@@ -8,10 +8,7 @@ use super::cells::{
     CellKind, face_neighbours, fluid_part, max_abs, offsets, oriented, part_of, shifted, sum_parts,
 };
 use super::state::Config;
-use super::{
-    COVERED_TOLERANCE, Embedded, EmbeddedError, MAX_WIDEN_RINGS, MERGE_ROUNDS, MIX_BELOW,
-    WIDEN_RINGS,
-};
+use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, WIDEN_RINGS};
 use crate::cutcell::face_index;
 use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
@@ -680,9 +677,7 @@ impl Mixing<'_> {
         let mut extra: Vec<usize> = Vec::new();
         // Cells the widening stepped over without taking them in (sorted).
         let mut crossed: Vec<usize> = Vec::new();
-        let mut rings = 0;
-        while !self.config.physical(&sum, vol) && rings < MAX_WIDEN_RINGS {
-            rings += 1;
+        while !self.config.physical(&sum, vol) {
             let ring = self.ring(&members, &extra, &crossed, &groups.roots, &out.claimed);
             if ring.is_empty() {
                 // NOTE: no free cell borders the group: a sliver of gas sealed between a body
@@ -713,6 +708,7 @@ impl Mixing<'_> {
         if !extra.is_empty() {
             report.widened_groups += 1;
             report.widened_cells += extra.len();
+            report.widest_group = report.widest_group.max(extra.len());
             for &q in &extra {
                 let pos = out.claimed.partition_point(|&x| x < q);
                 out.claimed.insert(pos, q);

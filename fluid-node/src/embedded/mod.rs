@@ -94,17 +94,15 @@ pub const MIX_BELOW: f64 = 0.5;
 pub const MERGE_ROUNDS: usize = 4;
 
 /// Rings of neighbours whose predicted states are read with the mixing groups' (collective, once
-/// per step): a group whose mixture is not physical takes these in first.
-pub const WIDEN_RINGS: usize = 2;
-
-/// Rings of neighbours a mixing group may take in when its mixture is not physical; the states
-/// of those beyond [`WIDEN_RINGS`] are read as a group needs them. A group still not physical
-/// after them stops the run (`EmbeddedError::NonPhysical`).
+/// per step): a group whose mixture is not physical takes these in first, and further rings,
+/// read as it needs them, until its mixture is physical (no limit: it ends at the latest when
+/// the group holds every cell no other group holds; docs/cut-cells.md §3).
 ///
 /// NOTE: two rings left the jets of a burst without contact non-physical (a cell 3 % open at
-/// 7 km/s, p = −1.9e4 Pa, `burst-shell-2d` without `[solid.contact]`, step 498); see
-/// docs/cut-cells.md.
-pub const MAX_WIDEN_RINGS: usize = 8;
+/// 7 km/s, p = −1.9e4 Pa, `burst-shell-2d` without `[solid.contact]`, step 498); eight left a
+/// body at Mach 850 in cold gas non-physical at step 1 (its groups took up to 457 cells; fluid-node
+/// test `bodies_at_hundreds_of_times_the_sound_speed_keep_every_cell_physical`).
+pub const WIDEN_RINGS: usize = 2;
 
 /// Largest defect of identity (3) (solid-fraction change against swept volume) a cell may show,
 /// relative to its volume: round-off is ~1e-15.
