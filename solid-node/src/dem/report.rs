@@ -75,8 +75,9 @@ pub enum Diagnostic {
         particle: ParticleId,
     },
     /// Two particles in contact overlap by more than
-    /// [`crate::dem::contact::DEEP_OVERLAP`] of the smaller one's volume (contact too soft or
-    /// step too large).
+    /// [`crate::dem::contact::DEEP_OVERLAP`] of the smaller one's volume (a step too long for
+    /// the pair's approach: deeper than [`crate::dem::contact::hold::HOLD_OVERLAP`] the pair
+    /// holds).
     #[error(
         "particles {} and {}: deep contact, overlap {overlap:?} above {} of the smaller one's \
          volume {volume:?}",

@@ -7,6 +7,7 @@ mod dem_contact;
 mod dem_determinism;
 mod dem_energy;
 mod dem_fracture;
+mod dem_holds;
 mod dem_init;
 mod dem_loads;
 mod dem_scene;

@@ -44,8 +44,15 @@
 //! the 3-D bar test then twisted about the contact normal and kept spinning (a square face
 //! turned on a square overlaps less, which is softer, which a dead load favours).
 //! The law treats A and B alike except that B (the larger index) is the one cut into pieces.
+//!
+//! Past [`hold::HOLD_OVERLAP`] of the smaller particle's volume a pair also holds: at each half
+//! kick its approach is stopped by a perfectly inelastic impulse ([`hold`]), so that impacts
+//! faster than the law can stop (overlap `≈ w / (c √s)` of a particle for a relative speed `w`,
+//! `c = √(E/ρ)`) stop at that depth instead of reaching the deep contact the step reports
+//! ([`DEEP_OVERLAP`]).
 
 pub mod broad;
+pub mod hold;
 pub mod overlap;
 mod shapes;
 
@@ -66,7 +73,9 @@ pub use shapes::ContactError;
 use shapes::{MAX_VERTICES, Piece, Shapes, build_shapes};
 
 /// Overlap volume, as a fraction of the smaller particle's volume, that the step reports as
-/// deep contact ([`crate::dem::Diagnostic::DeepContact`]).
+/// deep contact ([`crate::dem::Diagnostic::DeepContact`]): since pairs hold past
+/// [`hold::HOLD_OVERLAP`], only a step that carries a pair from below that depth past this one
+/// reaches it (a step too long for the pair's approach).
 pub const DEEP_OVERLAP: f64 = 0.25;
 
 /// Distance to a face plane, as a fraction of the smaller particle size, within which a point

@@ -10,7 +10,7 @@ use crate::dem::report::{BrokenLink, Diagnostic, StepReport};
 use crate::dem::solid::limits::MAX_ROTATION;
 use crate::dem::solid::orientation::quat;
 use crate::dem::solid::state::Solid;
-use crate::dem::solid::step::{hold, with_damping};
+use crate::dem::solid::step::{hold, hold_pairs, with_damping};
 
 impl Solid {
     /// Accepts the last trial: positions at n+1, internal forces at n+1, fracture, second half
@@ -145,11 +145,14 @@ impl Solid {
     }
 
     /// Second half kick of every free particle with the loads at n+1 (a fixed or driven particle
-    /// keeps its prescribed velocity and no spin).
+    /// keeps its prescribed velocity and no spin), the walls' hold, and the pairs' past the
+    /// hold depth (`contact::hold`, at the configuration n+1).
     fn second_half_kick(&mut self) {
         let dt = self.dt;
         let dim = self.model.dim;
-        // Second half kick with the forces at n+1 and the same external loads.
+        let n = self.n_particles();
+        // Per free particle: velocities at n+1, whether the walls acted, and the kick's loads.
+        let mut ends: Vec<Option<End>> = Vec::with_capacity(n);
         for (p, part) in self.model.particles.iter().enumerate() {
             let pt = &self.particle_trial[p];
             match part.motion {
@@ -157,6 +160,7 @@ impl Solid {
                 ParticleMotion::Fixed | ParticleMotion::Velocity(_) => {
                     self.state.v[p] = pt.v_half;
                     self.state.ang[p] = [0.0; 3];
+                    ends.push(None);
                     continue;
                 }
             }
@@ -189,9 +193,37 @@ impl Solid {
             ) {
                 (v, ang, held) = (h.v, h.ang, true);
             }
+            ends.push(Some((v, ang, held, [f, tau])));
+        }
+        let holds = self
+            .contact
+            .as_ref()
+            .map_or_else(Vec::new, |c| c.holds(&self.model));
+        if !holds.is_empty() {
+            let zero = Vector3::zeros();
+            let mut v: Vec<Vector3<f64>> = ends.iter().map(|e| e.map_or(zero, |e| e.0)).collect();
+            let mut ang: Vec<Vector3<f64>> = ends.iter().map(|e| e.map_or(zero, |e| e.1)).collect();
+            let touched = hold_pairs(
+                &self.model,
+                &self.walls,
+                &self.state,
+                &holds,
+                &mut v,
+                &mut ang,
+            );
+            for (p, e) in ends.iter_mut().enumerate() {
+                if let Some(e) = e {
+                    (e.0, e.1) = (v[p], ang[p]);
+                    e.2 |= touched[p];
+                }
+            }
+        }
+        for (p, end) in ends.into_iter().enumerate() {
+            let Some((v, ang, held, loads)) = end else {
+                continue;
+            };
             if held {
-                let end = (v, ang, [f, tau]);
-                self.state.dissipated += self.wall_loss(p, dt, end);
+                self.state.dissipated += self.wall_loss(p, dt, (v, ang, loads));
             }
             self.state.v[p] = v.into();
             self.state.ang[p] = ang.into();
@@ -382,3 +414,7 @@ fn load_work(load: &[[f64; 3]; 2], motion: &[[f64; 3]; 2]) -> f64 {
     Vector3::from(load[0]).dot(&Vector3::from(motion[0]))
         + Vector3::from(load[1]).dot(&Vector3::from(motion[1]))
 }
+
+/// A free particle at the end of its second half kick: velocity, angular velocity in the
+/// state's convention, whether the walls or holds acted, and the kick's force and torque.
+type End = (Vector3<f64>, Vector3<f64>, bool, [Vector3<f64>; 2]);

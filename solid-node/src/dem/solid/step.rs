@@ -4,6 +4,7 @@
 
 use nalgebra::Vector3;
 
+use crate::dem::contact::hold::{Kinematics, PairHold, project};
 use crate::dem::model::{Model, ParticleMotion, to3};
 use crate::dem::parallel::par_fill;
 use crate::dem::rattle::{compose, dmv_drift};
@@ -80,10 +81,53 @@ impl Solid {
         );
         let damping = &self.state.contact_damping;
         let walls = &self.walls;
-        par_fill(self.pool.as_ref(), &mut self.particle_trial, |p| {
-            let (f, t) = with_damping(damping, p, fi[p], ti[p]);
-            trial_particle(model, state, walls, p, dt, (f, t), (fe[p], te[p]), g)
-        });
+        let holds = self
+            .contact
+            .as_ref()
+            .map_or_else(Vec::new, |c| c.holds(model));
+        if holds.is_empty() {
+            par_fill(self.pool.as_ref(), &mut self.particle_trial, |p| {
+                let (f, t) = with_damping(damping, p, fi[p], ti[p]);
+                trial_particle(model, state, walls, p, dt, (f, t), (fe[p], te[p]), g)
+            });
+            return;
+        }
+        // Pairs past the hold depth (`contact::hold`): every kick first, then the pairs' and
+        // the walls' projections, then the drifts.
+        let mut kicks: Vec<Kick> = (0..model.particles.len())
+            .map(|p| {
+                let (f, t) = with_damping(damping, p, fi[p], ti[p]);
+                kick_particle(model, state, walls, p, dt, (f, t), (fe[p], te[p]), g)
+            })
+            .collect();
+        let mut v: Vec<Vector3<f64>> = kicks
+            .iter()
+            .map(|k| match k {
+                Kick::Free(k) => k.v_half,
+                Kick::Done(_) => Vector3::zeros(),
+            })
+            .collect();
+        let mut ang: Vec<Vector3<f64>> = kicks
+            .iter()
+            .map(|k| match k {
+                Kick::Free(k) => k.ang_half,
+                Kick::Done(_) => Vector3::zeros(),
+            })
+            .collect();
+        let touched = hold_pairs(model, walls, state, &holds, &mut v, &mut ang);
+        for (p, k) in kicks.iter_mut().enumerate() {
+            if let Kick::Free(k) = k {
+                k.v_half = v[p];
+                k.ang_half = ang[p];
+                k.held |= touched[p];
+            }
+        }
+        for (p, k) in kicks.into_iter().enumerate() {
+            self.particle_trial[p] = match k {
+                Kick::Free(k) => drift_particle(model, state, p, dt, k),
+                Kick::Done(done) => done,
+            };
+        }
     }
 
     /// Flat views of the particles' trial and the wet surface at the trial configuration.
@@ -166,6 +210,16 @@ pub(super) fn with_damping(
     }
 }
 
+/// A free particle's first half kick (walls applied), before its drift.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Kicked {
+    v_half: Vector3<f64>,
+    /// In the state's convention (3-D body-frame angular momentum, 2-D `[0, 0, ω]`).
+    ang_half: Vector3<f64>,
+    held: bool,
+    load: [[f64; 3]; 2],
+}
+
 /// First half kick and drift of one particle (003 eq. (4)–(7)).
 /// The walls act on the half-step velocities at `Xⁿ` ([`Walls::hold`]).
 #[allow(clippy::too_many_arguments)]
@@ -175,27 +229,52 @@ fn trial_particle(
     walls: &Walls,
     p: usize,
     dt: f64,
+    internal: ([f64; 3], [f64; 3]),
+    external: ([f64; 3], [f64; 3]),
+    gravity: [f64; 3],
+) -> ParticleTrial {
+    match kick_particle(model, state, walls, p, dt, internal, external, gravity) {
+        Kick::Free(kicked) => drift_particle(model, state, p, dt, kicked),
+        Kick::Done(done) => done,
+    }
+}
+
+/// A particle's first half kick: a free particle's velocities, or a fixed or driven particle's
+/// whole trial.
+pub(super) enum Kick {
+    Free(Kicked),
+    Done(ParticleTrial),
+}
+
+/// The first half kick of particle `p` with the walls' hold.
+#[allow(clippy::too_many_arguments)]
+fn kick_particle(
+    model: &Model,
+    state: &State,
+    walls: &Walls,
+    p: usize,
+    dt: f64,
     (f_int, t_int): ([f64; 3], [f64; 3]),
     (f_ext, t_ext): ([f64; 3], [f64; 3]),
     gravity: [f64; 3],
-) -> ParticleTrial {
+) -> Kick {
     let part = &model.particles[p];
     let x = Vector3::from(state.x[p]);
     match part.motion {
         ParticleMotion::Fixed => {
-            return ParticleTrial {
+            return Kick::Done(ParticleTrial {
                 x: state.x[p],
                 rot: state.rot[p],
                 ..ParticleTrial::default()
-            };
+            });
         }
         ParticleMotion::Velocity(v) => {
-            return ParticleTrial {
+            return Kick::Done(ParticleTrial {
                 x: (x + Vector3::from(v) * dt).into(),
                 v_half: v,
                 rot: state.rot[p],
                 ..ParticleTrial::default()
-            };
+            });
         }
         ParticleMotion::Free => {}
     }
@@ -216,7 +295,24 @@ fn trial_particle(
     if let Some(h) = hold(model, walls, p, &x, &state.rot[p], (v_half, ang_half)) {
         (v_half, ang_half, held) = (h.v, h.ang, true);
     }
-    let load = [f.into(), tau.into()];
+    Kick::Free(Kicked {
+        v_half,
+        ang_half,
+        held,
+        load: [f.into(), tau.into()],
+    })
+}
+
+/// The drift of a free particle from its kicked velocities.
+fn drift_particle(model: &Model, state: &State, p: usize, dt: f64, k: Kicked) -> ParticleTrial {
+    let part = &model.particles[p];
+    let x = Vector3::from(state.x[p]);
+    let Kicked {
+        v_half,
+        ang_half,
+        held,
+        load,
+    } = k;
     let x_new = x + v_half * dt;
     if model.dim == 3 {
         let q = quat(&state.rot[p]);
@@ -255,6 +351,60 @@ fn trial_particle(
         }
     }
 }
+
+/// Projects the velocities `v`, `ang` (state convention) at the configuration of `state` so
+/// that no pair of `holds` approaches and no particle goes further into a wall: the pairs'
+/// projection ([`crate::dem::contact::hold::project`]), then the walls' on the particles it
+/// changed, until the walls change nothing (at most [`HOLD_ROUNDS`] rounds). Returns which
+/// particles changed.
+pub(super) fn hold_pairs(
+    model: &Model,
+    walls: &Walls,
+    state: &State,
+    holds: &[PairHold],
+    v: &mut [Vector3<f64>],
+    ang: &mut [Vector3<f64>],
+) -> Vec<bool> {
+    let dim = model.dim;
+    let turn = |p: usize, r: &Vector3<f64>| rotate_body(dim, &state.rot[p], r);
+    let to_body = |p: usize, r: &Vector3<f64>| {
+        if dim == 3 {
+            quat(&state.rot[p]).inverse_transform_vector(r)
+        } else {
+            *r
+        }
+    };
+    let kin = Kinematics {
+        dim,
+        x: &state.x,
+        turn: &turn,
+        to_body: &to_body,
+    };
+    let mut touched = vec![false; model.particles.len()];
+    for _ in 0..HOLD_ROUNDS {
+        let mut moved = vec![false; model.particles.len()];
+        project(model, &kin, holds, v, ang, &mut moved);
+        let mut walls_acted = false;
+        for p in 0..moved.len() {
+            if !moved[p] {
+                continue;
+            }
+            touched[p] = true;
+            let x = Vector3::from(state.x[p]);
+            if let Some(h) = hold(model, walls, p, &x, &state.rot[p], (v[p], ang[p])) {
+                (v[p], ang[p]) = (h.v, h.ang);
+                walls_acted = true;
+            }
+        }
+        if !walls_acted {
+            break;
+        }
+    }
+    touched
+}
+
+/// Rounds of the pairs' and the walls' projections at most ([`hold_pairs`]).
+const HOLD_ROUNDS: usize = 20;
 
 /// [`Walls::hold`] for particle `p` at centre `x` and stored orientation `rot`, velocities
 /// `(v, ang)` in the state's convention.
