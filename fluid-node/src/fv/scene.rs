@@ -113,10 +113,11 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
             order: cfg.flux.order,
         });
     }
-    if !(cfg.vacuum.rho >= 0.0 && cfg.vacuum.p >= 0.0) {
+    let vacuum = cfg.vacuum();
+    if !(vacuum.rho >= 0.0 && vacuum.p >= 0.0) {
         return Err(ConfigError::Vacuum {
-            rho: cfg.vacuum.rho,
-            p: cfg.vacuum.p,
+            rho: vacuum.rho,
+            p: vacuum.p,
         });
     }
     let mut boundary = [[BoundaryKind::Outflow; 2]; 3];
@@ -139,8 +140,8 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
         cfl: cfg.cfl,
         flux: FluxKind::Osmp(cfg.flux.order),
         boundary,
-        vacuum_rho: cfg.vacuum.rho,
-        vacuum_p: cfg.vacuum.p,
+        vacuum_rho: vacuum.rho,
+        vacuum_p: vacuum.p,
     };
     for (k, entry) in cfg.init.iter().enumerate() {
         if !(entry.velocity.is_empty() || entry.velocity.len() == dim) {

@@ -100,7 +100,10 @@ fn fluid(profile: Profile) -> FluidConfig {
             y: Some([Boundary::Periodic, Boundary::Periodic]),
             z: Some([Boundary::Outflow, Boundary::Outflow]),
         },
-        vacuum: VacuumConfig::default(),
+        vacuum_thresholds: Some(VacuumConfig {
+            rho: 1e-10,
+            p: 1e-10,
+        }),
         characteristic: Some(CharacteristicConfig {
             sigma: DEFAULT_CHARACTERISTIC_SIGMA,
             p_far: Some(1.0),
