@@ -35,9 +35,9 @@ pub struct RealFluid {
     coupled: bool,
     /// Whether cracks may open in that solid (`[solid] fracture`, or several bodies).
     fracture: bool,
-    /// Whether the semi-implicit loads take mid-step lever arms (`run.solid_substeps` other
-    /// than 1 with the semi-implicit scheme; `embedded/levers.rs`).
-    mid_step_levers: bool,
+    /// Whether the semi-implicit loads take their lever arms on `F^n` (`run.solid_substeps`
+    /// other than 1 with the semi-implicit scheme; `embedded/levers.rs`).
+    start_levers: bool,
     embedded: Option<Embedded>,
     /// Budget restored from a checkpoint before the surface arrived.
     pending_budget: Option<InterfaceBudget>,
@@ -97,9 +97,9 @@ impl RealFluid {
                 .solid
                 .as_ref()
                 .is_some_and(|s| s.fracture.is_some() || s.bodies.len() > 1),
-            // Issue 37: the loads held over sub-cycled steps would lead the motion by dt/2; K = 1
-            // keeps paper 003's levers and its payloads.
-            mid_step_levers: scene.run.scheme == SchemeName::SemiImplicit
+            // Issue 37: the levers of the loads held over sub-cycled steps lag by dt/2 (on F^n);
+            // K = 1 keeps paper 003's levers and its payloads.
+            start_levers: scene.run.scheme == SchemeName::SemiImplicit
                 && scene
                     .run
                     .solid_substeps
@@ -376,7 +376,7 @@ impl FluidModel for RealFluid {
             None => {
                 let mut e = Embedded::new(&self.solver, frame)?;
                 e.set_fracture(self.fracture);
-                e.set_mid_step_levers(self.mid_step_levers);
+                e.set_start_levers(self.start_levers);
                 self.embedded = Some(e);
             }
         }

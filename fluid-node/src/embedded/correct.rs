@@ -465,7 +465,7 @@ impl Embedded {
 
     /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`.
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
-    /// 7), or with the mid-step levers of [`Levers`] (the same as the loads'). Explicit: on
+    /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
     /// that the exchange balances exactly.
     fn solid_flux(
@@ -495,8 +495,8 @@ impl Embedded {
             (&self.scratch.trial, accepted)
         };
         // Explicit: on `F^n`, the surface of the solid's loads, at its end.
-        let mid = self.config.mid_step_levers && !explicit;
-        let levers = Levers::new(mid, &self.state.current, flux_frame);
+        let start = self.config.start_levers && !explicit;
+        let levers = Levers::new(start, &self.state.current, flux_frame);
         let mut sum = std::mem::take(&mut self.scratch.odd);
         sum.clear();
         for s in &flux_geom.subfaces {

@@ -1,25 +1,30 @@
 //! Lever arms of the semi-implicit loads and of the solid flux's face velocity (issue 37).
 //!
 //! A sub-face's load `f` turns its particle by `r × f` and the solid flux gives the fluid the
-//! power `(V + Ω × r) · (−f)`: the same `r` in both keeps the exchange exact. Paper 003 takes
-//! `r = X_f − X`, both on `F^{n+1}` (the end levers). With the loads held over a long coupling
-//! step (`run.solid_substeps`, docs/subcycling.md) that reading leads the motion by `dt/2`: on
-//! the mean-vertex wet surface the faces of particles turning together stay parallel and slide
-//! along themselves, so a pressure torques the particles in the sense they turn (a negative
-//! stiffness `s`), and a torque `s θ^{n+1}` held over the step gives the mode `s Δθ²/2` more
-//! than the `s (θ^n + θ^{n+1})/2 · Δθ` of the motion, every step: the thin shell's slowest
-//! rotational mode grows. The mid-step levers take `r` between the mid-step positions of the
-//! face point and of the centre,
+//! power `(V + Ω × r) · (−f)`: the same `r` in both keeps the exchange exact, whatever `r` is.
+//! Paper 003 takes `r = X_f − X`, both on `F^{n+1}` (the end levers). With the loads held over a
+//! long coupling step (`run.solid_substeps`, docs/subcycling.md) the lever arms take the surface
+//! at `t^n`,
 //!
 //! ```text
-//! r = ½ [(X_f − X^{n+1}) + (X_f^n − X^n)],
+//! r = X_f^n − X^n,
 //! ```
 //!
 //! `X_f^n` the preimage of the sub-face's centroid on its element at `t^n` (same barycentric
-//! coordinates, as the swept prisms take it): the torque is the trapezoid's,
-//! `s (θ^n + θ^{n+1})/2`, whose work over the step, `s (θ^{n+1}² − θ^n²)/2`, telescopes, and
-//! `V̄ + Ω̄ × r` is the face point's mean velocity over the step to O(φ³) for a rigid motion
-//! (`V̄`, `Ω̄` the step's mean motion the solid sends).
+//! coordinates, as the swept prisms take it). What the choice of `r` moves is the lever part of
+//! the fluid's stiffness, `(∂r/∂θ) × f` with the force held: for a face point moving with a
+//! convex particle that holds its centre, it is `p A (r·n) ≥ 0` (2-D), a torque in the sense
+//! the particle turns (a negative stiffness `s`; on the mean-vertex surface a face slides by the
+//! mean of its two particles' rigid slides, the same sign). Held over the step, end levers give
+//! a mode `s θ^{n+1} Δθ`, `s Δθ²/2` more than the potential `s (θ^{n+1}² − θ^n²)/2` (they pump
+//! it), levers at `t^n` `s θ^n Δθ`, `s Δθ²/2` less (they damp it), mid-step ones exactly the
+//! potential. The levers at `t^n` are taken because the fluid's torque on the thin shell's
+//! rotational modes also has a part in phase with the step's motion that the levers do not
+//! touch (from the pressures the held loads take: 4e-5 to 1.5e-4 N m/rad times `Δθ` on modes
+//! 1 to 3, against a lever stiffness `s` of 3.2e-4 to 3.7e-4): mid-step levers leave it to
+//! grow, those at `t^n` take `s/2` off it (docs/subcycling.md, "The levers at tⁿ"). In 3-D a
+//! face whose centre of pressure is off the foot of its perpendicular has a restoring lever
+//! stiffness about some axes, which these levers would pump; no 3-D case was measured.
 
 use std::borrow::Cow;
 
@@ -34,12 +39,12 @@ pub(super) struct Levers<'a> {
 }
 
 impl<'a> Levers<'a> {
-    /// The levers of the sub-faces of `frame` (`F^{n+1}`): at mid-step from `current` (`F^n`)
-    /// when `mid`, at the end otherwise. Mid-step levers need `F^n` on `frame`'s connectivity;
-    /// where it has none (other elements or particles) they are the end levers, for the loads
-    /// and the solid flux alike.
-    pub(super) fn new(mid: bool, current: &'a SolidFrame, frame: &'a SolidFrame) -> Levers<'a> {
-        let before = if !mid || current.n_particles() != frame.n_particles() {
+    /// The levers of the sub-faces of `frame` (`F^{n+1}`): on `current` (`F^n`) when `start`,
+    /// on `frame` otherwise. Levers at `t^n` need `F^n` on `frame`'s connectivity; where it has
+    /// none (other elements or particles) they are the end levers, for the loads and the solid
+    /// flux alike.
+    pub(super) fn new(start: bool, current: &'a SolidFrame, frame: &'a SolidFrame) -> Levers<'a> {
+        let before = if !start || current.n_particles() != frame.n_particles() {
             None
         } else if current.elements == frame.elements {
             Some((Cow::Borrowed(&current.vertices[..]), current))
@@ -73,11 +78,7 @@ impl<'a> Levers<'a> {
         };
         let c0 = preimage(self.frame.dim, &t1, &t0, c);
         let x0 = current.center(p);
-        let mut r = [0.0; 3];
-        for a in 0..3 {
-            r[a] = 0.5 * (end[a] + (c0[a] - x0[a]));
-        }
-        r
+        [c0[0] - x0[0], c0[1] - x0[1], c0[2] - x0[2]]
     }
 }
 

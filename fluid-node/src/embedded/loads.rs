@@ -30,7 +30,7 @@ impl Embedded {
         let np = trial.n_particles();
         compute(grid, &trial.surface(), &mut self.scratch.trial);
         let geom = &self.scratch.trial;
-        let levers = Levers::new(self.config.mid_step_levers, &self.state.current, trial);
+        let levers = Levers::new(self.config.start_levers, &self.state.current, trial);
         let mut loads = Loads {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],

@@ -49,8 +49,9 @@
 //!   neighbours are all covered or beyond the domain is sealed; what the solid uncovers of it
 //!   holds vacuum, as a crack does (`crack.rs`, docs/cut-cells.md).
 //! - With the solid sub-cycled (`run.solid_substeps` other than 1) and the semi-implicit scheme,
-//!   the torques' lever arms, in the loads and the solid flux alike, are taken at mid-step
-//!   (`levers.rs`, docs/subcycling.md): held over a long step, the end surface's led the motion.
+//!   the torques' lever arms, in the loads and the solid flux alike, are taken on `F^n`
+//!   (`levers.rs`, docs/subcycling.md): held over a long step, the end surface's pumped the
+//!   lever part of the fluid's stiffness, which those at `t^n` damp.
 //!
 //! The files follow the step: `state` (configuration, what persists between steps, the step's
 //! near-surface data and the scratch, apart), `frame` (the solid as the core sees it), `cells`

@@ -40,9 +40,9 @@ pub(super) struct Config {
     /// Whether cracks may open in the solid (`[solid] fracture`, or separate bodies that touch
     /// and part): faces between two cells covered at t^n then carry no flux in the correct.
     pub(super) fracture: bool,
-    /// Whether the semi-implicit loads and solid flux take their lever arms at mid-step
+    /// Whether the semi-implicit loads and solid flux take their lever arms on `F^n`
     /// (`levers.rs`; set with `run.solid_substeps` other than 1).
-    pub(super) mid_step_levers: bool,
+    pub(super) start_levers: bool,
     pub(super) grid: Grid,
     /// Ghost cells of the sweeps' stencil.
     pub(super) ng: usize,
@@ -161,7 +161,7 @@ impl Embedded {
             },
             config: Config {
                 fracture: false,
-                mid_step_levers: false,
+                start_levers: false,
                 ng: params.ghost_cells(),
                 gamma: params.gamma,
                 vacuum: (params.vacuum_rho, params.vacuum_p),
@@ -199,10 +199,11 @@ impl Embedded {
         self.config.fracture = fracture;
     }
 
-    /// Declares that the semi-implicit loads and solid flux take their lever arms at mid-step
-    /// (`levers.rs`): the loads held over a long coupling step then no longer lead the motion.
-    pub fn set_mid_step_levers(&mut self, mid: bool) {
-        self.config.mid_step_levers = mid;
+    /// Declares that the semi-implicit loads and solid flux take their lever arms on `F^n`
+    /// (`levers.rs`): the loads held over a long coupling step then damp the lever part of the
+    /// fluid's stiffness instead of pumping it.
+    pub fn set_start_levers(&mut self, start: bool) {
+        self.config.start_levers = start;
     }
 
     /// Replaces the accepted surface and kinematics (start of a run, or after a restore).
