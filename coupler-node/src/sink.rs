@@ -160,7 +160,13 @@ impl RunSink {
                     &scene.to_toml(),
                 )
                 .with_context(|| format!("starting the record {}", path.display()))?;
-                Some(Background::start(recorder))
+                let background = Background::start(recorder);
+                // NOTE: `record_max_bytes` is checked on the bytes written, so with a cap the
+                // record keeps up step by step (one step in flight), as the check assumes.
+                Some(match scene.run.record_max_bytes {
+                    Some(_) => background.max_lag(0, 0),
+                    None => background,
+                })
             }
         };
         Ok(RunSink {

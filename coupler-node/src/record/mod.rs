@@ -58,8 +58,11 @@
 //! kill during the write itself leaves one unfinished record at the end. [`Recorder::finish`]
 //! writes the real data end, summary and footer over the provisional end. In a run the
 //! recorder works on a thread of its own ([`Background`]): the coupler copies each message into
-//! the open step, hands the step over whole at its end, and waits then for the step before it
-//! to be written; the thread builds, compresses (zstd level -1 by default) and writes the chunk.
+//! the open step and hands the step over whole at its end; the thread builds, compresses (zstd
+//! level -1 by default) and writes the chunk. The record may fall behind the run by up to
+//! [`MAX_LAG_STEPS`] steps and [`MAX_LAG_BYTES`] bytes (then the coupler waits for it), so a
+//! killed run loses at most the steps still in flight; with `run.record_max_bytes` it keeps up
+//! step by step.
 //!
 //! # Reading
 //!
@@ -76,7 +79,7 @@ mod reader;
 mod recover;
 mod writer;
 
-pub use background::Background;
+pub use background::{Background, MAX_LAG_BYTES, MAX_LAG_STEPS};
 pub use channels::{
     BusySeconds, DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, Diagnostics, FRAME_MESSAGE_ENCODING,
     FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_topic,

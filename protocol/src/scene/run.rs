@@ -240,8 +240,8 @@ pub enum RecordLevel {
 /// `run.record_compression`: how the chunks of `exchange.mcap` are compressed. Any value gives
 /// the same messages back; it only trades file size against the coupler's time.
 ///
-/// NOTE: `"zstd"` (the default, level 3, on the record's own thread) made the record of
-/// `clamped-beam-2d` 6.2 times smaller (310 MB to 50 MB); `"lz4"` 2.0 times; `"none"` writes
+/// NOTE: `"zstd"` (the default, level -1, on the record's own thread) makes the record of
+/// `clamped-beam-2d` 6.0 times smaller (315 MB to 52 MB); `"lz4"` 2.0 times; `"none"` writes
 /// fastest, 1.5–2 GiB/s into a file (docs/performance.md, "Recording").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -250,7 +250,7 @@ pub enum RecordCompression {
     None,
     /// LZ4 frames (MCAP compression `"lz4"`).
     Lz4,
-    /// Zstandard, level 3, on the record's own thread (MCAP compression `"zstd"`).
+    /// Zstandard, level -1 (`--fast=1`), on the record's own thread (MCAP compression `"zstd"`).
     #[default]
     Zstd,
 }

@@ -2,8 +2,10 @@
 //! called directly.
 
 use std::io::{BufWriter, Read};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
 
-use coupler_node::record::Background;
+use coupler_node::record::{Background, MAX_LAG_BYTES, MAX_LAG_STEPS};
 
 use super::*;
 
@@ -37,7 +39,7 @@ impl<W: Write + Seek> Calls for Recorder<W> {
     }
 }
 
-impl Calls for Background<std::fs::File> {
+impl<W: Write + Seek + Send + 'static> Calls for Background<W> {
     fn frame(&mut self, from: NodeKind, to: NodeKind, t: f64, frame: &[u8]) {
         self.record_frame(from, to, t, 1, frame).unwrap();
     }
@@ -90,7 +92,8 @@ fn run(calls: &mut impl Calls, n_steps: u64) -> Vec<u64> {
 
 /// Issue 39, item 4: the record's thread gets each step whole from the coupler and writes the
 /// same bytes as the recorder called directly, the messages of a step that did not end
-/// included; each step is committed by the time the next one ends.
+/// included; held to no lag (as with `run.record_max_bytes`), each step is committed by the
+/// time the next one ends.
 #[test]
 fn the_records_thread_writes_the_bytes_of_the_direct_recorder() {
     for compression in [RecordCompression::None, RecordCompression::Zstd] {
@@ -119,7 +122,7 @@ fn the_records_thread_writes_the_bytes_of_the_direct_recorder() {
             SCENE,
         )
         .unwrap();
-        let mut background = Background::start(recorder);
+        let mut background = Background::start(recorder).max_lag(0, 0);
         let committed = run(&mut background, 6);
         drop(background.finish().unwrap());
         let mut written = Vec::new();
@@ -141,4 +144,91 @@ fn the_records_thread_writes_the_bytes_of_the_direct_recorder() {
             );
         }
     }
+}
+
+/// A file whose writes wait while its gate is shut (a record's thread that cannot keep up).
+struct Gated {
+    file: std::fs::File,
+    open: Arc<(Mutex<bool>, Condvar)>,
+}
+
+impl Write for Gated {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let (open, changed) = &*self.open;
+        let mut guard = open.lock().unwrap();
+        while !*guard {
+            guard = changed.wait(guard).unwrap();
+        }
+        self.file.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl Seek for Gated {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.file.seek(pos)
+    }
+}
+
+fn set_gate(gate: &Arc<(Mutex<bool>, Condvar)>, open: bool) {
+    *gate.0.lock().unwrap() = open;
+    gate.1.notify_all();
+}
+
+/// Issue 39, item 4: while the record's thread is stuck in its first write, the coupler hands
+/// over `MAX_LAG_STEPS + 1` steps without waiting (it waited at every step's end before, on
+/// the run's critical path), all of them in flight; once the thread goes on, the record holds
+/// the bytes of the recorder called directly.
+#[test]
+fn the_coupler_goes_on_while_the_record_falls_behind_within_its_bound() {
+    let steps = MAX_LAG_STEPS as u64 + 1;
+    let compression = RecordCompression::Zstd;
+    let mut direct = Recorder::new(
+        Cursor::new(Vec::new()),
+        RecordLevel::Exchange,
+        compression,
+        "unit-scene",
+        SCENE,
+    )
+    .unwrap();
+    run(&mut direct, steps);
+    let direct = direct.finish().unwrap().into_inner();
+
+    let path = std::env::temp_dir().join(format!("cosim-lag-{}.mcap", std::process::id()));
+    let gate = Arc::new((Mutex::new(true), Condvar::new()));
+    let file = Gated {
+        file: std::fs::File::create(&path).unwrap(),
+        open: gate.clone(),
+    };
+    let recorder = Recorder::new(
+        BufWriter::new(file),
+        RecordLevel::Exchange,
+        compression,
+        "unit-scene",
+        SCENE,
+    )
+    .unwrap();
+    set_gate(&gate, false);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut background = Background::start(recorder);
+        run(&mut background, steps);
+        let _ = tx.send(background);
+    });
+    let handed_over = rx.recv_timeout(Duration::from_secs(60));
+    set_gate(&gate, true);
+    let background = handed_over.expect("the coupler waited for a record behind within its bound");
+    // (The steps here take about 1 MB each, far under MAX_LAG_BYTES.)
+    const { assert!(MAX_LAG_BYTES > 32 << 20) };
+    assert_eq!(background.in_flight(), MAX_LAG_STEPS + 1);
+    drop(background.finish().unwrap());
+    let mut written = Vec::new();
+    std::fs::File::open(&path)
+        .unwrap()
+        .read_to_end(&mut written)
+        .unwrap();
+    let _ = std::fs::remove_file(&path);
+    assert!(written == direct, "the bytes differ");
 }
