@@ -3,14 +3,15 @@
 
 use rayon::prelude::*;
 
-use crate::fv::comm::{bytes_f64, f64_bytes};
+use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
+use crate::fv::slab::{put_block, rank_of, take_block};
 use crate::fv::solver::cfl::fastest;
 use crate::fv::solver::{FluidSolver, Totals};
 use crate::fv::state::FluidState;
 
 impl FluidSolver {
-    /// Conserved totals over the whole grid, summed in a fixed order (each plane of the slab
+    /// Conserved totals over the whole grid, summed in a fixed order (each plane of the last
     /// axis, then the planes in order), so the result does not depend on the thread or rank
     /// count.
     ///
@@ -27,10 +28,15 @@ impl FluidSolver {
     }
 
     /// Conserved totals of the fluid around an embedded solid: each cell weighted by its fluid
-    /// fraction `1 − Λ` (`solid_fraction` one value per cell; cells with Λ = 1 hold ghost states
+    /// fraction `1 − Λ` (`solid_fraction` one value per cell of the whole grid, every rank
+    /// passing the same; cells with Λ = 1 hold ghost states
     /// and count for nothing). Same fixed-order sums as [`FluidSolver::totals`].
     pub fn totals_with_solid(&self, solid_fraction: &[f64]) -> Totals {
-        assert_eq!(solid_fraction.len(), self.grid.n_cells(), "one Λ per cell");
+        assert_eq!(
+            solid_fraction.len(),
+            self.slab.global.n_cells(),
+            "one Λ per cell of the whole grid"
+        );
         self.totals_by(Some(solid_fraction))
     }
 
@@ -70,13 +76,25 @@ impl FluidSolver {
     ) -> (Totals, (f64, usize)) {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
-        let plane = self.slab.plane();
-        // NOTE: compensated sums per plane and over planes, so that the totals are exact to a
-        // few ulps and a conservation check measures the scheme, not the sum; planes of the
-        // slab axis are the blocks, so that a rank sums whole blocks.
-        let n_planes = self.grid.cells[self.slab.axis];
-        let mut partial = vec![[CompensatedSum::default(); NQ]; n_planes];
+        // NOTE: compensated sums per plane of the last axis (x fastest within it) and over
+        // the planes, so that the totals are exact to a few ulps and a conservation check
+        // measures the scheme, not the sum. A block's part of each of its planes is contiguous
+        // in the one-rank order of the plane (x is not cut in 3-D, `protocol::decomp`), and
+        // the blocks along axis `dim − 2` take turns in that order: each continues the running
+        // sums of the block below it, so every plane's sum takes the one-rank steps.
+        let n_planes = self.grid.cells[dim - 1];
+        let plane = self.grid.n_cells() / n_planes;
+        let mut partial = self.receive_plane_sums(n_planes);
         let mut fast: Vec<(f64, usize)> = vec![(0.0, usize::MAX); n_planes];
+        let lambda_block;
+        let solid_fraction = match solid_fraction {
+            Some(l) if self.slab.ranks > 1 => {
+                let block = self.slab.block_of_rank(self.slab.rank);
+                lambda_block = take_block(&self.slab.global, block, 1, l);
+                Some(&lambda_block[..])
+            }
+            other => other,
+        };
         let u = &self.state.u;
         let rates = self.rate_params();
         self.pool.install(|| {
@@ -123,6 +141,11 @@ impl FluidSolver {
             .iter()
             .flat_map(|acc| acc.iter().flat_map(|c| [c.sum, c.comp]))
             .collect();
+        let flat = if self.send_plane_sums(&flat) {
+            Vec::new()
+        } else {
+            flat
+        };
         let flat = if self.slab.ranks == 1 {
             flat
         } else {
@@ -168,13 +191,81 @@ impl FluidSolver {
         Some(FluidState { nvar, u })
     }
 
-    /// Per-cell values of every rank concatenated in rank order (the global order) on rank 0.
+    /// Per-cell values (`per` each) of every rank's block put together in the global order on
+    /// rank 0 (`None` elsewhere; collective).
     pub(super) fn gather_cells(&self, mine: &[f64]) -> Option<Vec<f64>> {
         if self.slab.ranks == 1 {
             return Some(mine.to_vec());
         }
+        let per = mine.len() / self.grid.n_cells();
         let parts = self.comm.gather(0, &f64_bytes(mine))?;
-        Some(parts.iter().flat_map(|b| bytes_f64(b)).collect())
+        let global = &self.slab.global;
+        let mut whole = vec![0.0; global.n_cells() * per];
+        for (r, b) in parts.iter().enumerate() {
+            put_block(
+                global,
+                self.slab.block_of_rank(r),
+                per,
+                &bytes_f64(b),
+                &mut whole,
+            );
+        }
+        Some(whole)
+    }
+
+    /// The running sums of this rank's planes to start from: zero, or the ones of the block
+    /// below along axis `dim − 2` when that axis is cut (collective with it).
+    fn receive_plane_sums(&self, n_planes: usize) -> Vec<[CompensatedSum; NQ]> {
+        let mut partial = vec![[CompensatedSum::default(); NQ]; n_planes];
+        if let Some(from) = self.row_neighbour(false) {
+            let mut buf = vec![0.0; n_planes * 2 * NQ];
+            self.comm.exchange_halo(HaloExchange {
+                to_lo: None,
+                to_hi: None,
+                from_lo: Some((from, &mut buf[..])),
+                from_hi: None,
+            });
+            for (acc, v) in partial.iter_mut().zip(buf.chunks_exact(2 * NQ)) {
+                for q in 0..NQ {
+                    acc[q] = CompensatedSum {
+                        sum: v[2 * q],
+                        comp: v[2 * q + 1],
+                    };
+                }
+            }
+        }
+        partial
+    }
+
+    /// Sends the running sums `flat` of this rank's planes to the block above along axis
+    /// `dim − 2` when there is one (which continues them; true then).
+    fn send_plane_sums(&self, flat: &[f64]) -> bool {
+        let Some(to) = self.row_neighbour(true) else {
+            return false;
+        };
+        self.comm.exchange_halo(HaloExchange {
+            to_lo: None,
+            to_hi: Some((to, flat)),
+            from_lo: None,
+            from_hi: None,
+        });
+        true
+    }
+
+    /// The block below (`above` false) or above along axis `dim − 2`, not across a periodic
+    /// side (the order of the sums of a plane's rows).
+    fn row_neighbour(&self, above: bool) -> Option<usize> {
+        let slab = &self.slab;
+        let a = slab.global.dim.checked_sub(2)?;
+        let c = slab.coords[a];
+        let to = if above {
+            (c + 1 < slab.dims[a]).then_some(c + 1)?
+        } else {
+            c.checked_sub(1)?
+        };
+        let mut coords = slab.coords;
+        coords[a] = to;
+        Some(rank_of(slab.dims, coords))
     }
 }
 
