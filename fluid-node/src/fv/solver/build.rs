@@ -99,15 +99,17 @@ impl FluidSolver {
         FluidSolver::new(grid, params, state, threads)
     }
 
-    /// Builds this rank's slab of the solver of the scene's `[fluid]` table, the grid
-    /// decomposed over the ranks of `comm` (see [`FluidSolver::decomposed`]).
+    /// Builds this rank's block of the solver of the scene's `[fluid]` table, the grid
+    /// decomposed over the ranks of `comm` as `fluid.decomposition` says, or as
+    /// [`protocol::decomp::choose`] chooses (see [`FluidSolver::decomposed`]).
     pub fn from_scene_on(
         cfg: &FluidConfig,
         threads: usize,
         comm: Box<dyn Comm>,
     ) -> Result<FluidSolver, SolverError> {
         let (grid, params, state) = from_scene(cfg)?;
-        FluidSolver::decomposed(grid, params, state, threads, comm)
+        let dims = cfg.decomposition.as_ref().and(cfg.process_grid());
+        FluidSolver::decomposed_as(grid, params, state, threads, comm, dims)
     }
 
     /// Builds the solver from parts (`state` must have `grid.dim + 2` values per cell).
