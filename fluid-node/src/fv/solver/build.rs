@@ -59,7 +59,7 @@ pub enum SolverError {
 }
 
 /// The finite-volume Euler solver on a Cartesian grid of 1, 2 or 3 dimensions, on one rank or
-/// on one slab of a grid decomposed over several ([`Slab`], [`Comm`]).
+/// on one block of a grid decomposed over several ([`Slab`], [`Comm`]).
 pub struct FluidSolver {
     /// This rank's cells (the whole grid on one rank).
     pub(super) grid: Grid,

@@ -1,4 +1,4 @@
-//! What the split sweeps do for a coupled step ([`SplitHooks`]), on one rank or on one slab of
+//! What the split sweeps do for a coupled step ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the halo exchange, ghost states and vacuum written before a sweep, the
 //! pressures recorded, and the kept fluxes and pressures gathered on every rank (issue 16).
 
@@ -65,7 +65,7 @@ impl FluidSolver {
     }
 
     /// Writes the ghost states of `fills` (see [`GhostFill`]) on this rank's cells for a sweep
-    /// along `axis`. Along the slab axis of a decomposed grid the halo is exchanged first, since
+    /// along `axis`. Along a cut axis of a decomposed grid the halo is exchanged first, since
     /// a ghost may mirror a neighbour's cell (collective then).
     pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
         self.sums_cache = std::sync::OnceLock::new();

@@ -1,4 +1,4 @@
-//! What a coupled step asks of the split sweeps ([`SplitHooks`]), on one rank or on one slab of
+//! What a coupled step asks of the split sweeps ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the hooks name cells, pencils and faces of the whole grid, each rank
 //! applies the ghost states and vacuum of its own cells and keeps the pressures and fluxes of
 //! its own cells and faces, and the outputs are gathered so that every rank ends with all of

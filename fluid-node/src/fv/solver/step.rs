@@ -149,7 +149,7 @@ impl FluidSolver {
 
     /// Before the sweep along `axis`: the directional pressures of the whole grid, then (a
     /// coupled step) the ghost states, vacuum and kept pressures `hooks` asks for and this
-    /// rank's part of its taps and walls, and the halo of the neighbours along the slab axis.
+    /// rank's part of its taps and walls, and the halo of the neighbours along `axis` if cut.
     fn prepare_sweep(&mut self, axis: usize, hooks: Option<&mut SplitHooks>) {
         self.record_pressures(axis);
         if let Some(h) = hooks {
@@ -255,7 +255,7 @@ impl FluidSolver {
     }
 
     /// Adds the sweeps' summaries of every rank to `report` in a fixed order: sweep by sweep,
-    /// the partials in rank order (= plane order), the troubles by pencil (on the slab axis,
+    /// the partials in rank order (= plane order), the troubles by pencil (on a cut axis,
     /// the lowest rank's trouble of a pencil is the one nearest its start).
     fn merge_summaries(&self, mine: Vec<SweepSummary>, report: &mut StepReport) {
         let all: Vec<Vec<SweepSummary>> = if self.slab.ranks == 1 {
