@@ -136,13 +136,15 @@ impl RealFluid {
 
     fn vacuum_cells_here(&self) -> u64 {
         let params = self.solver.params();
-        // Λ is the whole grid's.
+        // Λ is the whole grid's; with slabs this rank's cells start at `first` in it.
         let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
         let slab = self.solver.slab();
+        let first = slab.slabs().then(|| slab.global_range().start);
+        let global = |c: usize| first.map_or_else(|| slab.to_global(c), |f| f + c);
         let n_cells = self.solver.grid().n_cells();
         (0..n_cells)
             .filter(|&c| {
-                if lambda.is_some_and(|l| l[slab.to_global(c)] >= 1.0 - COVERED_TOLERANCE) {
+                if lambda.is_some_and(|l| l[global(c)] >= 1.0 - COVERED_TOLERANCE) {
                     return false;
                 }
                 let (rho, _, p) = self.solver.primitive(c);
