@@ -108,7 +108,11 @@ impl FluidSolver {
         comm: Box<dyn Comm>,
     ) -> Result<FluidSolver, SolverError> {
         let (grid, params, state) = from_scene(cfg)?;
-        let dims = cfg.decomposition.as_ref().and(cfg.process_grid());
+        // A given process grid is checked by `decomposed_as` (an error, not the default).
+        let dims = cfg
+            .decomposition
+            .as_ref()
+            .map(|d| std::array::from_fn(|a| d.get(a).map_or(1, |&k| k as usize)));
         FluidSolver::decomposed_as(grid, params, state, threads, comm, dims)
     }
 
