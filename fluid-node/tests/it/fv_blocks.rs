@@ -102,3 +102,37 @@ fn a_process_grid_that_cuts_x_in_3d_or_does_not_fit_is_refused() {
         assert!(errs[0].contains("fluid.ranks = 4"), "{}", errs[0]);
     }
 }
+
+/// Negative pressures in two cells of different blocks of `1 × 2 × 2`, one of them on the
+/// pencil along y of a cell bad in the block below as well: every rank reports the troubles
+/// one rank does (the first of each pencil, by global cell), in the same order.
+#[test]
+fn troubles_on_blocks_are_those_of_one_rank() {
+    let (grid, mut state) = blast(&[12, 14, 24]);
+    for (i, j, k) in [(3, 11, 17), (3, 2, 17), (8, 9, 4)] {
+        state.set_primitive(grid.index(i, j, k), 1.4, [0.0; 3], -5.0, 1.4);
+    }
+    let p = params(5, [[BoundaryKind::Wall; 2]; 3]);
+    let mut one = FluidSolver::new(grid.clone(), p.clone(), state.clone(), 1).expect("solver");
+    let report = one.advance(one.max_dt());
+    assert!(report.troubles.len() >= 3, "{:?}", report.troubles);
+    let reports: Vec<String> = ThreadRanks::new(4)
+        .into_iter()
+        .map(|comm| {
+            let (grid, state, p) = (grid.clone(), state.clone(), p.clone());
+            std::thread::spawn(move || {
+                let dims = Some([1, 2, 2]);
+                let mut s = FluidSolver::decomposed_as(grid, p, state, 1, Box::new(comm), dims)
+                    .expect("solver");
+                let dt = s.max_dt();
+                format!("{:?}", s.advance(dt))
+            })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .map(|h| h.join().expect("rank"))
+        .collect();
+    for (rank, r) in reports.iter().enumerate() {
+        assert_eq!(*r, format!("{report:?}"), "rank {rank}");
+    }
+}

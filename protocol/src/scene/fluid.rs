@@ -396,7 +396,7 @@ impl FluidConfig {
         Ok(())
     }
 
-    /// The MPI ranks: a real fluid with enough planes of the last axis for each.
+    /// The MPI ranks: a real fluid, and a process grid of them that fits its grid.
     fn validate_ranks(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let fluid = self;
         let dim = c.dim;
