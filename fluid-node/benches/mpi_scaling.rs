@@ -1,6 +1,7 @@
 //! Strong scaling of the fluid over MPI ranks (issue 16): the 3-D blast of
 //! `scenes/blast-3d.toml` on `CELLS`³ cells (default 128), one thread per rank, `STEPS` steps
-//! (default 4) after one warm-up step; rank 0 prints one JSON line with the wall time per step,
+//! (default 4) after one warm-up step, cut as `protocol::decomp::choose` cuts it or as
+//! `DECOMP=kx,ky,kz` says (issue 40); rank 0 prints one JSON line with the wall time per step,
 //! the time each rank spent in halo exchanges (its share of the step) and the halo bytes.
 //! Not a criterion bench: a driver for the measurement the issue asks for.
 //!
@@ -34,6 +35,15 @@ fn main() {
     let (_universe, comm) = MpiComm::init().expect("MPI");
     let calls = comm.duplicate();
     let (rank, ranks) = (comm.rank(), comm.size());
+    fluid.ranks = ranks as u32;
+    if let Ok(d) = std::env::var("DECOMP") {
+        let dims: Vec<u32> = d
+            .split(',')
+            .map(|k| k.trim().parse().expect("DECOMP=kx,ky,kz"))
+            .collect();
+        fluid.decomposition = Some(dims);
+    }
+    let dims = fluid.process_grid().expect("a process grid that fits");
     let clock = comm.clock();
     let mut solver = FluidSolver::from_scene_on(&fluid, 1, Box::new(comm)).expect("solver");
     let warm = solver.advance(solver.max_dt());
@@ -62,7 +72,8 @@ fn main() {
         let halo_bytes: Vec<f64> = per_rank.iter().map(|v| v[1]).collect();
         let cells = f64::from(n).powi(3);
         println!(
-            "{{\"ranks\": {ranks}, \"cells\": {n}, \"steps\": {steps}, \"s_per_step\": {wall:.4}, \
+            "{{\"ranks\": {ranks}, \"dims\": {dims:?}, \"cells\": {n}, \"steps\": {steps}, \
+             \"s_per_step\": {wall:.4}, \
              \"cell_updates_per_s\": {:.4e}, \"halo_s_per_step\": {halo_s:?}, \
              \"halo_share\": {:?}, \"halo_bytes_sent_per_step\": {halo_bytes:?}}}",
             cells / wall,

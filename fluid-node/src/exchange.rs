@@ -136,13 +136,15 @@ impl RealFluid {
 
     fn vacuum_cells_here(&self) -> u64 {
         let params = self.solver.params();
-        // Λ is the whole grid's; this rank's cells start at `first` in it.
+        // Λ is the whole grid's; with slabs this rank's cells start at `first` in it.
         let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
-        let first = self.solver.slab().global_range().start;
+        let slab = self.solver.slab();
+        let first = slab.slabs().then(|| slab.global_range().start);
+        let global = |c: usize| first.map_or_else(|| slab.to_global(c), |f| f + c);
         let n_cells = self.solver.grid().n_cells();
         (0..n_cells)
             .filter(|&c| {
-                if lambda.is_some_and(|l| l[first + c] >= 1.0 - COVERED_TOLERANCE) {
+                if lambda.is_some_and(|l| l[global(c)] >= 1.0 - COVERED_TOLERANCE) {
                     return false;
                 }
                 let (rho, _, p) = self.solver.primitive(c);
@@ -300,15 +302,14 @@ impl NodeModel for RealFluid {
 
     fn record_probes(&mut self, t: f64) {
         // Each probe's cell is read on the rank that owns it and gathered on rank 0 (collective).
-        let range = self.solver.slab().global_range();
+        let slab = self.solver.slab();
         let owned: Vec<(u64, f64, [f64; 3], f64)> = self
             .probes
             .iter()
             .enumerate()
-            .filter(|(_, probe)| range.contains(&probe.cell))
-            .map(|(k, probe)| {
-                let (rho, u, p) = self.solver.primitive(probe.cell - range.start);
-                (k as u64, rho, u, p)
+            .filter_map(|(k, probe)| {
+                let (rho, u, p) = self.solver.primitive(slab.to_local(probe.cell)?);
+                Some((k as u64, rho, u, p))
             })
             .collect();
         let comm = self.solver.comm();

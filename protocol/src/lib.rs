@@ -26,6 +26,7 @@
 #![deny(missing_docs)]
 
 pub mod codec;
+pub mod decomp;
 pub mod scene;
 pub mod session;
 pub mod suggest;

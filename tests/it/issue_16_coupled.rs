@@ -1,7 +1,8 @@
 //! Issue 16 item 3 through the binaries and MPI: a coupled scene whose clamped beam crosses the
 //! cuts between the fluid's ranks (2-D and 3-D, semi-implicit with IQN-ILS, so several trial
 //! surfaces per step) gives the record frames (solid states, loads, totals, checkpoints) and
-//! output files of one rank, bit for bit, on 2 and 4 ranks (oversubscribed on 2 cores).
+//! output files of one rank, bit for bit, on 2, 3, 4 and 8 ranks (oversubscribed on 2 cores),
+//! cut into slabs or blocks (issue 40).
 //!
 //! Built only with `--features mpi`: `cargo test -p cosim-tests --features mpi --test it
 //! issue_16`.
@@ -103,7 +104,11 @@ particle_at = {tip}
     path
 }
 
-fn assert_beam_same_on_ranks(dim: usize) {
+/// The beam scene of `dim` run on one rank and on each of `ranks` (`--fluid-ranks K`, the
+/// process grid `protocol::decomp::choose` picks, or `(K, blocks)`: a copy of the scene with
+/// `fluid.ranks = K` and `fluid.decomposition = blocks`): every record frame and output file
+/// is bit for bit that of one rank.
+fn assert_beam_same_on_ranks(dim: usize, ranks: &[(&str, Option<&str>)]) {
     let dir = out_dir(&format!("mpi-beam-{dim}d"));
     let scene = beam_scene(&dir, dim);
     let one = dir.join("one");
@@ -123,9 +128,20 @@ fn assert_beam_same_on_ranks(dim: usize) {
         &outputs.iter().find(|(n, _)| *n == name).expect("surface").1
     };
     assert!(surface(0) != surface(1), "the beam moves");
-    for ranks in ["2", "4"] {
-        let out = dir.join(format!("ranks{ranks}"));
-        run(&scene, &out, &["--fluid-ranks", ranks]);
+    for &(ranks, blocks) in ranks {
+        let out = dir.join(format!("ranks{ranks}{}", blocks.map_or("", |_| "-blocks")));
+        match blocks {
+            None => {
+                run(&scene, &out, &["--fluid-ranks", ranks]);
+            }
+            Some(blocks) => {
+                let text = std::fs::read_to_string(&scene).expect("scene");
+                let cut = format!("[fluid]\nranks = {ranks}\ndecomposition = {blocks}");
+                let path = dir.join(format!("beam-{ranks}.toml"));
+                std::fs::write(&path, text.replacen("[fluid]", &cut, 1)).expect("scene");
+                run(&path, &out, &[]);
+            }
+        }
         let s = summary(&out);
         assert_eq!(s["status"], s1["status"], "{s}");
         assert_eq!(s["steps"], 4, "{s}");
@@ -153,12 +169,30 @@ fn assert_beam_same_on_ranks(dim: usize) {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// On 2, 3, 4 and 8 ranks the 64 × 48 grid is cut 2 × 1, 3 × 1, 4 × 1 and 4 × 2 (cuts
+/// along x through the beam; issue 40), and 1 × 4 as slabs.
 #[test]
-fn issue_16_clamped_beam_2d_across_the_cuts_is_bit_identical_on_1_2_and_4_ranks() {
-    assert_beam_same_on_ranks(2);
+fn issue_16_clamped_beam_2d_across_the_cuts_is_bit_identical_on_1_2_3_4_and_8_ranks() {
+    let ranks = [
+        ("2", None),
+        ("3", None),
+        ("4", None),
+        ("8", None),
+        ("4", Some("[1, 4]")),
+    ];
+    assert_beam_same_on_ranks(2, &ranks);
 }
 
+/// On 2, 3, 4 and 8 ranks the 32 × 16 × 24 grid is cut into slabs of 2, 3 and 4 and into
+/// blocks 1 × 2 × 4; 1 × 2 × 2 cuts y at the beam's middle as well (issue 40).
 #[test]
-fn issue_16_clamped_beam_3d_across_the_cuts_is_bit_identical_on_1_2_and_4_ranks() {
-    assert_beam_same_on_ranks(3);
+fn issue_16_clamped_beam_3d_across_the_cuts_is_bit_identical_on_1_2_3_4_and_8_ranks() {
+    let ranks = [
+        ("2", None),
+        ("3", None),
+        ("4", None),
+        ("8", None),
+        ("4", Some("[1, 2, 2]")),
+    ];
+    assert_beam_same_on_ranks(3, &ranks);
 }

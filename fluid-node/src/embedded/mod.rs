@@ -21,9 +21,9 @@
 //!    cells left with content (paper 000 §3.3, recursive). Away from the solid the predicted
 //!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
 //!
-//! On a grid decomposed over ranks ([`crate::fv::Slab`]) every rank holds the whole surface and
-//! runs all of this on the whole grid; the solver applies and gathers the sweeps' hooks per
-//! slab, and the states of near cells come from their ranks ([`crate::fv::FluidSolver::cells_at`]), so
+//! On a grid decomposed over ranks ([`crate::fv::Slab`], a block) every rank holds the whole
+//! surface and runs all of this on the whole grid; the solver applies and gathers the sweeps'
+//! hooks per block, and the states of near cells come from their ranks ([`crate::fv::FluidSolver::cells_at`]), so
 //! every rank computes the bits of one rank (the fluid-node tests `fv_ranks`, docs/mpi.md).
 //!
 //! Properties (tested in the fluid-node tests `embedded_*`): fluid mass, momentum and energy plus

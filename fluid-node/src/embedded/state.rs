@@ -284,6 +284,6 @@ impl Embedded {
 
     /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
-        solver.totals_with_solid(&self.state.geom.solid_fraction[solver.slab().global_range()])
+        solver.totals_with_solid(&self.state.geom.solid_fraction)
     }
 }

@@ -1,5 +1,5 @@
 //! The ranks a decomposed grid is spread over, as the solver sees them: a small [`Comm`] trait
-//! (halo exchange between neighbouring slabs, all-gather, gather, broadcast) with the
+//! (halo exchange between neighbouring blocks, all-gather, gather, broadcast) with the
 //! single-rank [`Serial`] implementation here. The MPI one (`crate::ranks::mpi`, feature
 //! `mpi`) and an in-process one over threads (`crate::ranks::threads`, for tests) live outside
 //! the pure core, which only calls this trait.

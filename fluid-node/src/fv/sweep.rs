@@ -227,7 +227,7 @@ fn gather(
     let [k_lo, k_hi] = halo.overlaps();
     let n = own + k_lo + k_hi;
     line[ng + k_lo..ng + k_lo + own].copy_from_slice(&cells[..own]);
-    // Pencils along the slab axis are numbered like the cells of a plane.
+    // The halo's planes hold the cells of each plane in the order of the pencils.
     let plane = pencils.count;
     let from_plane = |planes: &[f64], t: usize| {
         let c = (t * plane + p) * nvar;

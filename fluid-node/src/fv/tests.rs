@@ -373,8 +373,8 @@ fn wall_runs_in_a_decomposed_lines_ghost_cells_give_one_rank_fluxes() {
         vacuum_p: 1e-10,
     };
     // Rank 1 of 5 owns cells 8..16; its line runs over 5..19 with ghosts 2..5 and 19..22.
-    let slab = Slab::new(&global, 1, 5, 3, [BoundaryKind::Wall; 2]).expect("slab");
-    assert_eq!((slab.offset, slab.depth, slab.overlap), (8, 6, 3));
+    let slab = Slab::new(&global, 1, [5, 1, 1], 3, [[BoundaryKind::Wall; 2]; 3]).expect("slab");
+    assert_eq!((slab.offset[0], slab.depth, slab.overlap), (8, 6, 3));
     let nvar = 3;
     let mut u = smooth_1d(n);
     // Covered cells 2–3 and 20–21 hold states of their own (a ghost state of another sweep).
@@ -573,15 +573,16 @@ fn wall_runs_at_the_cuts_give_one_rank_states_and_counters() {
         let mut states = Vec::new();
         let mut counts = [0u32; 3];
         for rank in 0..5 {
-            let slab = Slab::new(&global, rank, 5, 3, [BoundaryKind::Wall; 2]).expect("slab");
-            let (lo, hi, d) = (slab.offset, slab.offset + 8, slab.depth);
+            let bc = [[BoundaryKind::Wall; 2]; 3];
+            let slab = Slab::new(&global, rank, [5, 1, 1], 3, bc).expect("slab");
+            let (lo, hi, d) = (slab.offset[0], slab.offset[0] + 8, slab.depth);
             let halo = SlabHalo {
-                lo: slab.lo.map(|_| &u[(lo - d) * nvar..lo * nvar]),
-                hi: slab.hi.map(|_| &u[hi * nvar..(hi + d) * nvar]),
+                lo: slab.lo[0].map(|_| &u[(lo - d) * nvar..lo * nvar]),
+                hi: slab.hi[0].map(|_| &u[hi * nvar..(hi + d) * nvar]),
                 depth: d,
                 overlap: slab.overlap,
                 n_global: n,
-                start: lo as isize - if slab.lo.is_some() { 3 } else { 0 },
+                start: lo as isize - if slab.lo[0].is_some() { 3 } else { 0 },
             };
             let (out, stats) = sweep(&slab.local, &u[lo * nvar..hi * nvar], &halo);
             states.extend(out);

@@ -157,7 +157,7 @@ pub enum FollowError {
     Decode(String),
 }
 
-/// A rank other than 0: makes rank 0's calls on its slab until [`Call::Stop`]. `model` is
+/// A rank other than 0: makes rank 0's calls on its block until [`Call::Stop`]. `model` is
 /// `Err` when building it failed; rank 0 meets the same error and stops, and the error is
 /// returned then. `wait` receives the next call (a broadcast from rank 0 that may wait long).
 pub fn follow(

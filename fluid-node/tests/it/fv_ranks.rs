@@ -15,11 +15,11 @@ use crate::fv_common;
 
 /// A blast off-centre with a swirl on `cells`: the ball sits across the middle of the last
 /// axis, where 2 and 4 ranks cut it.
-fn blast(cells: &[usize]) -> (Grid, FluidState) {
+pub(crate) fn blast(cells: &[usize]) -> (Grid, FluidState) {
     fv_common::blast_state(cells, 0.47)
 }
 
-fn params(order: u32, boundary: [[BoundaryKind; 2]; 3]) -> FluidParams {
+pub(crate) fn params(order: u32, boundary: [[BoundaryKind; 2]; 3]) -> FluidParams {
     FluidParams {
         gamma: 1.4,
         cfl: 0.5,
@@ -33,17 +33,31 @@ fn params(order: u32, boundary: [[BoundaryKind; 2]; 3]) -> FluidParams {
 /// What rank 0 sees after the steps: every report, the gathered state and checkpoint, the
 /// totals, all as bits.
 #[derive(Debug, PartialEq)]
-struct Run {
-    reports: Vec<String>,
-    state: Vec<u64>,
+pub(crate) struct Run {
+    pub(crate) reports: Vec<String>,
+    pub(crate) state: Vec<u64>,
     totals: String,
-    checkpoint: Vec<u8>,
+    pub(crate) checkpoint: Vec<u8>,
     limiting_cell: usize,
 }
 
-/// `steps` CFL steps of `(grid, state)` on `ranks` thread ranks (2 rayon threads each).
-fn run(
+/// `steps` CFL steps of `(grid, state)` on `ranks` thread ranks (2 rayon threads each), cut
+/// as `protocol::decomp::choose` cuts it.
+pub(crate) fn run(
     ranks: usize,
+    grid: &Grid,
+    state: &FluidState,
+    params: &FluidParams,
+    steps: usize,
+    restore: Option<&[u8]>,
+) -> Run {
+    run_on(ranks, None, grid, state, params, steps, restore)
+}
+
+/// [`run`] with the process grid `dims` (`None`: the chosen one).
+pub(crate) fn run_on(
+    ranks: usize,
+    dims: Option<[usize; 3]>,
     grid: &Grid,
     state: &FluidState,
     params: &FluidParams,
@@ -56,8 +70,9 @@ fn run(
             let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
             let restore = restore.map(<[u8]>::to_vec);
             std::thread::spawn(move || {
-                let mut s = FluidSolver::decomposed(grid, params, state, 2, Box::new(comm))
-                    .expect("solver");
+                let mut s =
+                    FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
+                        .expect("solver");
                 if let Some(bytes) = restore {
                     s.restore_checkpoint(&bytes).expect("restores");
                 }
@@ -105,9 +120,23 @@ fn assert_same_for_ranks(
     steps: usize,
     ranks: &[usize],
 ) {
+    let decomps: Vec<_> = ranks.iter().map(|&k| (k, None)).collect();
+    assert_same_on(name, grid, state, params, steps, &decomps);
+}
+
+/// [`assert_same_for_ranks`] on `(ranks, process grid)` pairs.
+pub(crate) fn assert_same_on(
+    name: &str,
+    grid: &Grid,
+    state: &FluidState,
+    params: &FluidParams,
+    steps: usize,
+    decomps: &[(usize, Option<[usize; 3]>)],
+) {
     let one = run(1, grid, state, params, steps, None);
-    for &k in ranks {
-        let many = run(k, grid, state, params, steps, None);
+    for &(k, dims) in decomps {
+        let many = run_on(k, dims, grid, state, params, steps, None);
+        let k = format!("{k} {dims:?}");
         assert_eq!(
             one.reports, many.reports,
             "{name}: reports of 1 and {k} ranks"
@@ -295,11 +324,15 @@ fn too_many_ranks_for_the_halo_is_refused() {
         })
         .collect();
     assert!(errs[0].contains("fluid.ranks = 4"), "{}", errs[0]);
-    assert!(errs[0].contains("6 planes"), "{}", errs[0]);
+    assert!(
+        errs[0].contains("7 cells along each cut axis"),
+        "{}",
+        errs[0]
+    );
 }
 
 /// Several rigid bodies as the particles of one frame.
-fn bodies(frames: &[SolidFrame]) -> SolidFrame {
+pub(crate) fn bodies(frames: &[SolidFrame]) -> SolidFrame {
     let mut all = SolidFrame {
         dim: frames[0].dim,
         ..SolidFrame::default()
@@ -333,21 +366,24 @@ struct CoupledRun {
 /// `steps` coupled steps of the bodies `solid` moving at their velocities through the blast of
 /// `(grid, state)`, on `ranks` thread ranks; odd steps take the explicit scheme's solid flux.
 fn coupled_run(
-    ranks: usize,
+    dims: [usize; 3],
     grid: &Grid,
     state: &FluidState,
     params: &FluidParams,
     solid: &SolidFrame,
     steps: u64,
 ) -> CoupledRun {
+    let ranks = dims.iter().product();
     let handles: Vec<_> = ThreadRanks::new(ranks)
         .into_iter()
         .map(|comm| {
             let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
             let solid = solid.clone();
             std::thread::spawn(move || {
-                let mut s = FluidSolver::decomposed(grid, params, state, 2, Box::new(comm))
-                    .expect("solver");
+                let dims = (ranks > 1).then_some(dims);
+                let mut s =
+                    FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
+                        .expect("solver");
                 let mut e = Embedded::new(&s, solid).expect("embedded");
                 let mut out = Vec::new();
                 let (mut mixed, mut uncovered) = (0, 0);
@@ -390,35 +426,36 @@ fn coupled_run(
     runs[0].take().expect("rank 0 gathers")
 }
 
-fn assert_coupled_same_for_ranks(
+pub(crate) fn assert_coupled_same_for_ranks(
     name: &str,
     grid: &Grid,
     state: &FluidState,
     params: &FluidParams,
     solid: &SolidFrame,
     steps: u64,
+    decomps: &[[usize; 3]],
 ) {
-    let one = coupled_run(1, grid, state, params, solid, steps);
+    let one = coupled_run([1; 3], grid, state, params, solid, steps);
     eprintln!(
         "{name}: {} cells mixed, {} uncovered over {steps} steps",
         one.mixed, one.uncovered
     );
     assert!(one.mixed > 0 && one.uncovered > 0, "{name}: mixing happens");
-    for k in [2, 4] {
+    for &k in decomps {
         let many = coupled_run(k, grid, state, params, solid, steps);
         for (n, (a, b)) in one.steps.iter().zip(&many.steps).enumerate() {
-            assert_eq!(a, b, "{name}: step {n} on 1 and {k} ranks");
+            assert_eq!(a, b, "{name}: step {n} on 1 rank and {k:?}");
         }
         assert!(
             one.state == many.state,
-            "{name}: state of 1 and {k} ranks differs"
+            "{name}: state of 1 rank and {k:?} differs"
         );
     }
 }
 
 /// Covered cells (Λ = 1) of `solid` on both sides of the plane `cut` of the last axis, in one
 /// pencil along it: a wall run across the cut.
-fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool {
+pub(crate) fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool {
     let s = FluidSolver::new(
         grid.clone(),
         params(5, [[BoundaryKind::Wall; 2]; 3]),
@@ -444,9 +481,10 @@ fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool {
 /// Issue 16 item 3 in 2-D: a tilted block and a plate two cells thick (a wall run that cuts
 /// the pencils along y) lie across the cut between ranks and move through it, so that the
 /// cut cells, swept amounts, ghost states, wall runs and mixing meet the cut; every step's
-/// reports, loads and totals and the final state are those of one rank.
+/// reports, loads and totals and the final state are those of one rank. Issue 40: the same on
+/// blocks (2 × 2, 3 × 1, 2 × 4: cuts along x through the block and the plates as well).
 #[test]
-fn a_moving_body_across_the_cut_2d_is_bit_identical_on_1_2_and_4_ranks() {
+fn a_moving_body_across_the_cuts_2d_is_bit_identical_on_slabs_and_blocks() {
     let (grid, state) = blast(&[40, 48]);
     let block = embedded_support::polygon_2d(
         &[[0.70, 0.38], [0.90, 0.44], [0.84, 0.64], [0.66, 0.58]],
@@ -485,6 +523,7 @@ fn a_moving_body_across_the_cut_2d_is_bit_identical_on_1_2_and_4_ranks() {
             &params(order, walls),
             &solid,
             10,
+            &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [3, 1, 1], [2, 4, 1]],
         );
     }
     // Periodic along y, with a plate on planes 1–2 beside the seam between the last rank and
@@ -507,13 +546,16 @@ fn a_moving_body_across_the_cut_2d_is_bit_identical_on_1_2_and_4_ranks() {
         &params(5, periodic),
         &solid,
         10,
+        &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [1, 3, 1]],
     );
 }
 
 /// The same in 3-D: a rotated box and a plate two cells thick across the cut at z = 0.5,
-/// moving through it; eight steps visit every sweep order.
+/// moving through it; eight steps visit every sweep order. Slabs of 2, 3 and 4, and blocks
+/// 1 × 2 × 2, 1 × 2 × 1 and 1 × 2 × 4 (y cut at 0.5 through both bodies; x is not cut in
+/// 3-D, `protocol::decomp`).
 #[test]
-fn a_moving_body_across_the_cut_3d_is_bit_identical_on_1_2_and_4_ranks() {
+fn a_moving_body_across_the_cuts_3d_is_bit_identical_on_slabs_and_blocks() {
     let (grid, state) = blast(&[16, 16, 24]);
     let tilt = embedded_support::rotation([0.6, 0.0, 0.8], 0.5);
     let block =
@@ -528,5 +570,14 @@ fn a_moving_body_across_the_cut_3d_is_bit_identical_on_1_2_and_4_ranks() {
         [BoundaryKind::Wall; 2],
         [BoundaryKind::Outflow, BoundaryKind::Wall],
     ];
-    assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &params(5, open), &solid, 8);
+    let p = params(5, open);
+    let decomps = [
+        [1, 1, 2],
+        [1, 1, 4],
+        [1, 2, 2],
+        [1, 2, 1],
+        [1, 1, 3],
+        [1, 2, 4],
+    ];
+    assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &p, &solid, 8, &decomps);
 }

@@ -20,6 +20,7 @@ mod embedded_uniform;
 mod embedded_wall_hit;
 mod embedded_withdrawn;
 mod fv_accuracy;
+mod fv_blocks;
 mod fv_characteristic;
 mod fv_common;
 mod fv_conservation;

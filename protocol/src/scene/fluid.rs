@@ -48,11 +48,16 @@ pub struct FluidConfig {
     /// A smooth analytic initial state (verification cases); replaces `init` when present.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub profile: Option<Profile>,
-    /// MPI ranks of the fluid (default 1): the grid is cut into this many slabs along its
-    /// slowest axis, each at least [`FluidConfig::halo_planes`] cells thick; results do not
-    /// depend on it. `coupler-node run --fluid-ranks` overrides it.
+    /// MPI ranks of the fluid (default 1): the grid is cut into this many blocks along its
+    /// last two axes ([`crate::decomp::choose`]), each at least [`FluidConfig::halo_planes`]
+    /// cells along every cut axis; results do not depend on it. `coupler-node run
+    /// --fluid-ranks` overrides it.
     #[serde(default = "default_ranks", skip_serializing_if = "is_one")]
     pub ranks: u32,
+    /// Blocks per axis (`[kx, ky]` or `[kx, ky, kz]`, product `ranks`): overrides the choice
+    /// of [`crate::decomp::choose`] ([`crate::decomp::check`] says which are allowed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decomposition: Option<Vec<u32>>,
 }
 
 fn default_ranks() -> u32 {
@@ -300,11 +305,27 @@ impl FluidConfig {
         }
     }
 
-    /// Planes of the slowest axis a rank needs when the grid is decomposed: the flux's ghost
+    /// Cells along each cut axis a rank needs when the grid is decomposed: the flux's ghost
     /// cells (3 for OSMP 3 and 5, 4 for OSMP 7) and the 3 rounds of the positivity fix.
     pub fn halo_planes(&self) -> u32 {
         let ghost = if self.flux.order >= 7 { 4 } else { 3 };
         ghost + 3
+    }
+
+    /// The process grid of `ranks` ranks on this grid: `decomposition` when given, else the
+    /// choice of [`crate::decomp::choose`]. `None` on one rank or when it does not fit (the
+    /// scene's validation refuses that).
+    pub fn process_grid(&self) -> Option<[usize; 3]> {
+        let cells: Vec<usize> = self.cells.iter().map(|&n| n as usize).collect();
+        let (ranks, depth) = (self.ranks as usize, self.halo_planes() as usize);
+        match &self.decomposition {
+            Some(d) => {
+                let dims = std::array::from_fn(|a| d.get(a).map_or(1, |&k| k as usize));
+                let extra = d.iter().skip(3).any(|&k| k != 1);
+                (!extra && crate::decomp::check(&cells, ranks, dims, depth).is_ok()).then_some(dims)
+            }
+            None => crate::decomp::choose(&cells, ranks, depth).ok(),
+        }
     }
 
     /// The `[fluid]` rules, in the order their errors are reported.
@@ -399,7 +420,7 @@ impl FluidConfig {
         Ok(())
     }
 
-    /// The MPI ranks: a real fluid with enough planes of the last axis for each.
+    /// The MPI ranks: a real fluid, and a process grid of them that fits its grid.
     fn validate_ranks(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let fluid = self;
         let dim = c.dim;
@@ -414,19 +435,48 @@ impl FluidConfig {
                     format!("{} with node {:?}", fluid.ranks, fluid.node),
                 ));
             }
-            let planes = fluid.cells[dim - 1] / fluid.ranks;
-            if planes < fluid.halo_planes() {
-                return Err(c.invalid(
-                    "fluid.ranks",
-                    &format!(
-                        "at most {} ranks: each needs {} planes of the last axis ({} cells)",
-                        (fluid.cells[dim - 1] / fluid.halo_planes()).max(1),
-                        fluid.halo_planes(),
-                        fluid.cells[dim - 1]
-                    ),
-                    fluid.ranks.to_string(),
-                ));
+            let cells: Vec<usize> = fluid.cells.iter().map(|&n| n as usize).collect();
+            let (ranks, depth) = (fluid.ranks as usize, fluid.halo_planes() as usize);
+            match &fluid.decomposition {
+                Some(d) => {
+                    let dims = std::array::from_fn(|a| d.get(a).map_or(1, |&k| k as usize));
+                    let long = d.len() != dim && d.len() != 3;
+                    let checked = crate::decomp::check(&cells, ranks, dims, depth);
+                    if long || checked.is_err() {
+                        let why = checked.err().map_or_else(
+                            || format!("one count per axis ({dim} or 3 with the extra ones 1)"),
+                            |e| e.to_string(),
+                        );
+                        return Err(c.invalid(
+                            "fluid.decomposition",
+                            &format!(
+                                "blocks per axis whose product is fluid.ranks = {ranks}, cutting \
+                                 only the last two axes: {why}"
+                            ),
+                            format!("{d:?}"),
+                        ));
+                    }
+                }
+                None => {
+                    if let Err(e) = crate::decomp::choose(&cells, ranks, depth) {
+                        return Err(c.invalid(
+                            "fluid.ranks",
+                            &format!("a count the grid can be cut into: {e}"),
+                            fluid.ranks.to_string(),
+                        ));
+                    }
+                }
             }
+        } else if fluid
+            .decomposition
+            .as_ref()
+            .is_some_and(|d| d.iter().any(|&k| k != 1))
+        {
+            return Err(c.invalid(
+                "fluid.decomposition",
+                "blocks per axis whose product is fluid.ranks = 1",
+                format!("{:?}", fluid.decomposition),
+            ));
         }
         Ok(())
     }

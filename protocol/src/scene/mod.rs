@@ -116,8 +116,10 @@ impl Scene {
         physics.run.threads = RunConfig::default().threads;
         if let Some(f) = physics.fluid.as_mut() {
             f.node = default_node_impl();
-            // Nor on the rank count (issue 16: bit-identical on any number of ranks).
+            // Nor on the rank count (issue 16: bit-identical on any number of ranks) or the
+            // blocks (issue 40).
             f.ranks = 1;
+            f.decomposition = None;
         }
         if let Some(s) = physics.solid.as_mut() {
             s.node = default_node_impl();

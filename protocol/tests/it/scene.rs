@@ -246,7 +246,7 @@ fn a_misspelt_key_or_value_gets_a_suggestion_and_the_whole_list() {
         ),
         "{message}"
     );
-    assert!(message.trim_end().ends_with("`ranks`"), "{message}");
+    assert!(message.trim_end().ends_with("`decomposition`"), "{message}");
     assert!(!message.contains("more bytes"), "{message}");
     let (path, message) = parse("scheme = \"osmp\"", "scheme = \"osnp\"");
     assert_eq!(path, "fluid.flux.scheme");
@@ -270,4 +270,47 @@ fn a_misspelt_key_or_value_gets_a_suggestion_and_the_whole_list() {
         }
         other => panic!("expected an Invalid error, got {other:?}"),
     }
+}
+
+/// Issue 40: `fluid.decomposition` is read, and a process grid that cuts x in 3-D, does not
+/// multiply to `fluid.ranks`, has the wrong length or makes blocks thinner than the halo is
+/// refused naming the key; without it, a rank count no grid fits is refused naming
+/// `fluid.ranks`.
+#[test]
+fn a_decomposition_is_read_and_a_bad_one_is_refused_naming_the_key() {
+    let scene = |ranks: u32, decomposition: &str| {
+        let text = format!(
+            "name = \"d\"\n[fluid]\nlower = [0.0, 0.0, 0.0]\nupper = [1.0, 1.0, 1.0]\n\
+             cells = [16, 16, 24]\nranks = {ranks}\n{decomposition}\n[[fluid.init]]\n\
+             region = \"all\"\nrho = 1.0\np = 1.0\nvelocity = [0.0, 0.0, 0.0]\n"
+        );
+        Scene::from_toml_str(&text, "d.toml")
+    };
+    let ok = scene(4, "decomposition = [1, 2, 2]").expect("valid");
+    let fluid = ok.fluid.as_ref().expect("fluid");
+    assert_eq!(fluid.decomposition, Some(vec![1, 2, 2]));
+    assert_eq!(fluid.process_grid(), Some([1, 2, 2]));
+    assert_eq!(
+        scene(4, "")
+            .expect("valid")
+            .fluid
+            .expect("fluid")
+            .process_grid(),
+        Some([1, 1, 4])
+    );
+    for bad in [
+        "[2, 2, 1]",
+        "[1, 2, 1]",
+        "[1, 4]",
+        "[1, 4, 1]",
+        "[1, 2, 2, 1]",
+    ] {
+        let res = scene(4, &format!("decomposition = {bad}"));
+        assert_eq!(invalid_path(res), "fluid.decomposition", "{bad}");
+    }
+    assert_eq!(invalid_path(scene(16, "")), "fluid.ranks");
+    assert_eq!(
+        invalid_path(scene(1, "decomposition = [1, 1, 2]")),
+        "fluid.decomposition"
+    );
 }

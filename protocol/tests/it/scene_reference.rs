@@ -124,6 +124,7 @@ fn fluid(profile: Profile) -> FluidConfig {
         }),
         profile: Some(profile),
         ranks: 2,
+        decomposition: Some(vec![1, 2]),
     }
 }
 

@@ -10,7 +10,7 @@ use crate::fv::euler::NQ;
 use crate::fv::isa::Isa;
 use crate::fv::line::{FluxKind, LineScratch};
 use crate::fv::scene::{ConfigError, from_scene};
-use crate::fv::slab::{Slab, SlabError};
+use crate::fv::slab::{Slab, SlabError, take_block};
 use crate::fv::solver::hooks::LocalHooks;
 use crate::fv::solver::pages;
 use crate::fv::state::{FluidParams, FluidState};
@@ -59,14 +59,17 @@ pub enum SolverError {
 }
 
 /// The finite-volume Euler solver on a Cartesian grid of 1, 2 or 3 dimensions, on one rank or
-/// on one slab of a grid decomposed over several ([`Slab`], [`Comm`]).
+/// on one block of a grid decomposed over several ([`Slab`], [`Comm`]).
 pub struct FluidSolver {
     /// This rank's cells (the whole grid on one rank).
     pub(super) grid: Grid,
     pub(super) slab: Slab,
     pub(super) comm: Box<dyn Comm>,
-    /// Halo planes of the neighbours below and above (empty without neighbours).
-    pub(super) halo: [Vec<f64>; 2],
+    /// Per axis: halo planes of the neighbours below and above (empty without neighbours),
+    /// x-fastest in the order of the pencils along that axis, lowest plane first.
+    pub(super) halo: [[Vec<f64>; 2]; 3],
+    /// This rank's planes sent to the neighbours along an axis other than the last (scratch).
+    pub(super) halo_send: [Vec<f64>; 2],
     /// The [`SplitHooks`](crate::fv::SplitHooks) of a coupled step on this rank's slab (scratch).
     pub(super) local: LocalHooks,
     pub(super) params: FluidParams,
@@ -96,15 +99,21 @@ impl FluidSolver {
         FluidSolver::new(grid, params, state, threads)
     }
 
-    /// Builds this rank's slab of the solver of the scene's `[fluid]` table, the grid
-    /// decomposed over the ranks of `comm` (see [`FluidSolver::decomposed`]).
+    /// Builds this rank's block of the solver of the scene's `[fluid]` table, the grid
+    /// decomposed over the ranks of `comm` as `fluid.decomposition` says, or as
+    /// [`protocol::decomp::choose`] chooses (see [`FluidSolver::decomposed`]).
     pub fn from_scene_on(
         cfg: &FluidConfig,
         threads: usize,
         comm: Box<dyn Comm>,
     ) -> Result<FluidSolver, SolverError> {
         let (grid, params, state) = from_scene(cfg)?;
-        FluidSolver::decomposed(grid, params, state, threads, comm)
+        // A given process grid is checked by `decomposed_as` (an error, not the default).
+        let dims = cfg
+            .decomposition
+            .as_ref()
+            .map(|d| std::array::from_fn(|a| d.get(a).map_or(1, |&k| k as usize)));
+        FluidSolver::decomposed_as(grid, params, state, threads, comm, dims)
     }
 
     /// Builds the solver from parts (`state` must have `grid.dim + 2` values per cell).
@@ -117,9 +126,9 @@ impl FluidSolver {
         FluidSolver::decomposed(grid, params, state, threads, Box::new(Serial))
     }
 
-    /// Builds this rank's slab of a solver over the ranks of `comm`: `grid` and `state` are the
-    /// whole grid's (every rank builds the same), the rank keeps its planes along the slowest
-    /// axis ([`Slab`]). Every method that reduces over the grid (the step, the CFL step, the
+    /// Builds this rank's block of a solver over the ranks of `comm`: `grid` and `state` are the
+    /// whole grid's (every rank builds the same), the rank keeps its block ([`Slab`], the
+    /// process grid of [`protocol::decomp::choose`]). Every method that reduces over the grid (the step, the CFL step, the
     /// totals, checkpoints, [`FluidSolver::gather_state`]) is then collective: every rank calls
     /// it, in the same order.
     pub fn decomposed(
@@ -128,6 +137,19 @@ impl FluidSolver {
         state: FluidState,
         threads: usize,
         comm: Box<dyn Comm>,
+    ) -> Result<FluidSolver, SolverError> {
+        FluidSolver::decomposed_as(grid, params, state, threads, comm, None)
+    }
+
+    /// [`FluidSolver::decomposed`] with the process grid `dims` (blocks per axis, their
+    /// product the ranks of `comm`; `None`: [`protocol::decomp::choose`]).
+    pub fn decomposed_as(
+        grid: Grid,
+        params: FluidParams,
+        state: FluidState,
+        threads: usize,
+        comm: Box<dyn Comm>,
+        dims: Option<[usize; 3]>,
     ) -> Result<FluidSolver, SolverError> {
         if state.nvar != grid.dim + 2 || state.u.len() != state.nvar * grid.n_cells() {
             return Err(SolverError::StateSize {
@@ -145,39 +167,44 @@ impl FluidSolver {
         let slab = if comm.size() == 1 {
             Slab::whole(&grid)
         } else {
-            let axis = grid.dim - 1;
+            let (ranks, depth) = (
+                comm.size(),
+                params.ghost_cells() + crate::fv::line::MAX_FIXES,
+            );
+            let cells = &grid.cells[..grid.dim];
+            let dims = match dims {
+                Some(dims) => protocol::decomp::check(cells, ranks, dims, depth).map(|()| dims),
+                None => protocol::decomp::choose(cells, ranks, depth),
+            }
+            .map_err(|source| SlabError::Decomposition { ranks, source })?;
             Slab::new(
                 &grid,
                 comm.rank(),
-                comm.size(),
+                dims,
                 params.ghost_cells(),
-                params.boundary[axis],
+                params.boundary,
             )?
         };
         let nvar = state.nvar;
         let state = if slab.ranks == 1 {
             state
         } else {
-            let range = slab.global_range();
             FluidState {
                 nvar,
-                u: state.u[range.start * nvar..range.end * nvar].to_vec(),
+                u: take_block(&grid, slab.block_of_rank(slab.rank), nvar, &state.u),
             }
         };
         let grid = slab.local.clone();
-        let halo_len = slab.depth * slab.plane() * nvar;
-        let halo = [
-            if slab.lo.is_some() {
-                vec![0.0; halo_len]
-            } else {
-                Vec::new()
-            },
-            if slab.hi.is_some() {
-                vec![0.0; halo_len]
-            } else {
-                Vec::new()
-            },
-        ];
+        let halo = std::array::from_fn(|a| {
+            let len = slab.depth * (grid.n_cells() / grid.cells[a]) * nvar;
+            [slab.lo[a], slab.hi[a]].map(|n| {
+                if n.is_some() {
+                    vec![0.0; len]
+                } else {
+                    Vec::new()
+                }
+            })
+        });
         let threads = threads.max(1);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -193,6 +220,7 @@ impl FluidSolver {
             slab,
             comm,
             halo,
+            halo_send: [Vec::new(), Vec::new()],
             local: LocalHooks::default(),
             buffer: pages::huge_vec(state.u.len(), None),
             pencil_out: vec![PencilOut::default(); max_pencils],
@@ -314,6 +342,7 @@ impl FluidSolver {
             + self.pbar.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&self.pencil_out)
             + vec_bytes(&self.scratch)
-            + self.halo.iter().map(vec_bytes).sum::<usize>()
+            + self.halo.iter().flatten().map(vec_bytes).sum::<usize>()
+            + self.halo_send.iter().map(vec_bytes).sum::<usize>()
     }
 }

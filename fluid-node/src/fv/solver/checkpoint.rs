@@ -4,6 +4,7 @@
 use std::sync::OnceLock;
 
 use crate::fv::euler::NQ;
+use crate::fv::slab::take_block;
 use crate::fv::solver::FluidSolver;
 
 /// Checkpoint layout (node-private bytes, see [`FluidSolver::to_checkpoint`]).
@@ -72,7 +73,7 @@ impl FluidSolver {
     }
 
     /// Restores a checkpoint written by [`FluidSolver::to_checkpoint`] for the same grid (every
-    /// rank passes the whole checkpoint and keeps its slab, so any rank count restores it).
+    /// rank passes the whole checkpoint and keeps its block, so any rank count restores it).
     pub fn restore_checkpoint(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         let c: Checkpoint = protocol::codec::decode_blob(bytes).map_err(CheckpointError::Decode)?;
         if c.version != CHECKPOINT_VERSION {
@@ -93,10 +94,10 @@ impl FluidSolver {
                 values: nvar * global.n_cells(),
             });
         }
-        let range = self.slab.global_range();
+        let block = self.slab.block_of_rank(self.slab.rank);
         self.state
             .u
-            .copy_from_slice(&c.u[range.start * nvar..range.end * nvar]);
+            .copy_from_slice(&take_block(global, block, nvar, &c.u));
         self.step = c.step;
         self.time = c.time;
         self.outflow = c.outflow;
@@ -105,7 +106,11 @@ impl FluidSolver {
             if c.pbar.is_empty() {
                 self.keep_directional_pressures(true);
             } else {
-                self.pbar = c.pbar.iter().map(|p| p[range.clone()].to_vec()).collect();
+                self.pbar = c
+                    .pbar
+                    .iter()
+                    .map(|p| take_block(&self.slab.global, block, 1, p))
+                    .collect();
             }
         }
         self.dt_cache = OnceLock::new();

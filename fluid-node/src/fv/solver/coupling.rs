@@ -1,4 +1,4 @@
-//! What the split sweeps do for a coupled step ([`SplitHooks`]), on one rank or on one slab of
+//! What the split sweeps do for a coupled step ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the halo exchange, ghost states and vacuum written before a sweep, the
 //! pressures recorded, and the kept fluxes and pressures gathered on every rank (issue 16).
 
@@ -7,30 +7,48 @@ use crate::fv::euler::NQ;
 use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::cell_primitive;
 use crate::fv::solver::hooks::{GhostFill, SplitHooks};
-use crate::fv::sweep::{frame, from_local, mirror, to_local};
+use crate::fv::sweep::{Pencils, frame, from_local, mirror, to_local};
 
-/// What one rank sends of the hooks' outputs: the pressures of its slots (one list per axis)
-/// and its kept fluxes `(slot, flux)` per axis.
+/// What one rank sends of the hooks' outputs: the pressures of the slots of its cells, in
+/// order (one list per axis), and its kept fluxes `(slot, flux)` per axis.
 #[derive(Default, serde::Serialize, serde::Deserialize)]
 struct HookOutputs {
-    pressure_start: u64,
     pressures: Vec<Vec<f64>>,
     fluxes: Vec<Vec<(u32, [f64; NQ])>>,
 }
 
 impl FluidSolver {
-    /// Sends this rank's boundary planes to its neighbours and receives theirs into the halo
-    /// (collective between neighbours).
-    pub(super) fn exchange_halo(&mut self) {
+    /// Sends this rank's boundary planes along `axis` to its neighbours and receives theirs
+    /// into the halo of that axis (collective between neighbours). Planes normal to the last
+    /// axis are contiguous; along another axis they are packed in the order of the pencils
+    /// along it ([`Pencils`]).
+    pub(super) fn exchange_halo(&mut self, axis: usize) {
         let slab = &self.slab;
         let u = &self.state.u;
-        let d = self.halo[0].len().max(self.halo[1].len());
-        let [lo, hi] = &mut self.halo;
+        let nvar = self.state.nvar;
+        let [lo, hi] = &mut self.halo[axis];
+        let d = lo.len().max(hi.len());
+        let (to_lo, to_hi) = if axis == self.grid.dim - 1 {
+            (&u[..d], &u[u.len() - d..])
+        } else {
+            let pencils = Pencils::new(&self.grid, axis);
+            for (side, send) in self.halo_send.iter_mut().enumerate() {
+                send.clear();
+                let first = side * (pencils.n - slab.depth);
+                for t in first..first + slab.depth {
+                    for p in 0..pencils.count {
+                        let c = (pencils.base(p) + t * pencils.stride) * nvar;
+                        send.extend_from_slice(&u[c..c + nvar]);
+                    }
+                }
+            }
+            (&self.halo_send[0][..], &self.halo_send[1][..])
+        };
         self.comm.exchange_halo(HaloExchange {
-            to_lo: slab.lo.map(|r| (r, &u[..d])),
-            to_hi: slab.hi.map(|r| (r, &u[u.len() - d..])),
-            from_lo: slab.lo.map(|r| (r, &mut lo[..])),
-            from_hi: slab.hi.map(|r| (r, &mut hi[..])),
+            to_lo: slab.lo[axis].map(|r| (r, to_lo)),
+            to_hi: slab.hi[axis].map(|r| (r, to_hi)),
+            from_lo: slab.lo[axis].map(|r| (r, &mut lo[..])),
+            from_hi: slab.hi[axis].map(|r| (r, &mut hi[..])),
         });
     }
 
@@ -39,66 +57,86 @@ impl FluidSolver {
     pub fn apply_vacuum(&mut self, cells: &[u32]) {
         self.sums_cache = std::sync::OnceLock::new();
         let nvar = self.state.nvar;
-        let range = self.slab.global_range();
         for &c in cells {
-            if range.contains(&(c as usize)) {
-                let c = (c as usize - range.start) * nvar;
-                self.state.u[c..c + nvar].fill(0.0);
+            if let Some(c) = self.slab.to_local(c as usize) {
+                self.state.u[c * nvar..(c + 1) * nvar].fill(0.0);
             }
         }
     }
 
     /// Writes the ghost states of `fills` (see [`GhostFill`]) on this rank's cells for a sweep
-    /// along `axis`. Along the slab axis of a decomposed grid the halo is exchanged first, since
+    /// along `axis`. Along a cut axis of a decomposed grid the halo is exchanged first, since
     /// a ghost may mirror a neighbour's cell (collective then).
     pub fn apply_ghosts(&mut self, axis: usize, fills: &[GhostFill]) {
         self.sums_cache = std::sync::OnceLock::new();
-        let decomposed = axis == self.slab.axis && self.slab.decomposed();
+        let decomposed = self.slab.cut(axis);
         if decomposed {
-            self.exchange_halo();
+            self.exchange_halo(axis);
         }
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         let fr = frame(dim, axis);
         let slab = &self.slab;
-        let range = slab.global_range();
-        let plane = slab.plane();
-        let (below, above) = (
-            (slab.offset - slab.depth.min(slab.offset)) * plane,
-            range.end,
-        );
+        let pencils = Pencils::new(&self.grid, axis);
         for g in fills {
-            let dst = g.cell as usize;
-            if !range.contains(&dst) {
+            let Some(d) = slab.to_local(g.cell as usize) else {
                 continue;
-            }
+            };
             let src = g.mirror_of as usize;
-            let cell: &[f64] = if range.contains(&src) {
-                let s = (src - range.start) * nvar;
-                &self.state.u[s..s + nvar]
+            let cell: &[f64] = if let Some(s) = slab.to_local(src) {
+                &self.state.u[s * nvar..(s + 1) * nvar]
             } else {
-                // NOTE: a ghost mirrors a cell at most `2 ng − 1` cells away along the sweep,
-                // within the `ng + 3` planes of the halo.
+                // NOTE: a ghost mirrors a cell of its own pencil at most `2 ng − 1` cells away
+                // along the sweep, within the `ng + 3` planes of the halo.
+                let at = self.halo_cell(axis, &pencils, d, src);
                 assert!(
-                    decomposed
-                        && ((below..range.start).contains(&src)
-                            || (above..above + slab.depth * plane).contains(&src)),
-                    "ghost of cell {dst} mirrors cell {src}, outside rank {}'s cells and halo",
+                    decomposed && at.is_some(),
+                    "ghost of cell {} mirrors cell {src}, outside rank {}'s cells and halo",
+                    g.cell,
                     slab.rank
                 );
-                let (halo, first) = if src < range.start {
-                    (&self.halo[0], range.start - slab.depth * plane)
-                } else {
-                    (&self.halo[1], above)
-                };
-                let s = (src - first) * nvar;
-                &halo[s..s + nvar]
+                let (side, s) = at.expect("checked");
+                &self.halo[axis][side][s * nvar..(s + 1) * nvar]
             };
             let local = to_local(cell, dim, &fr);
             let ghost = mirror(&local, &g.wall.in_frame(&fr));
-            let d = (dst - range.start) * nvar;
-            from_local(&ghost, dim, &fr, &mut self.state.u[d..d + nvar]);
+            from_local(
+                &ghost,
+                dim,
+                &fr,
+                &mut self.state.u[d * nvar..(d + 1) * nvar],
+            );
         }
+    }
+
+    /// Where the global cell `src` on the pencil along `axis` through local cell `d` lies in
+    /// the halo of that axis: `(side, cell of the halo)`, `None` beyond it.
+    fn halo_cell(
+        &self,
+        axis: usize,
+        pencils: &Pencils,
+        d: usize,
+        src: usize,
+    ) -> Option<(usize, usize)> {
+        let slab = &self.slab;
+        let g = slab.global.ijk(src);
+        let mut l = self.grid.ijk(d);
+        let first = slab.offset[axis];
+        for a in (0..3).filter(|&a| a != axis) {
+            if g[a] != l[a] + slab.offset[a] {
+                return None;
+            }
+        }
+        l[axis] = 0;
+        let base = self.grid.index(l[0], l[1], l[2]);
+        let p = base % pencils.stride + (base / (pencils.stride * pencils.n)) * pencils.stride;
+        let (side, t) = if g[axis] < first {
+            (0, g[axis].checked_sub(first.checked_sub(slab.depth)?)?)
+        } else {
+            (1, g[axis] - (first + pencils.n))
+        };
+        (t < slab.depth && !self.halo[axis][side].is_empty())
+            .then_some((side, t * pencils.count + p))
     }
 
     /// `p̄` of this rank's cells of `cells` (whole grid, ascending) into `out` (zero for the
@@ -107,15 +145,15 @@ impl FluidSolver {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         let gamma = self.params.gamma;
-        let range = self.slab.global_range();
-        let lo = cells.partition_point(|&c| (c as usize) < range.start);
-        let hi = cells.partition_point(|&c| (c as usize) < range.end);
-        self.local.pressure_range = lo..hi;
+        let slots = &mut self.local.pressure_slots;
+        slots.clear();
         out.clear();
         out.resize(cells.len(), 0.0);
-        for (k, &c) in cells.iter().enumerate().take(hi).skip(lo) {
-            let c = (c as usize - range.start) * nvar;
-            out[k] = cell_primitive(&self.state.u[c..c + nvar], dim, gamma).p;
+        for (k, &c) in cells.iter().enumerate() {
+            if let Some(c) = self.slab.to_local(c as usize) {
+                slots.push(k as u32);
+                out[k] = cell_primitive(&self.state.u[c * nvar..(c + 1) * nvar], dim, gamma).p;
+            }
         }
     }
 
@@ -134,14 +172,16 @@ impl FluidSolver {
         if self.slab.ranks == 1 {
             return;
         }
-        let range = self.local.pressure_range.clone();
+        let slots = &self.local.pressure_slots;
         let mine = HookOutputs {
-            pressure_start: range.start as u64,
             pressures: (0..3)
                 .map(|a| {
-                    hooks.pressures[a]
-                        .get(range.clone())
-                        .map_or_else(Vec::new, <[f64]>::to_vec)
+                    let p = &hooks.pressures[a];
+                    if p.is_empty() {
+                        Vec::new()
+                    } else {
+                        slots.iter().map(|&k| p[k as usize]).collect()
+                    }
                 })
                 .collect(),
             fluxes: (0..3)
@@ -156,13 +196,13 @@ impl FluidSolver {
                 .collect(),
         };
         let all = self.comm.all_gather(&protocol::codec::encode_blob(&mine));
-        for bytes in &all {
+        let by_rank = self.slots_by_rank(&hooks.pressure_cells);
+        for (rank, bytes) in all.iter().enumerate() {
             let part: HookOutputs =
                 protocol::codec::decode_blob(bytes).expect("ranks send valid hook outputs");
-            let start = part.pressure_start as usize;
             for (a, values) in part.pressures.iter().enumerate() {
-                if !values.is_empty() {
-                    hooks.pressures[a][start..start + values.len()].copy_from_slice(values);
+                for (&k, &v) in by_rank[rank].iter().zip(values) {
+                    hooks.pressures[a][k as usize] = v;
                 }
             }
             for (a, fluxes) in part.fluxes.iter().enumerate() {
@@ -173,30 +213,44 @@ impl FluidSolver {
         }
     }
 
+    /// The slots of `cells` (whole grid) each rank owns, in order.
+    fn slots_by_rank(&self, cells: &[u32]) -> Vec<Vec<u32>> {
+        let mut out = vec![Vec::new(); self.slab.ranks];
+        for (k, &c) in cells.iter().enumerate() {
+            out[self.slab.owner(c as usize)].push(k as u32);
+        }
+        out
+    }
+
     /// The conserved values (`dim + 2` each) of `cells` (whole grid, ascending), from the ranks
     /// that hold them, on every rank (collective on several ranks).
     pub fn cells_at(&self, cells: &[u32]) -> Vec<f64> {
         debug_assert!(cells.is_sorted());
         let nvar = self.state.nvar;
-        let range = self.slab.global_range();
-        let lo = cells.partition_point(|&c| (c as usize) < range.start);
-        let hi = cells.partition_point(|&c| (c as usize) < range.end);
-        let mut mine = Vec::with_capacity((hi - lo) * nvar);
-        for &c in &cells[lo..hi] {
-            let c = (c as usize - range.start) * nvar;
-            mine.extend_from_slice(&self.state.u[c..c + nvar]);
+        let mut mine = Vec::new();
+        for &c in cells {
+            if let Some(c) = self.slab.to_local(c as usize) {
+                mine.extend_from_slice(&self.state.u[c * nvar..(c + 1) * nvar]);
+            }
         }
         if self.slab.ranks == 1 || cells.is_empty() {
             return mine;
         }
-        // Ranks hold consecutive ranges of cells: rank order is the order of `cells`.
-        let all: Vec<f64> = self
+        let parts: Vec<Vec<f64>> = self
             .comm
             .all_gather(&f64_bytes(&mine))
             .iter()
-            .flat_map(|b| bytes_f64(b))
+            .map(|b| bytes_f64(b))
             .collect();
-        assert_eq!(all.len(), cells.len() * nvar, "every cell on one rank");
+        let mut all = vec![0.0; cells.len() * nvar];
+        for (rank, slots) in self.slots_by_rank(cells).iter().enumerate() {
+            assert_eq!(parts[rank].len(), slots.len() * nvar, "rank {rank}'s cells");
+            for (i, &k) in slots.iter().enumerate() {
+                let k = k as usize;
+                all[k * nvar..(k + 1) * nvar]
+                    .copy_from_slice(&parts[rank][i * nvar..(i + 1) * nvar]);
+            }
+        }
         all
     }
 
@@ -204,11 +258,9 @@ impl FluidSolver {
     /// name that lie on this rank, in order (a later write of a cell wins).
     pub fn set_cells(&mut self, values: &[(u32, [f64; NQ])]) {
         let nvar = self.state.nvar;
-        let range = self.slab.global_range();
         for (c, v) in values {
-            if range.contains(&(*c as usize)) {
-                let c = (*c as usize - range.start) * nvar;
-                self.state.u[c..c + nvar].copy_from_slice(&v[..nvar]);
+            if let Some(c) = self.slab.to_local(*c as usize) {
+                self.state.u[c * nvar..(c + 1) * nvar].copy_from_slice(&v[..nvar]);
             }
         }
         self.dt_cache = std::sync::OnceLock::new();

@@ -1,12 +1,12 @@
-//! What a coupled step asks of the split sweeps ([`SplitHooks`]), on one rank or on one slab of
+//! What a coupled step asks of the split sweeps ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the hooks name cells, pencils and faces of the whole grid, each rank
 //! applies the ghost states and vacuum of its own cells and keeps the pressures and fluxes of
 //! its own cells and faces, and the outputs are gathered so that every rank ends with all of
 //! them, bit for bit those of one rank (issue 16).
 //!
-//! Ownership: cell `c` belongs to the rank holding its plane; face `m` along the slab axis (the
-//! low face of cell `m`) to the rank holding cell `m`, the last face to the last rank. A ghost
-//! state along the slab axis may mirror a cell of the neighbour (at most `2 ng − 1` cells away,
+//! Ownership: cell `c` belongs to the rank holding its block; face `m` along a cut axis (the
+//! low face of cell `m`) to the rank holding cell `m`, the last face to the last block. A ghost
+//! state along a cut axis may mirror a cell of the neighbour (at most `2 ng − 1` cells away,
 //! within the `ng + 3` halo planes), so those ghosts are written after an exchange of the halo.
 
 use crate::fv::slab::Slab;
@@ -58,72 +58,58 @@ pub(super) struct LocalHooks {
     pub(super) taps: [FaceTap; 3],
     /// Per axis: the slot of [`SplitHooks::taps`] of each kept face of `taps`.
     pub(super) slots: [Vec<u32>; 3],
-    /// Per axis: the wall runs of this rank's pencils (all of a pencil along the slab axis).
+    /// Per axis: the wall runs of this rank's pencils (all of a pencil along a cut axis).
     pub(super) walls: [Vec<WallRun>; 3],
-    /// The slots of [`SplitHooks::pressure_cells`] this rank records.
-    pub(super) pressure_range: std::ops::Range<usize>,
+    /// The slots of [`SplitHooks::pressure_cells`] this rank records, ascending.
+    pub(super) pressure_slots: Vec<u32>,
 }
 
 impl LocalHooks {
-    /// This rank's part of the taps and wall runs of the sweep along `axis`.
+    /// This rank's part of the taps and wall runs of the sweep along `axis`: the pencils of its
+    /// block (numbered along its lines), the faces of its cells along them (and the last face
+    /// on the last block), and every wall run of those pencils, at positions along the whole
+    /// pencil.
     pub(super) fn localize(&mut self, slab: &Slab, axis: usize, tap: &FaceTap, walls: &[WallRun]) {
         let local = &mut self.taps[axis];
         let slots = &mut self.slots[axis];
         let global = &slab.global;
-        let count_global = global.n_cells() / global.cells[axis];
         let count = slab.local.n_cells() / slab.local.cells[axis];
         local.clear(count);
         slots.clear();
         let out = &mut self.walls[axis];
         out.clear();
-        if axis == slab.axis {
-            // Pencils along the slab axis are numbered like the cells of a plane on every rank;
-            // a rank keeps the faces of its cells (and the last face on the last rank).
-            let below = if slab.lo.is_some() { slab.overlap } else { 0 };
-            let start = slab.offset as i64 - below as i64;
-            let own = slab.local.cells[axis];
-            let last = slab.offset + own == global.cells[axis];
+        let first = slab.offset[axis];
+        let below = if slab.lo[axis].is_some() {
+            slab.overlap
+        } else {
+            0
+        };
+        let start = first as i64 - below as i64;
+        let own = slab.local.cells[axis];
+        let last = first + own == global.cells[axis];
+        for p in 0..count {
+            let gp = slab.global_pencil(axis, p);
             if !tap.pencil_offsets.is_empty() {
-                for p in 0..count_global {
-                    let (lo, hi) = (
-                        tap.pencil_offsets[p] as usize,
-                        tap.pencil_offsets[p + 1] as usize,
-                    );
-                    for slot in lo..hi {
-                        let m = tap.positions[slot] as usize;
-                        if (slab.offset..slab.offset + own).contains(&m)
-                            || (last && m == slab.offset + own)
-                        {
-                            local.positions.push((m as i64 - start) as u32);
-                            slots.push(slot as u32);
-                            local.pencil_offsets[p + 1] += 1;
-                        }
+                let (lo, hi) = (
+                    tap.pencil_offsets[gp] as usize,
+                    tap.pencil_offsets[gp + 1] as usize,
+                );
+                let mut kept = 0;
+                for slot in lo..hi {
+                    let m = tap.positions[slot] as usize;
+                    if (first..first + own).contains(&m) || (last && m == first + own) {
+                        local.positions.push((m as i64 - start) as u32);
+                        slots.push(slot as u32);
+                        kept += 1;
                     }
                 }
-                for p in 0..count {
-                    local.pencil_offsets[p + 1] += local.pencil_offsets[p];
-                }
+                local.pencil_offsets[p + 1] = local.pencil_offsets[p] + kept;
             }
-            out.extend_from_slice(walls);
-        } else {
-            // Pencils along another axis: the rank's planes hold a contiguous range of them.
-            let first = slab.offset * (count_global / global.cells[slab.axis]);
-            if !tap.pencil_offsets.is_empty() {
-                let base = tap.pencil_offsets[first];
-                for p in 0..=count {
-                    local.pencil_offsets[p] = tap.pencil_offsets[first + p] - base;
-                }
-                let end = tap.pencil_offsets[first + count];
-                local
-                    .positions
-                    .extend_from_slice(&tap.positions[base as usize..end as usize]);
-                slots.extend(base..end);
-            }
-            let range = first as u32..(first + count) as u32;
-            out.extend(walls.iter().filter(|w| range.contains(&w.pencil)).map(|w| {
-                let mut w = *w;
-                w.pencil -= first as u32;
-                w
+            let lo = walls.partition_point(|w| (w.pencil as usize) < gp);
+            let hi = walls.partition_point(|w| (w.pencil as usize) <= gp);
+            out.extend(walls[lo..hi].iter().map(|w| WallRun {
+                pencil: p as u32,
+                ..*w
             }));
         }
     }

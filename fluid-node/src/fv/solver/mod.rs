@@ -16,6 +16,7 @@ mod cfl;
 mod checkpoint;
 mod coupling;
 mod hooks;
+mod outflow;
 mod pages;
 mod report;
 mod step;

@@ -11,7 +11,6 @@ use crate::fv::solver::cell::{BLOCK_CELLS, cell_primitive, to_full};
 use crate::fv::solver::{
     FluidSolver, MAX_TROUBLES, RefusedTimeStep, SplitHooks, StepReport, Trouble, TroubleKind,
 };
-use crate::fv::state::BoundaryKind;
 use crate::fv::sweep::{Pencils, SlabHalo, sweep_axis};
 
 /// Sweep orders of 3-D steps: each consecutive pair is a sequence and its reverse, and the six
@@ -49,9 +48,10 @@ pub fn sweep_order(dim: usize, step: u64) -> Vec<usize> {
 /// in a fixed order (so that the report does not depend on the number of ranks).
 #[derive(Default, serde::Serialize, serde::Deserialize)]
 struct SweepSummary {
-    /// Outflow partial sums `dt × area × flux`: per plane of the slab axis for a sweep along
-    /// another axis; for a sweep along the slab axis one for the low and one for the high
-    /// domain face, from the ranks that hold them.
+    /// Outflow partial sums `dt × area × flux` (`outflow::partials`): per plane of the last
+    /// axis for a sweep along another axis; for a sweep along the last axis one for the low and
+    /// one for the high domain face, from the ranks that hold them (with blocks, all of them
+    /// from rank 0).
     partials: Vec<[f64; NQ]>,
     lax_friedrichs: u64,
     hlle: u64,
@@ -149,7 +149,7 @@ impl FluidSolver {
 
     /// Before the sweep along `axis`: the directional pressures of the whole grid, then (a
     /// coupled step) the ghost states, vacuum and kept pressures `hooks` asks for and this
-    /// rank's part of its taps and walls, and the halo of the neighbours along the slab axis.
+    /// rank's part of its taps and walls, and the halo of the neighbours along `axis` if cut.
     fn prepare_sweep(&mut self, axis: usize, hooks: Option<&mut SplitHooks>) {
         self.record_pressures(axis);
         if let Some(h) = hooks {
@@ -159,15 +159,15 @@ impl FluidSolver {
             self.local
                 .localize(&self.slab, axis, &h.taps[axis], &h.walls[axis]);
         }
-        if axis == self.slab.axis && self.slab.decomposed() {
-            self.exchange_halo();
+        if self.slab.cut(axis) {
+            self.exchange_halo(axis);
         }
     }
 
     /// The sweep along `axis` over every pencil (with this rank's taps and walls in a coupled
     /// step), written back into the state.
     fn sweep_along(&mut self, axis: usize, dt: f64, coupled: bool) {
-        let along_slab = axis == self.slab.axis && self.slab.decomposed();
+        let along_cut = self.slab.cut(axis);
         let grid = &self.grid;
         let params = &self.params;
         let (u, buffer) = (&self.state.u, &mut self.buffer);
@@ -181,15 +181,19 @@ impl FluidSolver {
             (None, &[][..])
         };
         let slab = &self.slab;
-        let halo = if along_slab {
-            let below = if slab.lo.is_some() { slab.overlap } else { 0 };
+        let halo = if along_cut {
+            let below = if slab.lo[axis].is_some() {
+                slab.overlap
+            } else {
+                0
+            };
             SlabHalo {
-                lo: slab.lo.map(|_| &self.halo[0][..]),
-                hi: slab.hi.map(|_| &self.halo[1][..]),
+                lo: slab.lo[axis].map(|_| &self.halo[axis][0][..]),
+                hi: slab.hi[axis].map(|_| &self.halo[axis][1][..]),
                 depth: slab.depth,
                 overlap: slab.overlap,
                 n_global: slab.global.cells[axis],
-                start: slab.offset as isize - below as isize,
+                start: slab.offset[axis] as isize - below as isize,
             }
         } else {
             SlabHalo::none(grid.cells[axis])
@@ -229,52 +233,7 @@ impl FluidSolver {
                     !covered(slab.to_global(c))
                 })
         };
-        // Outflow partials, each a sum in pencil order (see `SweepSummary::partials`).
-        let (per_plane, first_pencil) = if axis == slab.axis {
-            (count, 0)
-        } else {
-            let per_plane = count / self.grid.cells[slab.axis];
-            (per_plane, slab.offset * per_plane)
-        };
-        if axis == slab.axis {
-            let bc = self.params.boundary[axis];
-            let mine = [
-                bc[0] != BoundaryKind::Periodic && slab.lo.is_none(),
-                bc[1] != BoundaryKind::Periodic && slab.hi.is_none(),
-            ];
-            for side in 0..2 {
-                if mine[side] {
-                    let mut acc = [0.0; NQ];
-                    for (p, rep) in reps.iter().enumerate() {
-                        if ends_in_gas(p, side) {
-                            for q in 0..NQ {
-                                acc[q] += area * rep.outflow[side][q];
-                            }
-                        }
-                    }
-                    summary.partials.push(acc);
-                }
-            }
-        } else {
-            for (i, plane) in reps.chunks(per_plane).enumerate() {
-                let mut acc = [0.0; NQ];
-                for (j, rep) in plane.iter().enumerate() {
-                    let p = i * per_plane + j;
-                    let ends = [ends_in_gas(p, 0), ends_in_gas(p, 1)];
-                    for q in 0..NQ {
-                        let out = |side: usize| {
-                            if ends[side] {
-                                rep.outflow[side][q]
-                            } else {
-                                0.0
-                            }
-                        };
-                        acc[q] += area * (out(0) + out(1));
-                    }
-                }
-                summary.partials.push(acc);
-            }
-        }
+        summary.partials = self.outflow_partials(axis, area, &ends_in_gas);
         for (p, rep) in reps.iter().enumerate() {
             summary.lax_friedrichs += u64::from(rep.stats.lax_friedrichs);
             summary.hlle += u64::from(rep.stats.hlle);
@@ -287,7 +246,7 @@ impl FluidSolver {
                     None => Some(idx),
                 };
                 if let Some(idx) = found {
-                    let pencil = (first_pencil + p) as u64;
+                    let pencil = slab.global_pencil(axis, p) as u64;
                     summary.troubles.push((pencil, self.trouble_at(idx, axis)));
                 }
             }
@@ -296,7 +255,7 @@ impl FluidSolver {
     }
 
     /// Adds the sweeps' summaries of every rank to `report` in a fixed order: sweep by sweep,
-    /// the partials in rank order (= plane order), the troubles by pencil (on the slab axis,
+    /// the partials in rank order (= plane order), the troubles by pencil (on a cut axis,
     /// the lowest rank's trouble of a pencil is the one nearest its start).
     fn merge_summaries(&self, mine: Vec<SweepSummary>, report: &mut StepReport) {
         let all: Vec<Vec<SweepSummary>> = if self.slab.ranks == 1 {
