@@ -3,13 +3,11 @@
 //! law can stop them no longer reach the deep contact the step stops on; momentum is kept to
 //! round-off and the energy the holds take is counted as dissipated.
 
-use protocol::scene::{
-    BodyConfig, Boundary, BoundaryConfig, ContactConfig, Motion, Shape, SolidConfig,
-};
+use protocol::scene::{BodyConfig, ContactConfig, Motion, Shape, SolidConfig};
 use solid_node::dem::contact::hold::HOLD_OVERLAP;
 use solid_node::dem::{ParticleId, Solid};
 
-use crate::dem_support::{box_config, build};
+use crate::dem_support::{box_config, build, walled};
 
 /// Side of the blocks \[m\].
 const A: f64 = 0.1;
@@ -120,13 +118,7 @@ fn blocks_thrown_together_faster_than_the_contact_can_stop_hold_at_the_hold_dept
 fn blocks_piling_against_a_wall_hold_each_other_and_stay_out_of_it() {
     for dim in [2, 3] {
         let mut solid = build(&row(dim, 3, 0.6, 0.01, 1e-3), dim, 1);
-        let walls = Some([Boundary::Wall, Boundary::Wall]);
-        let boundary = BoundaryConfig {
-            x: walls,
-            y: walls,
-            z: if dim == 3 { walls } else { None },
-        };
-        solid.set_walls(&vec![0.0; dim], &vec![1.0; dim], &boundary);
+        walled(&mut solid, dim);
         let speed = 30.0;
         let mut v = vec![0.0; dim];
         v[0] = speed;

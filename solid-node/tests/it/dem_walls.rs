@@ -3,23 +3,11 @@
 //! stops its motion into it and keeps its motion along it, and the energy the walls take is
 //! counted as dissipated, so that the solid's energy balance closes.
 
-use protocol::scene::{Boundary, BoundaryConfig};
 use solid_node::dem::{ParticleId, Solid};
 
-use crate::dem_support::{box_config, build};
+use crate::dem_support::{box_config, build, walled};
 
 const SIDE: f64 = 0.2;
-
-/// Walls on every side of the box `[0, 1]^dim`.
-fn walled(solid: &mut Solid, dim: usize) {
-    let walls = Some([Boundary::Wall, Boundary::Wall]);
-    let boundary = BoundaryConfig {
-        x: walls,
-        y: walls,
-        z: if dim == 3 { walls } else { None },
-    };
-    solid.set_walls(&vec![0.0; dim], &vec![1.0; dim], &boundary);
-}
 
 /// One block of side `SIDE` whose bottom face lies `gap` above the wall y = 0.
 fn block(dim: usize, gap: f64, gravity: bool) -> Solid {

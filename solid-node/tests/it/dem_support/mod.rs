@@ -3,7 +3,8 @@
 #![allow(dead_code, unreachable_pub)]
 
 use protocol::scene::{
-    BodyConfig, ConstraintConfig, FractureConfig, Motion, Region, Shape, SolidConfig,
+    BodyConfig, Boundary, BoundaryConfig, ConstraintConfig, FractureConfig, Motion, Region, Shape,
+    SolidConfig,
 };
 use solid_node::dem::Solid;
 
@@ -97,4 +98,15 @@ pub fn mean_period(crossings: &[f64]) -> f64 {
         crossings.len()
     );
     (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64
+}
+
+/// Walls on every side of the box `[0, 1]^dim`.
+pub fn walled(solid: &mut Solid, dim: usize) {
+    let walls = Some([Boundary::Wall, Boundary::Wall]);
+    let boundary = BoundaryConfig {
+        x: walls,
+        y: walls,
+        z: if dim == 3 { walls } else { None },
+    };
+    solid.set_walls(&vec![0.0; dim], &vec![1.0; dim], &boundary);
 }
