@@ -128,3 +128,13 @@ fn a_lattice_pushed_into_a_corner_has_verlets_second_order_energy_error() {
         other => panic!("seed 908: {other:?}\n{toml}"),
     }
 }
+
+/// A 3-D shell with fracture at Mach 3.9 (4.6 m/s, 0.24 of the material's wave speed) whose
+/// fragments pile against a wall (seed 339): the penalty contact let neighbours overlap by more
+/// than a quarter of a particle and the solid stopped at step 81 ("deep contact"). Pairs past
+/// 10 % now hold (`solid_node::dem::contact::hold`).
+#[test]
+fn fragments_piling_on_a_wall_faster_than_the_contact_can_stop_hold() {
+    let (outcome, toml) = outcome(339);
+    assert!(outcome.passed(), "seed 339: {outcome:?}\n{toml}");
+}

@@ -201,8 +201,10 @@ impl Solid {
             .map_or_else(Vec::new, |c| c.holds(&self.model));
         if !holds.is_empty() {
             let zero = Vector3::zeros();
-            let mut v: Vec<Vector3<f64>> = ends.iter().map(|e| e.map_or(zero, |e| e.0)).collect();
-            let mut ang: Vec<Vector3<f64>> = ends.iter().map(|e| e.map_or(zero, |e| e.1)).collect();
+            let (mut v, mut ang): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = ends
+                .iter()
+                .map(|e| e.map_or((zero, zero), |e| (e.0, e.1)))
+                .unzip();
             let touched = hold_pairs(
                 &self.model,
                 &self.walls,

@@ -100,20 +100,13 @@ impl Solid {
                 kick_particle(model, state, walls, p, dt, (f, t), (fe[p], te[p]), g)
             })
             .collect();
-        let mut v: Vec<Vector3<f64>> = kicks
+        let (mut v, mut ang): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = kicks
             .iter()
             .map(|k| match k {
-                Kick::Free(k) => k.v_half,
-                Kick::Done(_) => Vector3::zeros(),
+                Kick::Free(k) => (k.v_half, k.ang_half),
+                Kick::Done(_) => (Vector3::zeros(), Vector3::zeros()),
             })
-            .collect();
-        let mut ang: Vec<Vector3<f64>> = kicks
-            .iter()
-            .map(|k| match k {
-                Kick::Free(k) => k.ang_half,
-                Kick::Done(_) => Vector3::zeros(),
-            })
-            .collect();
+            .unzip();
         let touched = hold_pairs(model, walls, state, &holds, &mut v, &mut ang);
         for (p, k) in kicks.iter_mut().enumerate() {
             if let Kick::Free(k) = k {
