@@ -1,9 +1,11 @@
-//! The rings a mixing group widens into ([`Mixing::ring`]), and the cells it steps over when no
-//! free cell borders it ([`Mixing::border`]).
+//! The rings a mixing group widens into ([`Mixing::ring`]), the cells it steps over when no
+//! free cell borders it ([`Mixing::border`]), and the groups mixed as one when a group has
+//! taken in every cell it could and is still not physical ([`Mixing::as_one`]).
 
 use super::super::COVERED_TOLERANCE;
-use super::Mixing;
+use super::super::cells::CellKind;
 use super::shifted;
+use super::{Groups, Mixing, Predicted};
 
 impl Mixing<'_> {
     /// The next ring of free cells around a group's `members`, the `extra` cells it took in and
@@ -56,5 +58,39 @@ impl Mixing<'_> {
         border.sort_unstable();
         border.dedup();
         border
+    }
+
+    /// The `groups` as one group rooted at the smallest root: every other root joins it as a
+    /// member (a source) or a merged root (its content read as [`Mixing::merge`] reads it).
+    pub(super) fn as_one(
+        &self,
+        groups: &Groups,
+        kind: &[CellKind],
+        predicted: &Predicted,
+    ) -> Groups {
+        let first = groups.groups[0].0;
+        let mut merged: Vec<(usize, usize)> =
+            groups.merged.iter().map(|&(_, old)| (first, old)).collect();
+        let mut representatives: Vec<usize> = groups.groups.iter().map(|g| g.0).collect();
+        representatives.dedup();
+        for &r in &representatives {
+            if r != first && self.is_source(r).is_none() {
+                merged.push((first, r));
+            }
+        }
+        merged.sort_unstable();
+        merged.dedup();
+        let merged_parts = merged
+            .iter()
+            .map(|m| self.part(kind, predicted, m.1))
+            .collect();
+        let mut one: Vec<(usize, usize)> = groups.groups.iter().map(|g| (first, g.1)).collect();
+        one.sort_unstable();
+        Groups {
+            groups: one,
+            roots: groups.roots.clone(),
+            merged,
+            merged_parts,
+        }
     }
 }
