@@ -157,6 +157,65 @@ fn gas_sealed_under_an_arch_pressed_through_a_wall_stays_physical() {
     assert!(worst < 1e-14, "mass error {worst:e}");
 }
 
+/// What a thrown square's run showed: steps, widest mixing group, largest relative mass error.
+struct Thrown {
+    steps: u64,
+    widest: usize,
+    worst: f64,
+}
+
+/// Throws a square of half-side `half`, turned by `angle`, from (0.3, 0.5) at `(v, 0.2 v)`
+/// through gas at rest (ρ = 1, pressure `p`) in the unit box of `n`² cells, at the step the
+/// fluid proposes for a moving body (`cfl / (R + 2 W)`, `fluid-node` `exchange.rs`), until a
+/// vertex would pass `stop` along x or y. Panics naming the case on a trouble or a stop.
+fn throw_square(n: usize, p: f64, (v, angle, half): (f64, f64, f64), stop: f64) -> Thrown {
+    let text = at_rest_in_unit_box("fast", &[n, n]).replace("p = 1.0\n", &format!("p = {p:e}\n"));
+    let mut solver = solver(&text);
+    let (s, c) = f64::sin_cos(angle);
+    let square: Vec<[f64; 2]> = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+        .iter()
+        .map(|q| {
+            let r = [c * q[0] - s * q[1], s * q[0] + c * q[1]];
+            [0.3 + half * r[0], 0.5 + half * r[1]]
+        })
+        .collect();
+    let body = polygon_2d(&square, [v, 0.2 * v], 0.0);
+    let mut embedded = Embedded::new(&solver, body).expect("embedded");
+    let m0 = embedded.totals(&solver).mass;
+    let mut out = Thrown {
+        steps: 0,
+        widest: 0,
+        worst: 0.0,
+    };
+    loop {
+        let (cfl, one_cell) = (solver.max_dt(), embedded.one_cell_dt());
+        let dt = 0.5 / (0.5 / cfl + 2.0 / one_cell);
+        let next = moved(embedded.surface(), dt);
+        if next
+            .vertices
+            .chunks_exact(2)
+            .any(|x| x[0] > stop || x[1] > stop)
+        {
+            return out;
+        }
+        let step = out.steps;
+        let report = embedded.predict(&mut solver, dt);
+        assert!(
+            report.ok(),
+            "{n}² p {p} v {v} step {step}: {:?}",
+            report.troubles
+        );
+        let r = embedded
+            .correct(&mut solver, dt, next, step, false)
+            .unwrap_or_else(|e| panic!("{n}² p {p} v {v} step {step}: {e}"));
+        out.widest = out.widest.max(r.widest_group);
+        out.worst = out
+            .worst
+            .max((embedded.totals(&solver).mass - m0).abs() / m0);
+        out.steps += 1;
+    }
+}
+
 /// A tilted square thrown through cold gas at rest (60 x 60 cells, ρ = 1, p from 1e-4 to
 /// 1e-8) at Mach 85 to 17,000, at the step the fluid proposes for a moving body (`cfl / (R +
 /// 2 W)`, `fluid-node` `exchange.rs`), until it nears the walls (issue 35 item 1). At such
@@ -176,45 +235,11 @@ fn bodies_at_hundreds_of_times_the_sound_speed_keep_every_cell_physical() {
         (1e-8, 2.0, 0.2, true),
     ];
     for (p, v, angle, beyond_8_rings) in cases {
-        let text =
-            at_rest_in_unit_box("fast", &[60, 60]).replace("p = 1.0\n", &format!("p = {p:e}\n"));
-        let mut solver = solver(&text);
-        let (s, c) = f64::sin_cos(angle);
-        let square: Vec<[f64; 2]> = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
-            .iter()
-            .map(|q| {
-                let r = [c * q[0] - s * q[1], s * q[0] + c * q[1]];
-                [0.3 + 0.08 * r[0], 0.5 + 0.08 * r[1]]
-            })
-            .collect();
-        let body = polygon_2d(&square, [v, 0.2 * v], 0.0);
-        let mut embedded = Embedded::new(&solver, body).expect("embedded");
-        let m0 = embedded.totals(&solver).mass;
-        let (mut widest, mut worst, mut steps) = (0usize, 0.0f64, 0);
-        loop {
-            let (cfl, one_cell) = (solver.max_dt(), embedded.one_cell_dt());
-            let dt = 0.5 / (0.5 / cfl + 2.0 / one_cell);
-            let next = moved(embedded.surface(), dt);
-            if next
-                .vertices
-                .chunks_exact(2)
-                .any(|x| x[0] > 0.9 || x[1] > 0.9)
-            {
-                break;
-            }
-            let report = embedded.predict(&mut solver, dt);
-            assert!(
-                report.ok(),
-                "p {p} v {v} step {steps}: {:?}",
-                report.troubles
-            );
-            let r = embedded
-                .correct(&mut solver, dt, next, steps, false)
-                .unwrap_or_else(|e| panic!("p {p} v {v} step {steps}: {e}"));
-            widest = widest.max(r.widest_group);
-            worst = worst.max((embedded.totals(&solver).mass - m0).abs() / m0);
-            steps += 1;
-        }
+        let Thrown {
+            steps,
+            widest,
+            worst,
+        } = throw_square(60, p, (v, angle, 0.08), 0.9);
         println!("p {p} v {v}: {steps} steps, widest group {widest} cells, mass {worst:e}");
         assert!(steps > 100, "p {p} v {v}: {steps} steps");
         assert!(worst < 1e-14, "p {p} v {v}: mass error {worst:e}");
@@ -241,44 +266,7 @@ fn a_group_that_exhausts_the_grid_is_mixed_with_all_the_others() {
         (24, 1e-4, 3.0, 0.7),
         (24, 1e-10, 3.0, 0.5),
     ] {
-        let text =
-            at_rest_in_unit_box("fast", &[n, n]).replace("p = 1.0\n", &format!("p = {p:e}\n"));
-        let mut solver = solver(&text);
-        let (s, c) = f64::sin_cos(angle);
-        let square: Vec<[f64; 2]> = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
-            .iter()
-            .map(|q| {
-                let r = [c * q[0] - s * q[1], s * q[0] + c * q[1]];
-                [0.3 + 0.12 * r[0], 0.5 + 0.12 * r[1]]
-            })
-            .collect();
-        let body = polygon_2d(&square, [v, 0.2 * v], 0.0);
-        let mut embedded = Embedded::new(&solver, body).expect("embedded");
-        let m0 = embedded.totals(&solver).mass;
-        let (mut steps, mut worst) = (0, 0.0f64);
-        loop {
-            let (cfl, one_cell) = (solver.max_dt(), embedded.one_cell_dt());
-            let dt = 0.5 / (0.5 / cfl + 2.0 / one_cell);
-            let next = moved(embedded.surface(), dt);
-            if next
-                .vertices
-                .chunks_exact(2)
-                .any(|x| x[0] > 0.97 || x[1] > 0.97)
-            {
-                break;
-            }
-            let report = embedded.predict(&mut solver, dt);
-            assert!(
-                report.ok(),
-                "{n}² p {p}: step {steps}: {:?}",
-                report.troubles
-            );
-            embedded
-                .correct(&mut solver, dt, next, steps, false)
-                .unwrap_or_else(|e| panic!("{n}² p {p} v {v}: {e}"));
-            worst = worst.max((embedded.totals(&solver).mass - m0).abs() / m0);
-            steps += 1;
-        }
+        let Thrown { steps, worst, .. } = throw_square(n, p, (v, angle, 0.12), 0.97);
         assert!(steps > 40, "{n}² p {p} v {v}: {steps} steps");
         assert!(worst < 1e-14, "{n}² p {p} v {v}: mass error {worst:e}");
     }
