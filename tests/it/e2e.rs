@@ -233,9 +233,15 @@ fn check_ledger_csv_and_record(out: &Path) {
             "{key}: {last:?} {ledger}"
         );
     }
-    let elastic =
-        ledger["solid_energy"].as_f64().expect("e") - ledger["solid_kinetic"].as_f64().expect("k");
-    assert!(close(last[5], elastic), "{last:?} {ledger}");
+    // The ledger's solid energy is the rounded sum of the kinetic and elastic parts, so the
+    // elastic part taken back out of it is exact to the rounding of that sum, not of itself
+    // (the beam at 0.2 s: 1.9e-4 J of 1.75e-3 J, off by 1.2 units of 1e-15 of itself).
+    let solid = ledger["solid_energy"].as_f64().expect("e");
+    let elastic = solid - ledger["solid_kinetic"].as_f64().expect("k");
+    assert!(
+        (last[5] - elastic).abs() <= 1e-15 * solid.abs(),
+        "{last:?} {ledger}"
+    );
     // Log time = simulated time in ns: the last diagnostics at t_end, to the ns.
     let t_end_ns = s["t_end"].as_f64().expect("t_end") * 1e9;
     assert!(

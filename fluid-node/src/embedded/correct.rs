@@ -513,8 +513,9 @@ impl Embedded {
                 as usize
                 - 1;
             let mut pi = [0.0; 3];
+            let p_bar = self.near.wall_pressure[kp];
             for a in 0..dim {
-                pi[a] = self.near.hooks.pressures[a][kp] * s.normal[a] * s.area;
+                pi[a] = p_bar * s.normal[a] * s.area;
             }
             let p = s.particle as usize;
             let r = levers.lever(s);

@@ -48,11 +48,11 @@ impl Embedded {
             }
             let mut f = [0.0; 3];
             let pc = pressure_cell(grid, &self.state.geom.solid_fraction, s) as u32;
+            let Some(p) = self.near.pressure_of(pc) else {
+                self.scratch.odd = sum;
+                return Err(self.outside_near(None, Reach::TrialSurface, pc));
+            };
             for a in 0..d {
-                let Some(p) = self.near.pressure_of(pc, a) else {
-                    self.scratch.odd = sum;
-                    return Err(self.outside_near(None, Reach::TrialSurface, pc));
-                };
                 f[a] = -p * s.normal[a] * s.area;
             }
             let p = s.particle as usize;

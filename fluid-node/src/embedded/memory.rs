@@ -41,6 +41,7 @@ impl Embedded {
             + h.walls.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&h.pressure_cells)
             + h.pressures.iter().map(vec_bytes).sum::<usize>()
+            + vec_bytes(&near.wall_pressure)
             + h.taps.iter().map(tap_bytes).sum::<usize>()
             + vec_bytes(&near.walls)
             + vec_bytes(&scratch.content)

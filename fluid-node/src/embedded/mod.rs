@@ -7,8 +7,8 @@
 //! 1. [`Embedded::predict`]: the split sweeps over the whole grid, ignoring the solid except for
 //!    the ghost states written into the covered cells before each sweep (mirror of the fluid
 //!    along the sweep line, relative to the wall velocity, `ng` cells deep). Kept: `U^n`, the
-//!    directional pressures `p̄_x, p̄_y, p̄_z` and the face fluxes, of the cells near the wet
-//!    surface only (the cut cells of `F^n` dilated by [`NEAR_RADIUS`] cells).
+//!    wall pressure `p̄` and the face fluxes, of the cells near the wet surface only (the cut
+//!    cells of `F^n` dilated by [`NEAR_RADIUS`] cells).
 //! 2. [`Embedded::loads`], once per fixed-point iteration: force and torque per particle from
 //!    `p̄` over the wet sub-faces of the trial surface (eq. 23–25), torques about the trial
 //!    centres of mass. Only the geometry of the trial surface is computed.
@@ -33,10 +33,12 @@
 //! sub-face prisms give `Δt w·ν A` exactly).
 //!
 //! Readings chosen where the papers are silent:
-//! - `p̄` of a sub-face is the pressure of the cell holding it, from the state each sweep starts
-//!   with; ghost states make it the mirrored fluid pressure in a covered cell. A face in a cell
-//!   covered at t^n takes the `p̄` of the fluid cell it faces (`cells::pressure_cell`): a thin
-//!   covered run mirrors one side only.
+//! - `p̄` of a sub-face is one pressure on every axis: the mean of the pressures of the cell
+//!   holding it at t^n and after the sweeps (paper 003 takes along each axis the pressure that
+//!   axis's sweep starts from; a face's work then need not have the sign of its normal velocity,
+//!   see `predict.rs` and docs/cut-cells.md §3). A face in a cell covered at t^n takes the `p̄`
+//!   of the fluid cell it faces (`cells::pressure_cell`): a thin covered run mirrors one side
+//!   only.
 //! - Ghost states mirror along the sweep line (numerics §2.6), which is exact for walls normal
 //!   to the axis; the wall velocity is the area-averaged velocity of the sub-faces of the cut
 //!   cell beside the covered run.

@@ -75,8 +75,12 @@ pub(super) struct NearCells {
     pub(super) saved: Vec<f64>,
     /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces, by face index.
     pub(super) face_slots: [Vec<(u32, u32)>; 3],
-    /// What the sweeps take in (ghost fills, vacuum cells) and give back (`p̄`, face fluxes).
+    /// What the sweeps take in (ghost fills, vacuum cells) and give back (directional
+    /// pressures, face fluxes).
     pub(super) hooks: SplitHooks,
+    /// `p̄` of each near cell: the one pressure of the wet faces it holds or faces, on every
+    /// axis (see [`Embedded::predict`]).
+    pub(super) wall_pressure: Vec<f64>,
     /// The wall in each near cell (sub-faces of `F^n`), for the ghost states.
     pub(super) walls: Vec<NearWall>,
 }
@@ -128,10 +132,9 @@ impl NearCells {
         Some(&self.hooks.taps[axis].flux[slots[k].1 as usize])
     }
 
-    /// `p̄` along `axis` of a near cell.
-    pub(super) fn pressure_of(&self, cell: u32, axis: usize) -> Option<f64> {
-        self.slot(cell as usize)
-            .map(|k| self.hooks.pressures[axis][k])
+    /// `p̄` of a near cell.
+    pub(super) fn pressure_of(&self, cell: u32) -> Option<f64> {
+        self.slot(cell as usize).map(|k| self.wall_pressure[k])
     }
 }
 
@@ -157,6 +160,7 @@ impl Embedded {
                 saved: Vec::new(),
                 face_slots: Default::default(),
                 hooks: SplitHooks::default(),
+                wall_pressure: Vec::new(),
                 walls: Vec::new(),
             },
             config: Config {
