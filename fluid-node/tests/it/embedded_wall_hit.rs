@@ -296,6 +296,26 @@ fn under_resolved_bodies_at_up_to_250_000_times_the_sound_speed_run_to_the_walls
     }
 }
 
+/// Squares 1.3 to 2.6 cells across at Mach 850 to 250,000 on 6² and 8² cells: a group takes in
+/// every cell no other group holds and is still not physical while the gas as a whole is (the
+/// other groups keep the surplus). Every group of that step is then mixed again as one, the
+/// whole gas's mixture (`embedded/mix.rs`, `Mixing::as_one`); without that they stop at steps
+/// 6, 0 and 8 (`p = −2.7e-7`, `−1.8e-3`, `−8.2e-5`).
+#[test]
+fn a_group_that_exhausts_the_grid_is_mixed_with_all_the_others() {
+    // NOTE: measured 11, 20 and 19 steps; mass errors up to 3.7e-16.
+    for (n, p, v, angle, half) in [
+        (6, 1e-6, 1.0, 0.5, 0.16),
+        (8, 1e-10, 3.0, 0.7, 0.16),
+        (8, 1e-6, 1.0, 0.0, 0.08),
+    ] {
+        let Thrown { steps, worst, .. } = throw_square(n, p, (v, angle, half), 0.97);
+        println!("{n}² p {p} v {v}: {steps} steps, mass {worst:e}");
+        assert!(steps > 9, "{n}² p {p} v {v}: {steps} steps");
+        assert!(worst < 1e-14, "{n}² p {p} v {v}: mass error {worst:e}");
+    }
+}
+
 /// Tilted cubes about 3 cells across at Mach 870 and 2,600 in cold gas (12³ cells), until they
 /// near the walls: every cell physical, mass to round-off (issue 35 item 1 in 3-D;
 /// docs/cut-cells.md §3 compares the wall pressures on twelve such cubes).
