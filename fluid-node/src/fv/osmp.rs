@@ -115,7 +115,12 @@ impl SpeedLine {
     /// (`inv_sigma = 1/sigma`).
     #[inline(always)]
     pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
-        let n = self.lam.len();
+        self.fill_first(self.lam.len(), order, sigma, inv_sigma);
+    }
+
+    /// [`SpeedLine::fill`] of the first `n` interfaces.
+    #[inline(always)]
+    pub fn fill_first(&mut self, n: usize, order: u32, sigma: f64, inv_sigma: f64) {
         let lam = &self.lam[..n];
         let (nu, inv_nu, inv_lam) = (
             &mut self.nu[..n],
@@ -181,6 +186,16 @@ impl WaveLine {
     #[inline(always)]
     pub fn fill(&mut self, order: u32, speed: &SpeedLine) {
         let n = self.alpha.len();
+        self.fill_products(n, order, speed);
+        self.dm4[..n].fill(0.0);
+        if n >= 4 {
+            self.fill_curvatures(n - 2, speed);
+        }
+    }
+
+    /// `d` at the first `n` interfaces.
+    #[inline(always)]
+    pub fn fill_products(&mut self, n: usize, order: u32, speed: &SpeedLine) {
         let (alpha, nu) = (&self.alpha[..n], &speed.nu[..n]);
         let [d0, d1, d2, d3, d4, d5] = &mut self.d;
         let (d0, d1, d2, d3, d4, d5) = (
@@ -207,21 +222,23 @@ impl WaveLine {
                 d5[l] = c5[l] * x;
             }
         }
-        // Curvatures on interfaces 1 ..= n−2 (0 at the two ends): interface l + 1 takes the
-        // curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and `λα(l+2) − λα(l+1)`.
-        // NOTE: one pass from λ and α (each product formed where it is used, the same bits):
-        // the products stored first and differenced in place (`la[l] = la[l+1] − la[l]`) made
-        // two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
-        // step on its one line).
-        let (lam, dm4) = (&speed.lam[..n], &mut self.dm4[..n]);
-        dm4.fill(0.0);
-        if n < 4 {
-            return;
-        }
-        let (lam0, lam1, lam2) = (&lam[..n - 2], &lam[1..n - 1], &lam[2..n]);
-        let (al0, al1, al2) = (&alpha[..n - 2], &alpha[1..n - 1], &alpha[2..n]);
-        let out = &mut dm4[1..n - 1];
-        for l in 0..n - 2 {
+    }
+
+    /// `dm4` at the interfaces `1 ..= m` (from `λ` and `α` at `0 .. m + 2`).
+    ///
+    /// Interface l + 1 takes the curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and
+    /// `λα(l+2) − λα(l+1)`.
+    /// NOTE: one pass from λ and α (each product formed where it is used, the same bits):
+    /// the products stored first and differenced in place (`la[l] = la[l+1] − la[l]`) made
+    /// two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
+    /// step on its one line).
+    #[inline(always)]
+    pub fn fill_curvatures(&mut self, m: usize, speed: &SpeedLine) {
+        let (lam, alpha) = (&speed.lam, &self.alpha);
+        let (lam0, lam1, lam2) = (&lam[..m], &lam[1..m + 1], &lam[2..m + 2]);
+        let (al0, al1, al2) = (&alpha[..m], &alpha[1..m + 1], &alpha[2..m + 2]);
+        let out = &mut self.dm4[1..m + 1];
+        for l in 0..m {
             let (p0, p1, p2) = (lam0[l] * al0[l], lam1[l] * al1[l], lam2[l] * al2[l]);
             out[l] = curvature_m4(p1 - p0, p2 - p1);
         }
