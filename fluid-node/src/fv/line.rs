@@ -24,7 +24,7 @@
 //!
 //! Layout: the passes run over one array per quantity (cells, interfaces, waves, face
 //! components) without branches, so that each vectorises on the instruction set the line runs
-//! on (`isa.rs`), and over strips of about 32 faces, so that their arrays stay in L1
+//! on (`isa.rs`), and over strips of 48 faces, so that their arrays stay in L1
 //! (`line/strip.rs`); the scheme's flux is computed at every face, and the special faces
 //! (vacuum, HLLE fallback, positivity fix) overwrite theirs afterwards, one by one, on the
 //! slower scalar path.
@@ -135,6 +135,8 @@ pub struct LineScratch {
     pub face: Vec<State>,
     /// The buffers of one strip of faces (`strip.rs`).
     strip: strip::Strip,
+    /// Where the last strip started along the line (`strip.rs`).
+    last_a: usize,
     /// Whether each cell is vacuum, `n + 2 ng`.
     vacuum: Vec<bool>,
     /// Whether the Roe average of each interface is valid, `n + 2 ng − 1`.

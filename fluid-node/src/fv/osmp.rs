@@ -115,25 +115,26 @@ impl SpeedLine {
     /// (`inv_sigma = 1/sigma`).
     #[inline(always)]
     pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
-        self.fill_first(self.lam.len(), order, sigma, inv_sigma);
+        self.fill_range(0, self.lam.len(), order, sigma, inv_sigma);
     }
 
-    /// [`SpeedLine::fill`] of the first `n` interfaces.
+    /// [`SpeedLine::fill`] of the `n` interfaces from `lo` on.
     #[inline(always)]
-    pub fn fill_first(&mut self, n: usize, order: u32, sigma: f64, inv_sigma: f64) {
-        let lam = &self.lam[..n];
+    pub fn fill_range(&mut self, lo: usize, n: usize, order: u32, sigma: f64, inv_sigma: f64) {
+        let r = lo..lo + n;
+        let lam = &self.lam[r.clone()];
         let (nu, inv_nu, inv_lam) = (
-            &mut self.nu[..n],
-            &mut self.inv_nu[..n],
-            &mut self.inv_lam[..n],
+            &mut self.nu[r.clone()],
+            &mut self.inv_nu[r.clone()],
+            &mut self.inv_lam[r.clone()],
         );
         let [c1, c2, c3, c4, c5] = &mut self.c;
         let (c1, c2, c3, c4, c5) = (
-            &mut c1[..n],
-            &mut c2[..n],
-            &mut c3[..n],
-            &mut c4[..n],
-            &mut c5[..n],
+            &mut c1[r.clone()],
+            &mut c2[r.clone()],
+            &mut c3[r.clone()],
+            &mut c4[r.clone()],
+            &mut c5[r],
         );
         let nc = n_coefficients(order);
         for l in 0..n {
@@ -186,28 +187,30 @@ impl WaveLine {
     #[inline(always)]
     pub fn fill(&mut self, order: u32, speed: &SpeedLine) {
         let n = self.alpha.len();
-        self.fill_products(n, order, speed);
+        self.fill_products(0, n, order, speed);
         self.dm4[..n].fill(0.0);
         if n >= 4 {
-            self.fill_curvatures(n - 2, speed);
+            self.fill_curvatures(0, n - 2, speed);
         }
     }
 
-    /// `d` at the first `n` interfaces.
+    /// `d` at the `n` interfaces from `lo` on.
     #[inline(always)]
-    pub fn fill_products(&mut self, n: usize, order: u32, speed: &SpeedLine) {
-        let (alpha, nu) = (&self.alpha[..n], &speed.nu[..n]);
+    pub fn fill_products(&mut self, lo: usize, n: usize, order: u32, speed: &SpeedLine) {
+        let r = lo..lo + n;
+        let (alpha, nu) = (&self.alpha[r.clone()], &speed.nu[r.clone()]);
         let [d0, d1, d2, d3, d4, d5] = &mut self.d;
         let (d0, d1, d2, d3, d4, d5) = (
-            &mut d0[..n],
-            &mut d1[..n],
-            &mut d2[..n],
-            &mut d3[..n],
-            &mut d4[..n],
-            &mut d5[..n],
+            &mut d0[r.clone()],
+            &mut d1[r.clone()],
+            &mut d2[r.clone()],
+            &mut d3[r.clone()],
+            &mut d4[r.clone()],
+            &mut d5[r.clone()],
         );
         let [c1, c2, c3, c4, c5] = &speed.c;
-        let (c1, c2, c3, c4, c5) = (&c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n]);
+        let (c1, c2, c3) = (&c1[r.clone()], &c2[r.clone()], &c3[r.clone()]);
+        let (c4, c5) = (&c4[r.clone()], &c5[r]);
         let nc = n_coefficients(order);
         for l in 0..n {
             let x = (1.0 - nu[l]) * alpha[l];
@@ -224,7 +227,7 @@ impl WaveLine {
         }
     }
 
-    /// `dm4` at the interfaces `1 ..= m` (from `λ` and `α` at `0 .. m + 2`).
+    /// `dm4` at the interfaces `lo + 1 ..= lo + m` (from `λ` and `α` at `lo .. lo + m + 2`).
     ///
     /// Interface l + 1 takes the curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and
     /// `λα(l+2) − λα(l+1)`.
@@ -233,11 +236,11 @@ impl WaveLine {
     /// two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
     /// step on its one line).
     #[inline(always)]
-    pub fn fill_curvatures(&mut self, m: usize, speed: &SpeedLine) {
-        let (lam, alpha) = (&speed.lam, &self.alpha);
+    pub fn fill_curvatures(&mut self, lo: usize, m: usize, speed: &SpeedLine) {
+        let (lam, alpha) = (&speed.lam[lo..], &self.alpha[lo..]);
         let (lam0, lam1, lam2) = (&lam[..m], &lam[1..m + 1], &lam[2..m + 2]);
         let (al0, al1, al2) = (&alpha[..m], &alpha[1..m + 1], &alpha[2..m + 2]);
-        let out = &mut self.dm4[1..m + 1];
+        let out = &mut self.dm4[lo + 1..lo + m + 1];
         for l in 0..m {
             let (p0, p1, p2) = (lam0[l] * al0[l], lam1[l] * al1[l], lam2[l] * al2[l]);
             out[l] = curvature_m4(p1 - p0, p2 - p1);

@@ -1,40 +1,49 @@
 //! The regular (OSMP) faces of a line, strip by strip, and the special faces after them.
 //!
-//! A line's faces are cut into strips of at most [`STRIP_FACES`] consecutive faces. Each strip
-//! runs every pass of the scheme over its own cells and interfaces (the faces' stencils:
-//! `R = stencil_radius` interfaces beyond each end, recomputed by the strips on either side) in
-//! a [`Strip`]'s buffers, which a strip reuses and which stay in L1: the cell pass (primitive
-//! variables, Roe sides, physical fluxes, vacuum flags), the interface pass (Roe averages,
-//! speeds, strengths), the speeds' and waves' coefficients, OSMP's `Ψ` per wave, and the
-//! regular flux at the strip's faces.
+//! A line longer than [`SHORT_LINE`] faces is cut into strips of [`STRIP_FACES`] faces. Each
+//! strip runs every pass of the scheme over its part of the line in a [`Strip`]'s buffers,
+//! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
+//! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
+//! speeds' and waves' coefficients, OSMP's `Ψ` per wave, and the regular flux at the strip's
+//! faces. What a strip's faces read below its own cells and interfaces (the stencils reach
+//! `R = stencil_radius` interfaces before a face) it takes from the strip before, which
+//! computed it ([`Strip::carry`]): every cell and interface is computed once, as before.
+//!
+//! Every loop of a strip runs over a number of entries fixed at compile time and a multiple of
+//! 8 (the lanes of AVX-512), so that none has a scalar remainder: a strip is short, and a
+//! remainder of up to 7 entries done one by one cost more than the strip saved (a first
+//! version with strips of 26–33 faces was slower than the whole line). The entries beyond the
+//! line's end (the last strip's) are computed on what an earlier strip left there, and are
+//! never read by the line's own. A short line is one strip of its own length (loops of run-time
+//! length, as before): its arrays fit the L1 already.
 //!
 //! NOTE: before, each pass ran over the whole line and wrote arrays that the next pass read:
 //! about 80 arrays of `n + 2 ng` values, 90 kB for a 128-cell line, twice the 48 kB L1 of this
-//! machine's cores, so every pass read and wrote its arrays in L2. The arrays a strip of 48
-//! faces touches (OSMP5, 3-D) are about 37 kB. An interface or face that two strips share is
-//! computed twice from the same inputs by the same operations, so every value, and the line's
-//! result, is the same to the bit.
+//! machine's cores, so every pass read and wrote its arrays in L2 (2.7 MB for the 1-D line of
+//! 4096 cells, beyond the L2). The arrays a strip of 48 faces touches (OSMP5, 3-D) are about
+//! 37 kB. Every value is computed from the same inputs by the same operations, so the line's
+//! result is the same to the bit. Measured gain: 1.2× on the 1-D line of 4096 cells, about
+//! 1.1× on 3-D 128³, none on 2-D 512² (whose 518-cell lines' arrays, 290 kB, stream from L2
+//! as fast): the kernel was not bound by its scratch traffic (docs/performance.md).
 
 use super::{FaceFlux, LineScratch, LineSetup, n_waves, vacuum_face};
 use crate::fv::euler::{
     NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
-use crate::fv::osmp::{SpeedLine, WaveLine, psi_line, stencil_radius};
+use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius};
 
-/// Faces a strip computes.
-///
-/// Every loop of a strip runs over a number of entries fixed at compile time and a multiple of
-/// 8 (the lanes of AVX-512), so that none has a scalar remainder (a strip is short, and a
-/// remainder of up to 7 entries done one by one cost more than the strip saved). The entries
-/// beyond the strip's own (beyond the line's end, in a line shorter than a strip) hold what an
-/// earlier strip left there: computed on, never read by an entry of the strip's own.
+/// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
+/// them and the curvatures two before (`strip_faces`).
 pub(super) const STRIP_FACES: usize = 48;
-/// Interfaces a strip computes: its faces and `R ≤ 3` beyond each end, rounded up to 8.
-const STRIP_INTERFACES: usize = STRIP_FACES + 8;
-/// Cells a strip computes (at least one more than its interfaces), and the length of every
-/// buffer of a strip (the curvatures read `λ` and `α` two interfaces beyond the last one).
-const STRIP_CELLS: usize = STRIP_INTERFACES + 8;
+/// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
+/// (see `strip_faces`).
+const CARRY: usize = 16;
+/// The length of every buffer of a strip (its cells).
+const STRIP_CELLS: usize = STRIP_FACES + CARRY;
+/// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
+/// they are, and strips of fixed length would compute up to a strip's faces more than it has.
+const SHORT_LINE: usize = 80;
 
 /// The buffers of one strip: its cells, interfaces and faces (structure of arrays).
 #[derive(Clone, Debug, Default)]
@@ -55,9 +64,53 @@ pub(super) struct Strip {
 }
 
 impl Strip {
-    /// Sizes the buffers ([`STRIP_CELLS`] entries each; a no-op once done).
-    fn resize(&mut self) {
-        let len = STRIP_CELLS;
+    /// Moves the entries `shift .. shift + CARRY` of what the next strip reads below the part it
+    /// computes to `0 .. CARRY` (the next strip starts `shift ≥ CARRY` cells further along the
+    /// line), for `nw` waves and the `nd` arrays of `d` the order fills.
+    ///
+    /// NOTE: copies of a length fixed at compile time (two 64-byte moves an array); a
+    /// `copy_within` of a run-time range was a `memmove` call per array, ~90 a strip, which
+    /// cost more than the strip saved.
+    #[inline(always)]
+    fn carry(&mut self, shift: usize, nw: usize, nd: usize) {
+        assert!(shift >= CARRY, "strips of {shift} cells (at least {CARRY})");
+        let mv = |v: &mut Vec<f64>| {
+            let (head, tail) = v.split_at_mut(shift);
+            let src: &[f64; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
+            let dst: &mut [f64; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            *dst = *src;
+        };
+        let c = &mut self.cells;
+        c.q.iter_mut()
+            .chain(&mut c.vel)
+            .chain(&mut c.flux)
+            .for_each(mv);
+        [&mut c.sqrt_rho, &mut c.h, &mut self.roe.h, &mut self.roe.c]
+            .into_iter()
+            .for_each(mv);
+        self.roe.vel.iter_mut().for_each(mv);
+        for sp in &mut self.speeds {
+            [&mut sp.lam, &mut sp.nu, &mut sp.inv_nu, &mut sp.inv_lam]
+                .into_iter()
+                .for_each(mv);
+        }
+        for w in &mut self.waves[..nw] {
+            [&mut w.alpha, &mut w.dm4].into_iter().for_each(mv);
+            w.d[..nd].iter_mut().for_each(mv);
+        }
+        for v in [&mut self.vacuum, &mut self.valid] {
+            let (head, tail) = v.split_at_mut(shift);
+            let src: &[bool; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
+            let dst: &mut [bool; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            *dst = *src;
+        }
+    }
+
+    /// Sizes the buffers to at least `len` entries each (a no-op once done).
+    fn reserve(&mut self, len: usize) {
+        if self.vacuum.len() >= len {
+            return;
+        }
         self.cells.resize(len);
         self.roe.resize(len);
         for sp in &mut self.speeds {
@@ -167,29 +220,35 @@ impl RoeLine {
 }
 
 /// Conserved states, velocities, Roe-average sides, physical fluxes (into `c`) and vacuum flags
-/// of a strip's cells, `u` first (at most [`STRIP_CELLS`]).
+/// of the `len` cells of a strip from `lo` on, whose states are `u` first (at most `len`).
 #[inline(always)]
-fn cell_loop(u: &[State], c: &mut CellLine, vacuum: &mut [bool], setup: &LineSetup) {
+fn cell_loop(
+    u: &[State],
+    (lo, len): (usize, usize),
+    c: &mut CellLine,
+    vacuum: &mut [bool],
+    setup: &LineSetup,
+) {
     for (q, cq) in c.q.iter_mut().enumerate() {
-        let cq = &mut cq[..u.len()];
+        let cq = &mut cq[lo..lo + u.len()];
         for i in 0..u.len() {
             cq[i] = u[i][q];
         }
     }
-    let len = STRIP_CELLS;
-    let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][..len]);
+    let r = lo..lo + len;
+    let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][r.clone()]);
     let [v0, v1, v2] = &mut c.vel;
-    let vel = [&mut v0[..len], &mut v1[..len], &mut v2[..len]];
+    let vel = [&mut v0[r.clone()], &mut v1[r.clone()], &mut v2[r.clone()]];
     let [f0, f1, f2, f3, f4] = &mut c.flux;
     let flux_q = [
-        &mut f0[..len],
-        &mut f1[..len],
-        &mut f2[..len],
-        &mut f3[..len],
-        &mut f4[..len],
+        &mut f0[r.clone()],
+        &mut f1[r.clone()],
+        &mut f2[r.clone()],
+        &mut f3[r.clone()],
+        &mut f4[r.clone()],
     ];
-    let (sqrt_rho, h) = (&mut c.sqrt_rho[..len], &mut c.h[..len]);
-    let vacuum = &mut vacuum[..len];
+    let (sqrt_rho, h) = (&mut c.sqrt_rho[r.clone()], &mut c.h[r.clone()]);
+    let vacuum = &mut vacuum[r];
     for i in 0..len {
         let ui: State = std::array::from_fn(|k| q[k][i]);
         let w = primitive_floored(&ui, setup.gamma, setup.vacuum_rho);
@@ -208,35 +267,35 @@ fn cell_loop(u: &[State], c: &mut CellLine, vacuum: &mut [bool], setup: &LineSet
     }
 }
 
-/// Roe averages, wave speeds and strengths at the [`STRIP_INTERFACES`] interfaces of the strip
-/// `st` (its cells filled), and whether each average is valid. An interface beside a vacuum
+/// Roe averages, wave speeds and strengths at the `nint` interfaces of the strip `st` from `lo`
+/// on (their cells filled), and whether each average is valid. An interface beside a vacuum
 /// cell or with a non-physical average (c² ≤ 0, non-finite) is marked invalid and gets
 /// λ = α = 0.
 #[inline(always)]
-fn interface_pass(st: &mut Strip, gamma: f64) {
-    let nint = STRIP_INTERFACES;
-    let cells = st.cells.view(0, nint + 1);
+fn interface_pass(st: &mut Strip, (lo, nint): (usize, usize), gamma: f64) {
+    let cells = st.cells.view(lo, nint + 1);
     let [rv0, rv1, rv2] = &mut st.roe.vel;
     let [s0, s1, s2] = &mut st.speeds;
     let [w0, w1, w2, w3, w4] = &mut st.waves;
+    let r = lo..lo + nint;
     interface_loop(
         &cells,
-        &st.vacuum[..nint + 1],
+        &st.vacuum[lo..lo + nint + 1],
         gamma,
-        &mut rv0[..nint],
-        &mut rv1[..nint],
-        &mut rv2[..nint],
-        &mut st.roe.h[..nint],
-        &mut st.roe.c[..nint],
-        &mut st.valid[..nint],
-        &mut s0.lam[..nint],
-        &mut s1.lam[..nint],
-        &mut s2.lam[..nint],
-        &mut w0.alpha[..nint],
-        &mut w1.alpha[..nint],
-        &mut w2.alpha[..nint],
-        &mut w3.alpha[..nint],
-        &mut w4.alpha[..nint],
+        &mut rv0[r.clone()],
+        &mut rv1[r.clone()],
+        &mut rv2[r.clone()],
+        &mut st.roe.h[r.clone()],
+        &mut st.roe.c[r.clone()],
+        &mut st.valid[r.clone()],
+        &mut s0.lam[r.clone()],
+        &mut s1.lam[r.clone()],
+        &mut s2.lam[r.clone()],
+        &mut w0.alpha[r.clone()],
+        &mut w1.alpha[r.clone()],
+        &mut w2.alpha[r.clone()],
+        &mut w3.alpha[r.clone()],
+        &mut w4.alpha[r],
     );
 }
 
@@ -305,76 +364,113 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
         "OSMP{ORDER} lines have {} ghosts",
         radius + 1
     );
-    s.strip.resize();
     let nf = setup.n + 1;
-    // Strips of STRIP_FACES faces; the last one ends at the line's last face (it computes
-    // again some faces of the one before, to the same bits), unless the line is shorter.
-    for k in 0..nf.div_ceil(STRIP_FACES) {
-        let a = (k * STRIP_FACES).min(nf.saturating_sub(STRIP_FACES));
-        strip_faces::<ORDER>(s, setup, a, STRIP_FACES.min(nf));
+    // The faces computed, counted from CARRY / 2 faces before the line's first.
+    let todo = nf + CARRY / 2;
+    if todo <= SHORT_LINE {
+        // One strip: the whole line (loops of the line's length).
+        s.strip.reserve(todo + CARRY);
+        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf));
+    } else {
+        // Strips of STRIP_FACES faces (the last one's beyond the line's end computed on what
+        // is there, and not kept).
+        s.strip.reserve(STRIP_CELLS);
+        for k in 0..todo.div_ceil(STRIP_FACES) {
+            let a = k * STRIP_FACES;
+            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES));
+        }
     }
     special_faces(s, setup, radius);
 }
 
-/// The regular flux of the faces `a .. a + sn` of the line into [`LineScratch::face`], and
-/// whether their linearised star states are physical; the vacuum flags of the cells of the
-/// strip and the validity of its interfaces (`R` beyond each end too).
+/// A strip of `nc` cells from the line's cell `a` on: the regular flux of its faces
+/// `j0 .. j0 + count` (`0 .. nc` in all) into [`LineScratch::face`], whether their linearised star states are physical, the
+/// vacuum flags of its cells and the validity of its interfaces, those on the line.
+///
+/// A strip's entry `i` is the line's cell `a + i − CARRY` and interface `a + i − CARRY` (between
+/// cells `a + i − CARRY` and `a + i − CARRY + 1`); it computes the cells `CARRY .. CARRY + NF`,
+/// the interfaces one before, and the curvatures two before. The entries below come from the
+/// strip before (the first strip's are left over, and only its faces before the line's first
+/// read them): its `a + i` is this strip's `i`.
 #[inline(always)]
-fn strip_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup, a: usize, sn: usize) {
-    const NF: usize = STRIP_FACES;
-    const NI: usize = STRIP_INTERFACES;
-    let LineSetup { ng, sigma, .. } = *setup;
+fn strip_faces<const ORDER: u32>(
+    s: &mut LineScratch,
+    setup: &LineSetup,
+    a: usize,
+    nc: usize,
+    (j0, count): (usize, usize),
+) {
     let r = stencil_radius(ORDER);
-    // The strip's first interface and cell along the line (face `a` is interface `ng − 1 + a`,
-    // which is the strip's interface `r`), and its cells on the line.
-    let g0 = ng - 1 + a - r;
-    let nc = STRIP_CELLS.min(s.u.len() - g0);
+    let (len, sigma) = (s.u.len(), setup.sigma);
     let st = &mut s.strip;
-    cell_loop(&s.u[g0..g0 + nc], &mut st.cells, &mut st.vacuum, setup);
-    interface_pass(st, setup.gamma);
+    if a > 0 {
+        st.carry(a - s.last_a, n_waves(setup), 1 + n_coefficients(ORDER));
+    }
+    s.last_a = a;
+    // The strip's cells on the line.
+    let own = a.min(len)..(a + nc).min(len);
+    cell_loop(
+        &s.u[own.clone()],
+        (CARRY, nc),
+        &mut st.cells,
+        &mut st.vacuum,
+        setup,
+    );
+    interface_pass(st, (CARRY - 1, nc), setup.gamma);
     let inv_sigma = 1.0 / sigma;
     for sp in &mut st.speeds {
-        sp.fill_first(NI, ORDER, sigma, inv_sigma);
+        sp.fill_range(CARRY - 1, nc, ORDER, sigma, inv_sigma);
     }
+    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
+    // (`f0`: the interface of face j0).
+    let f0 = CARRY / 2 + r + j0;
     // Wave k travels at speed [u−c, u+c, u, u, u][k].
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
-        st.waves[k].fill_products(NI, ORDER, speed);
-        st.waves[k].fill_curvatures(NI, speed);
-        psi_line::<ORDER, true>(speed, &st.waves[k], r, &mut st.psi[k][..NF]);
+        st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
+        st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
+        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut st.psi[k][j0..j0 + count]);
     }
     for k in nw..NQ {
-        st.psi[k][..NF].fill(0.0);
+        st.psi[k][j0..j0 + count].fill(0.0);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
-    let cells = st.cells.view(r, NF + 1);
-    let w = r..r + NF;
+    let cells = st.cells.view(f0, count + 1);
+    let w = f0..f0 + count;
     let roe_vel: [&[f64]; 3] = std::array::from_fn(|k| &st.roe.vel[k][w.clone()]);
     let (roe_h, roe_c) = (&st.roe.h[w.clone()], &st.roe.c[w.clone()]);
     let roe_valid = &st.valid[w.clone()];
     let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
     let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
-    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][..NF]);
+    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][j0..j0 + count]);
     let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
     face_loop(
         &cells,
         (roe_vel, roe_h, roe_c, roe_valid),
         (lam, alpha, psi),
-        &mut st.star_ok[..NF],
-        &mut fq0[..NF],
-        &mut fq1[..NF],
-        &mut fq2[..NF],
-        &mut fq3[..NF],
-        &mut fq4[..NF],
+        &mut st.star_ok[j0..j0 + count],
+        &mut fq0[j0..j0 + count],
+        &mut fq1[j0..j0 + count],
+        &mut fq2[j0..j0 + count],
+        &mut fq3[j0..j0 + count],
+        &mut fq4[j0..j0 + count],
     );
-    // The strip's own cells, interfaces and faces to the line.
-    s.vacuum[g0..g0 + nc].copy_from_slice(&st.vacuum[..nc]);
-    s.valid[g0..g0 + nc - 1].copy_from_slice(&st.valid[..nc - 1]);
-    s.star_ok[a..a + sn].copy_from_slice(&st.star_ok[..sn]);
-    for (j, face) in s.face[a..a + sn].iter_mut().enumerate() {
-        *face = std::array::from_fn(|q| st.face_q[q][j]);
+    // What is on the line of the strip's cells, interfaces (a − 1 ..) and faces (a − CARRY / 2 ..).
+    // (The line's cell or interface i is the strip's entry i + CARRY − a.)
+    let at = |i: usize| i + CARRY - a;
+    s.vacuum[own.clone()].copy_from_slice(&st.vacuum[at(own.start)..at(own.end)]);
+    let ints = a.saturating_sub(1)..(a + nc - 1).min(len - 1);
+    if !ints.is_empty() {
+        s.valid[ints.clone()].copy_from_slice(&st.valid[at(ints.start)..at(ints.end)]);
+    }
+    let nf = setup.n + 1;
+    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
+    let first = faces.start + CARRY / 2 - a;
+    s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
+    for (j, face) in s.face[faces].iter_mut().enumerate() {
+        *face = std::array::from_fn(|q| st.face_q[q][first + j]);
     }
 }
 
