@@ -21,10 +21,11 @@
 //! about 80 arrays of `n + 2 ng` values, 90 kB for a 128-cell line, twice the 48 kB L1 of this
 //! machine's cores, so every pass read and wrote its arrays in L2 (2.7 MB for the 1-D line of
 //! 4096 cells, beyond the L2). The arrays a strip of 48 faces touches (OSMP5, 3-D) are about
-//! 37 kB. Every value is computed from the same inputs by the same operations, so the line's
-//! result is the same to the bit. Measured gain: 1.2× on the 1-D line of 4096 cells, about
-//! 1.1× on 3-D 128³, none on 2-D 512² (whose 518-cell lines' arrays, 290 kB, stream from L2
-//! as fast): the kernel was not bound by its scratch traffic (docs/performance.md).
+//! 40 kB. Every value is computed from the same inputs by the same operations, so the line's
+//! result is the same to the bit. Measured gain (CPU time a step, docs/performance.md): 1.23×
+//! on the 1-D line of 4096 cells, 1.06× on 2-D 512², none on 3-D 64³ and 128³ (within the
+//! machine's noise, ±5 %): lines whose arrays fit the L2 stream them from there as fast, so
+//! the kernel was not bound by its scratch traffic except beyond the L2.
 
 use super::{FaceFlux, LineScratch, LineSetup, n_waves, vacuum_face};
 use crate::fv::euler::{
