@@ -115,20 +115,26 @@ impl SpeedLine {
     /// (`inv_sigma = 1/sigma`).
     #[inline(always)]
     pub fn fill(&mut self, order: u32, sigma: f64, inv_sigma: f64) {
-        let n = self.lam.len();
-        let lam = &self.lam[..n];
+        self.fill_range(0, self.lam.len(), order, sigma, inv_sigma);
+    }
+
+    /// [`SpeedLine::fill`] of the `n` interfaces from `lo` on.
+    #[inline(always)]
+    pub fn fill_range(&mut self, lo: usize, n: usize, order: u32, sigma: f64, inv_sigma: f64) {
+        let r = lo..lo + n;
+        let lam = &self.lam[r.clone()];
         let (nu, inv_nu, inv_lam) = (
-            &mut self.nu[..n],
-            &mut self.inv_nu[..n],
-            &mut self.inv_lam[..n],
+            &mut self.nu[r.clone()],
+            &mut self.inv_nu[r.clone()],
+            &mut self.inv_lam[r.clone()],
         );
         let [c1, c2, c3, c4, c5] = &mut self.c;
         let (c1, c2, c3, c4, c5) = (
-            &mut c1[..n],
-            &mut c2[..n],
-            &mut c3[..n],
-            &mut c4[..n],
-            &mut c5[..n],
+            &mut c1[r.clone()],
+            &mut c2[r.clone()],
+            &mut c3[r.clone()],
+            &mut c4[r.clone()],
+            &mut c5[r],
         );
         let nc = n_coefficients(order);
         for l in 0..n {
@@ -181,18 +187,30 @@ impl WaveLine {
     #[inline(always)]
     pub fn fill(&mut self, order: u32, speed: &SpeedLine) {
         let n = self.alpha.len();
-        let (alpha, nu) = (&self.alpha[..n], &speed.nu[..n]);
+        self.fill_products(0, n, order, speed);
+        self.dm4[..n].fill(0.0);
+        if n >= 4 {
+            self.fill_curvatures(0, n - 2, speed);
+        }
+    }
+
+    /// `d` at the `n` interfaces from `lo` on.
+    #[inline(always)]
+    pub fn fill_products(&mut self, lo: usize, n: usize, order: u32, speed: &SpeedLine) {
+        let r = lo..lo + n;
+        let (alpha, nu) = (&self.alpha[r.clone()], &speed.nu[r.clone()]);
         let [d0, d1, d2, d3, d4, d5] = &mut self.d;
         let (d0, d1, d2, d3, d4, d5) = (
-            &mut d0[..n],
-            &mut d1[..n],
-            &mut d2[..n],
-            &mut d3[..n],
-            &mut d4[..n],
-            &mut d5[..n],
+            &mut d0[r.clone()],
+            &mut d1[r.clone()],
+            &mut d2[r.clone()],
+            &mut d3[r.clone()],
+            &mut d4[r.clone()],
+            &mut d5[r.clone()],
         );
         let [c1, c2, c3, c4, c5] = &speed.c;
-        let (c1, c2, c3, c4, c5) = (&c1[..n], &c2[..n], &c3[..n], &c4[..n], &c5[..n]);
+        let (c1, c2, c3) = (&c1[r.clone()], &c2[r.clone()], &c3[r.clone()]);
+        let (c4, c5) = (&c4[r.clone()], &c5[r]);
         let nc = n_coefficients(order);
         for l in 0..n {
             let x = (1.0 - nu[l]) * alpha[l];
@@ -207,21 +225,23 @@ impl WaveLine {
                 d5[l] = c5[l] * x;
             }
         }
-        // Curvatures on interfaces 1 ..= n−2 (0 at the two ends): interface l + 1 takes the
-        // curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and `λα(l+2) − λα(l+1)`.
-        // NOTE: one pass from λ and α (each product formed where it is used, the same bits):
-        // the products stored first and differenced in place (`la[l] = la[l+1] − la[l]`) made
-        // two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
-        // step on its one line).
-        let (lam, dm4) = (&speed.lam[..n], &mut self.dm4[..n]);
-        dm4.fill(0.0);
-        if n < 4 {
-            return;
-        }
-        let (lam0, lam1, lam2) = (&lam[..n - 2], &lam[1..n - 1], &lam[2..n]);
-        let (al0, al1, al2) = (&alpha[..n - 2], &alpha[1..n - 1], &alpha[2..n]);
-        let out = &mut dm4[1..n - 1];
-        for l in 0..n - 2 {
+    }
+
+    /// `dm4` at the interfaces `lo + 1 ..= lo + m` (from `λ` and `α` at `lo .. lo + m + 2`).
+    ///
+    /// Interface l + 1 takes the curvatures of cells l + 1 and l + 2, `λα(l+1) − λα(l)` and
+    /// `λα(l+2) − λα(l+1)`.
+    /// NOTE: one pass from λ and α (each product formed where it is used, the same bits):
+    /// the products stored first and differenced in place (`la[l] = la[l+1] − la[l]`) made
+    /// two more passes over the line, and the in-place one did not vectorise (5 % of a 3-D
+    /// step on its one line).
+    #[inline(always)]
+    pub fn fill_curvatures(&mut self, lo: usize, m: usize, speed: &SpeedLine) {
+        let (lam, alpha) = (&speed.lam[lo..], &self.alpha[lo..]);
+        let (lam0, lam1, lam2) = (&lam[..m], &lam[1..m + 1], &lam[2..m + 2]);
+        let (al0, al1, al2) = (&alpha[..m], &alpha[1..m + 1], &alpha[2..m + 2]);
+        let out = &mut self.dm4[lo + 1..lo + m + 1];
+        for l in 0..m {
             let (p0, p1, p2) = (lam0[l] * al0[l], lam1[l] * al1[l], lam2[l] * al2[l]);
             out[l] = curvature_m4(p1 - p0, p2 - p1);
         }

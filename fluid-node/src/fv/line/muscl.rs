@@ -3,7 +3,9 @@
 //! comparisons ([`super::FluxKind::MusclHancock`]).
 
 use super::{FaceFlux, LineScratch, LineSetup, vacuum_face};
-use crate::fv::euler::{NQ, Primitive, State, flux_hllc, physical_flux, primitive};
+use crate::fv::euler::{
+    NQ, Primitive, State, flux_hllc, physical_flux, primitive, primitive_floored,
+};
 
 /// Monotonized-central limited slope `minmod(2a, 2b, (a+b)/2)` (van Leer 1977), TVD.
 ///
@@ -27,9 +29,14 @@ pub(super) fn muscl_faces(s: &mut LineScratch, setup: &LineSetup) {
         sigma,
         ..
     } = *setup;
+    for (i, u) in s.u.iter().enumerate() {
+        let w = primitive_floored(u, gamma, setup.vacuum_rho);
+        s.vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+        s.prim[i] = w;
+    }
     // Boundary-extrapolated, half-step-evolved states of cells ng−1 ..= ng+n (Toro §14.4.2).
     for i in ng - 1..=ng + n {
-        let (wm, w0, wp) = (s.cells.prim[i - 1], s.cells.prim[i], s.cells.prim[i + 1]);
+        let (wm, w0, wp) = (s.prim[i - 1], s.prim[i], s.prim[i + 1]);
         let field = |w: &Primitive| [w.rho, w.vel[0], w.vel[1], w.vel[2], w.p];
         let (am, a0, ap) = (field(&wm), field(&w0), field(&wp));
         let mut lo = Primitive::default();

@@ -1,0 +1,570 @@
+//! The regular (OSMP) faces of a line, strip by strip, and the special faces after them.
+//!
+//! A line longer than [`SHORT_LINE`] faces is cut into strips of [`STRIP_FACES`] faces. Each
+//! strip runs every pass of the scheme over its part of the line in a [`Strip`]'s buffers,
+//! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
+//! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
+//! speeds' and waves' coefficients, OSMP's `Ψ` per wave, and the regular flux at the strip's
+//! faces. What a strip's faces read below its own cells and interfaces (the stencils reach
+//! `R = stencil_radius` interfaces before a face) it takes from the strip before, which
+//! computed it ([`Strip::carry`]): every cell and interface is computed once, as before.
+//!
+//! Every loop of a strip runs over a number of entries fixed at compile time and a multiple of
+//! 8 (the lanes of AVX-512), so that none has a scalar remainder: a strip is short, and a
+//! remainder of up to 7 entries done one by one cost more than the strip saved (a first
+//! version with strips of 26–33 faces was slower than the whole line). The entries beyond the
+//! line's end (the last strip's) are computed on what an earlier strip left there, and are
+//! never read by the line's own. A short line is one strip of its own length (loops of run-time
+//! length, as before): its arrays fit the L1 already.
+//!
+//! NOTE: before, each pass ran over the whole line and wrote arrays that the next pass read:
+//! about 80 arrays of `n + 2 ng` values, 90 kB for a 128-cell line, twice the 48 kB L1 of this
+//! machine's cores, so every pass read and wrote its arrays in L2 (2.7 MB for the 1-D line of
+//! 4096 cells, beyond the L2). The arrays a strip of 48 faces touches (OSMP5, 3-D) are about
+//! 40 kB. Every value is computed from the same inputs by the same operations, so the line's
+//! result is the same to the bit. Measured gain (CPU time a step, docs/performance.md): 1.23×
+//! on the 1-D line of 4096 cells, 1.06× on 2-D 512², none on 3-D 64³ and 128³ (within the
+//! machine's noise, ±5 %): lines whose arrays fit the L2 stream them from there as fast, so
+//! the kernel was not bound by its scratch traffic except beyond the L2.
+
+use super::{FaceFlux, LineScratch, LineSetup, n_waves, vacuum_face};
+use crate::fv::euler::{
+    NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
+    roe_star_states_positive, roe_strengths,
+};
+use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius};
+
+/// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
+/// them and the curvatures two before (`strip_faces`).
+pub(super) const STRIP_FACES: usize = 48;
+/// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
+/// (see `strip_faces`).
+const CARRY: usize = 16;
+/// The length of every buffer of a strip (its cells).
+const STRIP_CELLS: usize = STRIP_FACES + CARRY;
+/// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
+/// they are, and strips of fixed length would compute up to a strip's faces more than it has.
+const SHORT_LINE: usize = 80;
+
+/// The buffers of one strip: its cells, interfaces and faces (structure of arrays).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Strip {
+    cells: CellLine,
+    roe: RoeLine,
+    speeds: [SpeedLine; 3],
+    waves: [WaveLine; NQ],
+    /// `Ψ` of each wave at the strip's faces.
+    psi: [Vec<f64>; NQ],
+    /// The regular face fluxes, one array per component.
+    face_q: [Vec<f64>; NQ],
+    /// Whether each cell is vacuum, each interface's average valid, each face's linearised
+    /// star states physical.
+    vacuum: Vec<bool>,
+    valid: Vec<bool>,
+    star_ok: Vec<bool>,
+}
+
+impl Strip {
+    /// Moves the entries `shift .. shift + CARRY` of what the next strip reads below the part it
+    /// computes to `0 .. CARRY` (the next strip starts `shift ≥ CARRY` cells further along the
+    /// line), for `nw` waves and the `nd` arrays of `d` the order fills.
+    ///
+    /// NOTE: copies of a length fixed at compile time (two 64-byte moves an array); a
+    /// `copy_within` of a run-time range was a `memmove` call per array, ~90 a strip, which
+    /// cost more than the strip saved.
+    #[inline(always)]
+    fn carry(&mut self, shift: usize, nw: usize, nd: usize) {
+        assert!(shift >= CARRY, "strips of {shift} cells (at least {CARRY})");
+        let mv = |v: &mut Vec<f64>| {
+            let (head, tail) = v.split_at_mut(shift);
+            let src: &[f64; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
+            let dst: &mut [f64; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            *dst = *src;
+        };
+        let c = &mut self.cells;
+        c.q.iter_mut()
+            .chain(&mut c.vel)
+            .chain(&mut c.flux)
+            .for_each(mv);
+        [&mut c.sqrt_rho, &mut c.h, &mut self.roe.h, &mut self.roe.c]
+            .into_iter()
+            .for_each(mv);
+        self.roe.vel.iter_mut().for_each(mv);
+        for sp in &mut self.speeds {
+            [&mut sp.lam, &mut sp.nu, &mut sp.inv_nu, &mut sp.inv_lam]
+                .into_iter()
+                .for_each(mv);
+        }
+        for w in &mut self.waves[..nw] {
+            [&mut w.alpha, &mut w.dm4].into_iter().for_each(mv);
+            w.d[..nd].iter_mut().for_each(mv);
+        }
+        for v in [&mut self.vacuum, &mut self.valid] {
+            let (head, tail) = v.split_at_mut(shift);
+            let src: &[bool; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
+            let dst: &mut [bool; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            *dst = *src;
+        }
+    }
+
+    /// Sizes the buffers to at least `len` entries each (a no-op once done).
+    fn reserve(&mut self, len: usize) {
+        if self.vacuum.len() >= len {
+            return;
+        }
+        self.cells.resize(len);
+        self.roe.resize(len);
+        for sp in &mut self.speeds {
+            sp.resize(len);
+        }
+        for w in &mut self.waves {
+            w.resize(len);
+        }
+        for v in self.psi.iter_mut().chain(&mut self.face_q) {
+            v.resize(len, 0.0);
+        }
+        for v in [&mut self.vacuum, &mut self.valid, &mut self.star_ok] {
+            v.resize(len, false);
+        }
+    }
+}
+
+/// What the cells of a line give the interfaces, one array per quantity (structure of arrays,
+/// so that the loops over the line vectorise): the conserved state, the velocity and the
+/// other Roe-average side quantities, the physical flux.
+#[derive(Clone, Debug, Default)]
+struct CellLine {
+    q: [Vec<f64>; NQ],
+    vel: [Vec<f64>; 3],
+    sqrt_rho: Vec<f64>,
+    h: Vec<f64>,
+    flux: [Vec<f64>; NQ],
+}
+
+impl CellLine {
+    fn resize(&mut self, len: usize) {
+        let arrays = self.q.iter_mut().chain(&mut self.vel).chain(&mut self.flux);
+        for v in arrays.chain([&mut self.sqrt_rho, &mut self.h]) {
+            v.resize(len, 0.0);
+        }
+    }
+
+    /// The cells `lo .. lo + len` as slices of one length, so that a loop over them has no
+    /// bounds checks left and vectorises.
+    #[inline(always)]
+    fn view(&self, lo: usize, len: usize) -> CellView<'_> {
+        let r = lo..lo + len;
+        CellView {
+            q: std::array::from_fn(|k| &self.q[k][r.clone()]),
+            vel: std::array::from_fn(|k| &self.vel[k][r.clone()]),
+            sqrt_rho: &self.sqrt_rho[r.clone()],
+            h: &self.h[r.clone()],
+            flux: std::array::from_fn(|k| &self.flux[k][r.clone()]),
+        }
+    }
+}
+
+/// Slices of a [`CellLine`], all of one length.
+struct CellView<'a> {
+    q: [&'a [f64]; NQ],
+    vel: [&'a [f64]; 3],
+    sqrt_rho: &'a [f64],
+    h: &'a [f64],
+    flux: [&'a [f64]; NQ],
+}
+
+impl CellView<'_> {
+    /// The Roe-average side of cell `i` (as [`RoeSide::new`] gives it).
+    #[inline(always)]
+    fn side(&self, i: usize) -> RoeSide {
+        RoeSide {
+            sqrt_rho: self.sqrt_rho[i],
+            vel: [self.vel[0][i], self.vel[1][i], self.vel[2][i]],
+            h: self.h[i],
+        }
+    }
+
+    /// The conserved state of cell `i`.
+    #[inline(always)]
+    fn state(&self, i: usize) -> State {
+        std::array::from_fn(|q| self.q[q][i])
+    }
+}
+
+/// The Roe averages of a strip's interfaces, one array per field (whether each is valid is in
+/// the line's [`LineScratch`], which the special faces read).
+#[derive(Clone, Debug, Default)]
+struct RoeLine {
+    vel: [Vec<f64>; 3],
+    h: Vec<f64>,
+    c: Vec<f64>,
+}
+
+impl RoeLine {
+    fn resize(&mut self, len: usize) {
+        for v in self.vel.iter_mut().chain([&mut self.h, &mut self.c]) {
+            v.resize(len, 0.0);
+        }
+    }
+
+    /// The average of interface `l` of slices `vel, h, c, valid` of a `RoeLine` (of one
+    /// length, so that no bounds check stays in a loop).
+    #[inline(always)]
+    fn get(vel: [&[f64]; 3], h: &[f64], c: &[f64], valid: &[bool], l: usize) -> RoeAverage {
+        RoeAverage {
+            vel: [vel[0][l], vel[1][l], vel[2][l]],
+            h: h[l],
+            c: c[l],
+            valid: valid[l],
+        }
+    }
+}
+
+/// Conserved states, velocities, Roe-average sides, physical fluxes (into `c`) and vacuum flags
+/// of the `len` cells of a strip from `lo` on, whose states are `u` first (at most `len`).
+#[inline(always)]
+fn cell_loop(
+    u: &[State],
+    (lo, len): (usize, usize),
+    c: &mut CellLine,
+    vacuum: &mut [bool],
+    setup: &LineSetup,
+) {
+    for (q, cq) in c.q.iter_mut().enumerate() {
+        let cq = &mut cq[lo..lo + u.len()];
+        for i in 0..u.len() {
+            cq[i] = u[i][q];
+        }
+    }
+    let r = lo..lo + len;
+    let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][r.clone()]);
+    let [v0, v1, v2] = &mut c.vel;
+    let vel = [&mut v0[r.clone()], &mut v1[r.clone()], &mut v2[r.clone()]];
+    let [f0, f1, f2, f3, f4] = &mut c.flux;
+    let flux_q = [
+        &mut f0[r.clone()],
+        &mut f1[r.clone()],
+        &mut f2[r.clone()],
+        &mut f3[r.clone()],
+        &mut f4[r.clone()],
+    ];
+    let (sqrt_rho, h) = (&mut c.sqrt_rho[r.clone()], &mut c.h[r.clone()]);
+    let vacuum = &mut vacuum[r];
+    for i in 0..len {
+        let ui: State = std::array::from_fn(|k| q[k][i]);
+        let w = primitive_floored(&ui, setup.gamma, setup.vacuum_rho);
+        // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
+        let side = RoeSide::new(&ui, &w);
+        let flux = physical_flux(&ui, &w);
+        for k in 0..3 {
+            vel[k][i] = side.vel[k];
+        }
+        sqrt_rho[i] = side.sqrt_rho;
+        h[i] = side.h;
+        for k in 0..NQ {
+            flux_q[k][i] = flux[k];
+        }
+        vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+    }
+}
+
+/// Roe averages, wave speeds and strengths at the `nint` interfaces of the strip `st` from `lo`
+/// on (their cells filled), and whether each average is valid. An interface beside a vacuum
+/// cell or with a non-physical average (c² ≤ 0, non-finite) is marked invalid and gets
+/// λ = α = 0.
+#[inline(always)]
+fn interface_pass(st: &mut Strip, (lo, nint): (usize, usize), gamma: f64) {
+    let cells = st.cells.view(lo, nint + 1);
+    let [rv0, rv1, rv2] = &mut st.roe.vel;
+    let [s0, s1, s2] = &mut st.speeds;
+    let [w0, w1, w2, w3, w4] = &mut st.waves;
+    let r = lo..lo + nint;
+    interface_loop(
+        &cells,
+        &st.vacuum[lo..lo + nint + 1],
+        gamma,
+        &mut rv0[r.clone()],
+        &mut rv1[r.clone()],
+        &mut rv2[r.clone()],
+        &mut st.roe.h[r.clone()],
+        &mut st.roe.c[r.clone()],
+        &mut st.valid[r.clone()],
+        &mut s0.lam[r.clone()],
+        &mut s1.lam[r.clone()],
+        &mut s2.lam[r.clone()],
+        &mut w0.alpha[r.clone()],
+        &mut w1.alpha[r.clone()],
+        &mut w2.alpha[r.clone()],
+        &mut w3.alpha[r.clone()],
+        &mut w4.alpha[r],
+    );
+}
+
+/// The loop of [`interface_pass`]. Its outputs are separate `&mut` arguments: they reach the
+/// compiler as `noalias` (also once inlined), which the loop needs to vectorise with sixteen
+/// output arrays (slices cut from one `&mut LineScratch` in one function body do not, and the
+/// loop stayed scalar).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn interface_loop(
+    cells: &CellView<'_>,
+    vacuum: &[bool],
+    gamma: f64,
+    roe_v0: &mut [f64],
+    roe_v1: &mut [f64],
+    roe_v2: &mut [f64],
+    roe_h: &mut [f64],
+    roe_c: &mut [f64],
+    roe_valid: &mut [bool],
+    lam0: &mut [f64],
+    lam1: &mut [f64],
+    lam2: &mut [f64],
+    a0: &mut [f64],
+    a1: &mut [f64],
+    a2: &mut [f64],
+    a3: &mut [f64],
+    a4: &mut [f64],
+) {
+    let nint = roe_h.len();
+    let (roe_v0, roe_v1, roe_v2) = (
+        &mut roe_v0[..nint],
+        &mut roe_v1[..nint],
+        &mut roe_v2[..nint],
+    );
+    let (roe_c, roe_valid) = (&mut roe_c[..nint], &mut roe_valid[..nint]);
+    let (lam0, lam1, lam2) = (&mut lam0[..nint], &mut lam1[..nint], &mut lam2[..nint]);
+    let (a0, a1, a2) = (&mut a0[..nint], &mut a1[..nint], &mut a2[..nint]);
+    let (a3, a4) = (&mut a3[..nint], &mut a4[..nint]);
+    let vacuum = &vacuum[..nint + 1];
+    let rho = &cells.q[0][..nint + 1];
+    for l in 0..nint {
+        let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
+        let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
+        let du: State = std::array::from_fn(|q| cells.q[q][l + 1] - cells.q[q][l]);
+        // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
+        let alpha =
+            roe_strengths(&average, &du, gamma).map(|a| if average.valid { a } else { 0.0 });
+        [roe_v0[l], roe_v1[l], roe_v2[l]] = average.vel;
+        roe_h[l] = average.h;
+        roe_c[l] = average.c;
+        roe_valid[l] = average.valid;
+        let (un, c) = (average.vel[0], average.c);
+        [lam0[l], lam1[l], lam2[l]] = [un - c, un + c, un];
+        [a0[l], a1[l], a2[l], a3[l], a4[l]] = alpha;
+    }
+}
+
+/// The regular (OSMP) flux of every face of the line, strip by strip (see the module doc),
+/// then the special faces.
+#[inline(always)]
+pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
+    let radius = stencil_radius(ORDER);
+    assert_eq!(
+        setup.ng,
+        radius + 1,
+        "OSMP{ORDER} lines have {} ghosts",
+        radius + 1
+    );
+    let nf = setup.n + 1;
+    // The faces computed, counted from CARRY / 2 faces before the line's first.
+    let todo = nf + CARRY / 2;
+    if todo <= SHORT_LINE {
+        // One strip: the whole line (loops of the line's length).
+        s.strip.reserve(todo + CARRY);
+        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf));
+    } else {
+        // Strips of STRIP_FACES faces (the last one's beyond the line's end computed on what
+        // is there, and not kept).
+        s.strip.reserve(STRIP_CELLS);
+        for k in 0..todo.div_ceil(STRIP_FACES) {
+            let a = k * STRIP_FACES;
+            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES));
+        }
+    }
+    special_faces(s, setup, radius);
+}
+
+/// A strip of `nc` cells from the line's cell `a` on: the regular flux of its faces
+/// `j0 .. j0 + count` (`0 .. nc` in all) into [`LineScratch::face`], whether their linearised star states are physical, the
+/// vacuum flags of its cells and the validity of its interfaces, those on the line.
+///
+/// A strip's entry `i` is the line's cell `a + i − CARRY` and interface `a + i − CARRY` (between
+/// cells `a + i − CARRY` and `a + i − CARRY + 1`); it computes the cells `CARRY .. CARRY + NF`,
+/// the interfaces one before, and the curvatures two before. The entries below come from the
+/// strip before (the first strip's are left over, and only its faces before the line's first
+/// read them): its `a + i` is this strip's `i`.
+#[inline(always)]
+fn strip_faces<const ORDER: u32>(
+    s: &mut LineScratch,
+    setup: &LineSetup,
+    a: usize,
+    nc: usize,
+    (j0, count): (usize, usize),
+) {
+    let r = stencil_radius(ORDER);
+    let (len, sigma) = (s.u.len(), setup.sigma);
+    let st = &mut s.strip;
+    if a > 0 {
+        st.carry(a - s.last_a, n_waves(setup), 1 + n_coefficients(ORDER));
+    }
+    s.last_a = a;
+    // The strip's cells on the line.
+    let own = a.min(len)..(a + nc).min(len);
+    cell_loop(
+        &s.u[own.clone()],
+        (CARRY, nc),
+        &mut st.cells,
+        &mut st.vacuum,
+        setup,
+    );
+    interface_pass(st, (CARRY - 1, nc), setup.gamma);
+    let inv_sigma = 1.0 / sigma;
+    for sp in &mut st.speeds {
+        sp.fill_range(CARRY - 1, nc, ORDER, sigma, inv_sigma);
+    }
+    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
+    // (`f0`: the interface of face j0).
+    let f0 = CARRY / 2 + r + j0;
+    // Wave k travels at speed [u−c, u+c, u, u, u][k].
+    let nw = n_waves(setup);
+    for k in 0..nw {
+        let speed = &st.speeds[k.min(2)];
+        st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
+        st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
+        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut st.psi[k][j0..j0 + count]);
+    }
+    for k in nw..NQ {
+        st.psi[k][j0..j0 + count].fill(0.0);
+    }
+    // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
+    // physical.
+    let cells = st.cells.view(f0, count + 1);
+    let w = f0..f0 + count;
+    let roe_vel: [&[f64]; 3] = std::array::from_fn(|k| &st.roe.vel[k][w.clone()]);
+    let (roe_h, roe_c) = (&st.roe.h[w.clone()], &st.roe.c[w.clone()]);
+    let roe_valid = &st.valid[w.clone()];
+    let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
+    let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
+    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][j0..j0 + count]);
+    let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
+    face_loop(
+        &cells,
+        (roe_vel, roe_h, roe_c, roe_valid),
+        (lam, alpha, psi),
+        &mut st.star_ok[j0..j0 + count],
+        &mut fq0[j0..j0 + count],
+        &mut fq1[j0..j0 + count],
+        &mut fq2[j0..j0 + count],
+        &mut fq3[j0..j0 + count],
+        &mut fq4[j0..j0 + count],
+    );
+    // What is on the line of the strip's cells, interfaces (a − 1 ..) and faces (a − CARRY / 2 ..).
+    // (The line's cell or interface i is the strip's entry i + CARRY − a.)
+    let at = |i: usize| i + CARRY - a;
+    s.vacuum[own.clone()].copy_from_slice(&st.vacuum[at(own.start)..at(own.end)]);
+    let ints = a.saturating_sub(1)..(a + nc - 1).min(len - 1);
+    if !ints.is_empty() {
+        s.valid[ints.clone()].copy_from_slice(&st.valid[at(ints.start)..at(ints.end)]);
+    }
+    let nf = setup.n + 1;
+    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
+    let first = faces.start + CARRY / 2 - a;
+    s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
+    for (j, face) in s.face[faces].iter_mut().enumerate() {
+        *face = std::array::from_fn(|q| st.face_q[q][first + j]);
+    }
+}
+
+/// The special faces, over the regular flux: beside vacuum, Lax–Friedrichs (local between two
+/// vacuum cells); an invalid average in the stencil (`radius` interfaces either side) or
+/// non-physical star states, HLLE.
+///
+/// NOTE: the usual line has no invalid average and no vacuum cell; it then skips the
+/// prefix count and the per-face calls (the same choice for every face, made faster: the
+/// two were 3 % of a 3-D step).
+#[inline(always)]
+fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
+    let LineSetup { n, ng, gamma, .. } = *setup;
+    let all_valid = s.valid.iter().fold(true, |acc, &v| acc & v);
+    if !all_valid {
+        s.bad_prefix[0] = 0;
+        for l in 0..s.valid.len() {
+            s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.valid[l]);
+        }
+    }
+    for fi in 0..=n {
+        let f = ng - 1 + fi;
+        let regular = !(s.vacuum[f] | s.vacuum[f + 1]) & s.star_ok[fi];
+        if regular && all_valid {
+            s.kind[fi] = FaceFlux::Regular;
+            continue;
+        }
+        if vacuum_face(s, setup, fi, f) {
+            continue;
+        }
+        let bad_stencil = !all_valid && s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius];
+        if bad_stencil || !s.star_ok[fi] {
+            s.face[fi] = flux_hlle(&s.u[f], &s.u[f + 1], gamma);
+            s.kind[fi] = FaceFlux::Hlle;
+        } else {
+            s.kind[fi] = FaceFlux::Regular;
+        }
+    }
+}
+
+/// The regular flux of every face `j` of `cells` (faces between cells `j` and `j + 1`) into
+/// `fq0..fq4`, and whether its linearised star states are physical. The outputs are separate
+/// `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+#[inline(always)]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn face_loop(
+    cells: &CellView<'_>,
+    (roe_vel, roe_h, roe_c, roe_valid): ([&[f64]; 3], &[f64], &[f64], &[bool]),
+    (lam, alpha, psi): ([&[f64]; 3], [&[f64]; NQ], [&[f64]; NQ]),
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    let nf = star_ok.len();
+    let (fq0, fq1, fq2, fq3, fq4) = (
+        &mut fq0[..nf],
+        &mut fq1[..nf],
+        &mut fq2[..nf],
+        &mut fq3[..nf],
+        &mut fq4[..nf],
+    );
+    let phys = cells.flux;
+    for j in 0..nf {
+        let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
+        let mut flux = [0.0; NQ];
+        for q in 0..NQ {
+            flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
+        }
+        let mut a = [0.0; NQ];
+        let mut coef = [0.0; NQ];
+        for k in 0..NQ {
+            a[k] = alpha[k][j];
+            coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
+        }
+        // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
+        // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
+        // image is the mirror image of the flux to the last bit (a problem symmetric about
+        // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
+        let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
+        for q in 0..NQ {
+            flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
+        }
+        for k in 2..NQ {
+            let r = roe_eigenvector(&roe, k);
+            for q in 0..NQ {
+                flux[q] -= coef[k] * r[q];
+            }
+        }
+        [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
+        let (ul, ur) = (cells.state(j), cells.state(j + 1));
+        star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
+    }
+}
