@@ -1,6 +1,7 @@
 //! The cut-cell geometry per rank (issue 40 item 1, step 1): `compute_block` of each rank's
 //! block and halo against `compute` on the whole grid, with K = 1, 2, 4 ranks cut as
-//! `protocol::decomp::choose` cuts the grid; time (median of repeats, one rank after the other
+//! `protocol::decomp::choose` cuts the grid, with the halo of the loads' trial geometry (1) and
+//! of the embedded part's (11); time (median of repeats, one rank after the other
 //! in this one process, so no rank waits for a core), heap bytes and elements clipped per rank.
 //!
 //! ```text
@@ -64,8 +65,8 @@ fn run(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
         1e3 * t_whole,
         whole.memory_bytes() as f64 / 1e6
     );
-    println!("| K | cut | rank | elements clipped | rows swept whole | ms | MB |");
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    println!("| K | cut | rank | halo | elements clipped | rows swept whole | ms | MB |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     for k in [1, 2, 4] {
         let dims = protocol::decomp::choose(&grid.cells[..3], k, 6).expect("decomposition");
         for r in 0..k {
@@ -75,17 +76,19 @@ fn run(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
                 let (first, own) = share(grid.cells[a], dims[a], coords[a]);
                 (block.lo[a], block.hi[a]) = (first, first + own);
             }
-            let b = compute_block(grid, &surface, block, HALO);
-            let t = timed(reps, || {
-                std::hint::black_box(compute_block(grid, &surface, block, HALO));
-            });
-            println!(
-                "| {k} | {dims:?} | {r} | {} | {} | {:.2} | {:.1} |",
-                b.clipped_elements,
-                b.whole_rows,
-                1e3 * t,
-                b.memory_bytes() as f64 / 1e6
-            );
+            for halo in [1, HALO] {
+                let b = compute_block(grid, &surface, block, halo);
+                let t = timed(reps, || {
+                    std::hint::black_box(compute_block(grid, &surface, block, halo));
+                });
+                println!(
+                    "| {k} | {dims:?} | {r} | {halo} | {} | {} | {:.2} | {:.1} |",
+                    b.clipped_elements,
+                    b.whole_rows,
+                    1e3 * t,
+                    b.memory_bytes() as f64 / 1e6
+                );
+            }
         }
     }
 }

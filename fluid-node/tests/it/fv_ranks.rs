@@ -393,8 +393,8 @@ fn coupled_run(
                     assert!(predicted.ok(), "step {n}: {:?}", predicted.troubles);
                     let current = e.surface().clone();
                     let next = embedded_support::translated(&current, dt);
-                    let on_current = e.loads(&current).expect("loads on F^n");
-                    let on_next = e.loads(&next).expect("loads on the trial");
+                    let on_current = e.loads(&s, &current).expect("loads on F^n");
+                    let on_next = e.loads(&s, &next).expect("loads on the trial");
                     let report = e
                         .correct(&mut s, dt, next, n, n % 2 == 1)
                         .unwrap_or_else(|err| panic!("step {n}: {err}"));
@@ -597,4 +597,50 @@ pub(crate) fn moving_bodies_3d() -> SolidFrame {
     let plate =
         embedded_support::box_3d([0.25, 0.3, 0.5], [0.12, 0.12, 0.05], flat, [0.0, 0.2, -0.6]);
     bodies(&[block, plate])
+}
+
+/// Issue 40 item 1, step 3: each rank takes the loads' terms of its own block's sub-faces, so
+/// a trial surface that reaches beyond the near cells (moved 4 cells: the sub-face whose `p̄`
+/// is missing lies in one rank's block) must be refused on every rank as one rank refuses it,
+/// naming the same cell.
+#[test]
+fn a_trial_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
+    let (grid, state) = blast(&[40, 48]);
+    let solid = moving_bodies_2d();
+    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
+    let refusals = |dims: [usize; 3]| -> Vec<String> {
+        let ranks = dims.iter().product();
+        let handles: Vec<_> = ThreadRanks::new(ranks)
+            .into_iter()
+            .map(|comm| {
+                let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+                let solid = solid.clone();
+                std::thread::spawn(move || {
+                    let dims = (ranks > 1).then_some(dims);
+                    let mut s =
+                        FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
+                            .expect("solver");
+                    let mut e = Embedded::new(&s, solid).expect("embedded");
+                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+                    assert!(e.predict(&mut s, dt).ok());
+                    // 1/30 s moves the tilted block (2.5 m/s along y) 4 cells of 1/48 m.
+                    let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
+                    e.loads(&s, &far)
+                        .expect_err("beyond the near cells")
+                        .to_string()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("rank thread"))
+            .collect()
+    };
+    let one = refusals([1, 1, 1]);
+    assert!(one[0].contains("the trial wet surface"), "{}", one[0]);
+    for dims in [[1, 2, 1], [2, 2, 1], [2, 4, 1]] {
+        for (r, refusal) in refusals(dims).iter().enumerate() {
+            assert_eq!(refusal, &one[0], "{dims:?} rank {r}");
+        }
+    }
 }
