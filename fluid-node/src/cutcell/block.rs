@@ -136,6 +136,10 @@ pub struct BlockGeometry {
     pub clipped_elements: usize,
     /// Rows along a cut axis swept whole (a run of cut cells from beyond the window).
     pub whole_rows: usize,
+    /// Pieces clipped (those of the window and one cell around it, and those of the elements
+    /// of the rows swept whole): the work, as [`crate::cutcell::CutDiagnostics::n_pieces`]
+    /// counts it for the whole grid.
+    pub n_pieces: usize,
 }
 
 impl BlockGeometry {
@@ -167,6 +171,28 @@ impl BlockGeometry {
 /// Pure. Cost: the elements that reach the window (in 2-D with x cut: its band of rows), plus
 /// those of the rows swept whole.
 pub fn compute_block(grid: &Grid, surface: &Surface, block: CellBox, halo: usize) -> BlockGeometry {
+    block_geometry(grid, surface, block, halo, true)
+}
+
+/// [`compute_block`] without the sweeps along the axes other than x: Λ, λ along x and the
+/// sub-faces only (exact on every cell of the window; λ along the other axes is left 0), what
+/// the loads need. No row is swept whole, so the cost is that of the window's elements.
+pub fn compute_block_cells(
+    grid: &Grid,
+    surface: &Surface,
+    block: CellBox,
+    halo: usize,
+) -> BlockGeometry {
+    block_geometry(grid, surface, block, halo, false)
+}
+
+fn block_geometry(
+    grid: &Grid,
+    surface: &Surface,
+    block: CellBox,
+    halo: usize,
+    cut_axes: bool,
+) -> BlockGeometry {
     assert!(
         grid.dim == surface.dim,
         "grid dimension {} differs from surface dimension {}",
@@ -217,11 +243,14 @@ pub fn compute_block(grid: &Grid, surface: &Surface, block: CellBox, halo: usize
     });
     clip_elements(grid, surface, keep, Some(reach), sub, &mut clipped);
     out.clipped_elements = n_kept;
+    out.n_pieces = pieces.len();
     let covered_runs = sweep_x(grid, &rows, &pieces, &piece_subface, &mut out);
-    for axis in 1..dim {
-        sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
+    if cut_axes {
+        for axis in 1..dim {
+            sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
+        }
+        fill_covered_faces(grid, &covered_runs, &mut out);
     }
-    fill_covered_faces(grid, &covered_runs, &mut out);
     out.cut_cells.extend(out.subfaces.iter().map(|s| s.cell));
     out.cut_cells.dedup();
     out
@@ -479,6 +508,7 @@ fn sweep_whole_rows(
         &mut sink,
     );
     out.clipped_elements += n_whole;
+    out.n_pieces += row_pieces.len();
     out.whole_rows += whole.len();
 }
 

@@ -83,7 +83,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
-pub use block::{BlockGeometry, CellBox, compute_block};
+pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };

@@ -7,7 +7,7 @@ use super::cells::{domain_face, pressure_cell, touches_gas_with};
 use super::error::Reach;
 use super::levers::Levers;
 use super::{Embedded, EmbeddedError, SolidFrame};
-use crate::cutcell::{SubFace, compute, compute_block};
+use crate::cutcell::{SubFace, compute, compute_block_cells};
 use crate::fv::FluidSolver;
 
 /// Force and torque per particle on one trial surface (eq. 23–25 of paper 003).
@@ -26,7 +26,7 @@ impl Embedded {
     /// ([`EmbeddedError::at_step`]).
     ///
     /// Collective on a decomposed grid: each rank takes the sub-faces of its own block only
-    /// (the trial geometry of the block and one cell around it, `cutcell::compute_block`), and
+    /// (the trial geometry of the block and one cell around it, `cutcell::compute_block_cells`), and
     /// the terms of every rank are gathered on every rank and added per slot as one rank adds
     /// them ([`OddSum`]: the sums do not depend on the terms' order), so every rank returns
     /// the loads of one rank.
@@ -54,7 +54,7 @@ impl Embedded {
             }
             Some(block) => {
                 let grid = &self.config.grid;
-                let geom = compute_block(grid, &trial.surface(), block, 1);
+                let geom = compute_block_cells(grid, &trial.surface(), block, 1);
                 let lambda = |c: usize| geom.solid_fraction_at(grid.ijk(c));
                 let mine = geom
                     .subfaces

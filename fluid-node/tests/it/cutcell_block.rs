@@ -2,9 +2,12 @@
 //! them (`cutcell::compute_block`) is the whole grid's geometry, bit for bit: Λ, λ along x and
 //! the sub-faces on every cell of the window, λ along every axis on the block's own faces, for
 //! the moving bodies of the `fv_ranks` tests at several positions, on their process grids, with
-//! halos from none (a block's own cells only) to the embedded part's.
+//! halos from none (a block's own cells only) to the embedded part's; and the same for Λ, λ
+//! along x and the sub-faces of `compute_block_cells` (the loads' geometry).
 
-use fluid_node::cutcell::{BlockGeometry, CellBox, CutGeometry, compute, compute_block};
+use fluid_node::cutcell::{
+    BlockGeometry, CellBox, CutGeometry, compute, compute_block, compute_block_cells,
+};
 use fluid_node::embedded::SolidFrame;
 use fluid_node::fv::slab::share;
 use fluid_node::grid::Grid;
@@ -27,7 +30,15 @@ struct Tally {
 
 /// Asserts every cell of the window (Λ, λ_x, sub-faces, cut cells) and every face of the
 /// block's cells (λ along every axis) as the whole grid has them.
-fn assert_block_is_whole(grid: &Grid, whole: &CutGeometry, b: &BlockGeometry, what: &str) {
+///
+/// `cells_only`: the geometry of `compute_block_cells`, λ along x only.
+fn assert_block_is_whole(
+    grid: &Grid,
+    whole: &CutGeometry,
+    b: &BlockGeometry,
+    cells_only: bool,
+    what: &str,
+) {
     let w = b.window;
     let dim = grid.dim;
     for c in 0..grid.n_cells() {
@@ -42,7 +53,7 @@ fn assert_block_is_whole(grid: &Grid, whole: &CutGeometry, b: &BlockGeometry, wh
             "{what}: Λ of cell {ijk:?}"
         );
         for axis in 0..dim {
-            if axis > 0 && !own {
+            if axis > 0 && (!own || cells_only) {
                 continue;
             }
             for side in 0..2 {
@@ -112,7 +123,10 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
                 for halo in HALOS {
                     let b = compute_block(grid, &surface, block, halo);
                     let what = format!("{name}, position {k}, {dims:?} rank {r}, halo {halo}");
-                    assert_block_is_whole(grid, &whole, &b, &what);
+                    assert_block_is_whole(grid, &whole, &b, false, &what);
+                    let cells = compute_block_cells(grid, &surface, block, halo);
+                    assert_block_is_whole(grid, &whole, &cells, true, &what);
+                    assert_eq!(cells.whole_rows, 0, "{what}: compute_block_cells");
                     tally.whole_rows += b.whole_rows;
                     tally.fewer += usize::from(b.clipped_elements < surface.n_elements());
                     tally.blocks += 1;
