@@ -142,7 +142,8 @@ impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
         // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16): the cut-cell data
+        // geometry and the correct on the whole grid (replicated, issue 16; the loads are taken
+        // by block, issue 40): the cut-cell data
         // are surface-sized, and the same inputs give every rank the bits of one rank. Only the
         // states of cells near the surface cross ranks (`FluidSolver::cells_at`).
         let grid = solver.global_grid().clone();
