@@ -191,8 +191,8 @@ fn measured_predict(embedded: &mut Embedded, solver: &mut FluidSolver, dt: f64, 
 }
 
 #[inline(never)]
-fn measured_loads(embedded: &mut Embedded, trial: &SolidFrame) {
-    black_box(embedded.loads(trial).expect("loads"));
+fn measured_loads(embedded: &mut Embedded, solver: &FluidSolver, trial: &SolidFrame) {
+    black_box(embedded.loads(solver, trial).expect("loads"));
 }
 
 #[inline(never)]
@@ -253,7 +253,7 @@ fn coupled_step(
         fluid_only(&mut t);
     }
     let loads: Vec<f64> = (0..ITERATIONS)
-        .map(|_| seconds(|| measured_loads(embedded, &next)))
+        .map(|_| seconds(|| measured_loads(embedded, solver, &next)))
         .collect();
     t.loads = median(loads);
     let grid = solver.grid().clone();
@@ -365,7 +365,7 @@ fn rss_child(variant: &str, n: usize, steps: usize) {
             let next = support::translated(embedded.surface(), dt);
             assert!(embedded.predict(&mut solver, dt).ok(), "predict {k}");
             for _ in 0..ITERATIONS {
-                black_box(embedded.loads(&next).expect("loads"));
+                black_box(embedded.loads(&solver, &next).expect("loads"));
             }
             embedded
                 .correct(&mut solver, dt, next, k as u64, false)

@@ -110,10 +110,6 @@ impl RealFluid {
         })
     }
 
-    fn embedded(&mut self, step: u64) -> Result<&mut Embedded, Error> {
-        self.embedded.as_mut().ok_or(Error::NoSurface { step })
-    }
-
     /// Whether this rank writes the files (rank 0).
     fn writes(&self) -> bool {
         self.solver.comm().rank() == 0
@@ -402,9 +398,9 @@ impl FluidModel for RealFluid {
     fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, Error> {
         let step = plan.stamp.step;
         let frame = solid_frame(state)?;
-        let loads = self
-            .embedded(step)?
-            .loads(&frame)
+        let embedded = self.embedded.as_mut().ok_or(Error::NoSurface { step })?;
+        let loads = embedded
+            .loads(&self.solver, &frame)
             .map_err(|e| e.at_step(step))?;
         Ok(InterfaceLoads {
             stamp: plan.stamp,

@@ -54,6 +54,17 @@ impl OddSum {
         self.terms.push((slot as u32, value));
     }
 
+    /// The terms pushed so far, `(slot, value)` in the order they came (to send them to the
+    /// rank that adds them: the sums do not depend on that order).
+    pub fn terms(&self) -> &[(u32, f64)] {
+        &self.terms
+    }
+
+    /// Pushes terms taken from [`OddSum::terms`] (of another rank), as if pushed one by one.
+    pub fn extend(&mut self, terms: impl IntoIterator<Item = (u32, f64)>) {
+        self.terms.extend(terms);
+    }
+
     /// Adds every slot's sum to `out[slot]` and forgets the terms.
     ///
     /// `out[slot]` is added last, to the sum of the slot's terms, so that a slot receiving terms

@@ -264,6 +264,64 @@ fn peel<const N: usize>(
     peel(grid, axis + 1, &rest, cell, emit);
 }
 
+/// [`clip_polygon`] restricted to the extended cells within `window` (`(first, last)` slab per
+/// axis, inclusive): the same splits in the same order up to the window's last slab along each
+/// axis, so every piece in the window has the bits [`clip_polygon`] gives it, and none outside
+/// is emitted or split further (a block's geometry, [`crate::cutcell::compute_block`]).
+pub(crate) fn clip_polygon_in<const N: usize>(
+    grid: &Grid,
+    poly: &Polygon<N>,
+    window: [(i32, i32); 3],
+    emit: &mut impl FnMut([i32; 3], &Polygon<N>),
+) {
+    peel_in(grid, 0, poly, [0; 3], &window, emit);
+}
+
+fn peel_in<const N: usize>(
+    grid: &Grid,
+    axis: usize,
+    poly: &Polygon<N>,
+    mut cell: [i32; 3],
+    window: &[(i32, i32); 3],
+    emit: &mut impl FnMut([i32; 3], &Polygon<N>),
+) {
+    if poly.n < 3 {
+        return;
+    }
+    if axis == grid.dim {
+        emit(cell, poly);
+        return;
+    }
+    let (lo, hi) = slab_range(grid, axis, poly.vertices());
+    let (first, last) = window[axis];
+    let mut rest = *poly;
+    let mut below = Polygon::EMPTY;
+    let mut above = Polygon::EMPTY;
+    for s in lo..hi {
+        if s > last {
+            return;
+        }
+        // NOTE: the slabs below the window are split off all the same: each split acts on what
+        // the ones below it left, so skipping them would give the window's pieces other bits.
+        split_polygon(
+            &rest,
+            axis,
+            plane(grid, axis, s + 1),
+            &mut below,
+            &mut above,
+        );
+        if s >= first {
+            cell[axis] = s;
+            peel_in(grid, axis + 1, &below, cell, window, emit);
+        }
+        rest = above;
+    }
+    if (first..=last).contains(&hi) {
+        cell[axis] = hi;
+        peel_in(grid, axis + 1, &rest, cell, window, emit);
+    }
+}
+
 fn slab_range<const N: usize>(grid: &Grid, axis: usize, verts: &[[f64; N]]) -> (i32, i32) {
     let mut x_min = verts[0][axis];
     let mut x_max = x_min;

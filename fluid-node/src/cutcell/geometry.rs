@@ -1,6 +1,6 @@
 //! [`compute`]: solid volume fractions Λ, face fractions λ and clipped sub-faces of a surface.
 
-use crate::cutcell::clip::{Polygon, clip_polygon, clip_segment};
+use crate::cutcell::clip::{Polygon, clip_polygon, clip_polygon_in, clip_segment};
 use crate::cutcell::measure::{
     Piece, column_moment, polygon_measures, segment_measures, triangle_normal,
 };
@@ -224,23 +224,74 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
         diagnostics,
         ..
     } = out;
+    let mut clipped = Clipped {
+        pieces,
+        piece_subface,
+        subfaces,
+        subface_vertices,
+    };
+    diagnostics.n_skipped_elements += clip_elements(
+        grid,
+        surface,
+        |_| true,
+        None,
+        |cell| domain_cell(grid, cell),
+        &mut clipped,
+    );
+}
+
+/// Where [`clip_elements`] puts the pieces and sub-faces.
+pub(crate) struct Clipped<'a> {
+    pub(crate) pieces: &'a mut Vec<Piece>,
+    /// Sub-face of each piece (`u32::MAX` for a piece without one).
+    pub(crate) piece_subface: &'a mut Vec<u32>,
+    pub(crate) subfaces: &'a mut Vec<SubFace>,
+    pub(crate) subface_vertices: &'a mut Vec<[f64; 3]>,
+}
+
+/// Clips the elements `keep` accepts (given their vertices), in element order, into `out`; a
+/// piece gets a sub-face where `sub` gives its extended cell a linear index. With a `window`
+/// (first and last extended slab per axis), 3-D elements give only their pieces in it
+/// ([`clip_polygon_in`]; 2-D segments are clipped whole). Returns the number of elements skipped
+/// (an index out of range or a non-finite coordinate).
+///
+/// NOTE: an element's pieces depend on the element and the grid only, so any subset of the
+/// elements gives the bits of the whole surface's pieces for those elements, in the same order.
+pub(crate) fn clip_elements(
+    grid: &Grid,
+    surface: &Surface,
+    mut keep: impl FnMut(&[[f64; 3]; 3]) -> bool,
+    window: Option<[(i32, i32); 3]>,
+    sub: impl Fn([i32; 3]) -> Option<u32>,
+    out: &mut Clipped,
+) -> usize {
+    let Clipped {
+        pieces,
+        piece_subface,
+        subfaces,
+        subface_vertices,
+    } = out;
+    let mut skipped = 0;
     for e in 0..surface.n_elements() {
         let Some(t) = surface.element(e) else {
-            diagnostics.n_skipped_elements += 1;
+            skipped += 1;
             continue;
         };
+        if !keep(&t) {
+            continue;
+        }
         let particle = surface.particle(e);
         if surface.dim == 3 {
             let normal = triangle_normal(&t);
             let poly = Polygon::from_slice(&t);
-            clip_polygon(grid, &poly, &mut |cell, piece| {
+            let mut emit = |cell: [i32; 3], piece: &Polygon| {
                 let (area_vector, area, centroid) = polygon_measures(piece, normal);
                 pieces.push(Piece {
                     cell,
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                let in_domain = domain_cell(grid, cell);
+                let in_domain = sub(cell);
                 piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
                 if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
@@ -255,7 +306,11 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     });
                     subface_vertices.extend_from_slice(piece.vertices());
                 }
-            });
+            };
+            match window {
+                Some(w) => clip_polygon_in(grid, &poly, w, &mut emit),
+                None => clip_polygon(grid, &poly, &mut emit),
+            }
         } else {
             let (full, length, _) = segment_measures(t[0], t[1]);
             let normal = if length > 0.0 {
@@ -270,7 +325,7 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
                     area_vector,
                     moment: column_moment(grid, cell, area_vector, centroid),
                 });
-                let in_domain = domain_cell(grid, cell);
+                let in_domain = sub(cell);
                 piece_subface.push(in_domain.map_or(u32::MAX, |_| subfaces.len() as u32));
                 if let Some(cell_idx) = in_domain {
                     subfaces.push(SubFace {
@@ -289,6 +344,7 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
             });
         }
     }
+    skipped
 }
 
 /// Puts the sub-faces in cell order (then element, then piece order) by walking the sorted

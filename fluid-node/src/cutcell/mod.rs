@@ -15,6 +15,9 @@
 //!    of each element ∩ cell, down to its preimage at `t^n`), which for a translation gives every
 //!    sub-face exactly `Δt (w · n) area`, as the conservative update of a uniform flow needs;
 //! 5. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
+//! 6. [`compute_block`]: Λ, λ and the sub-faces of one block of a decomposed grid and a halo,
+//!    from the elements that reach them only, with the bits of [`compute`] on the block's cells
+//!    (issue 40, docs/mpi.md).
 //!
 //! # Method
 //!
@@ -67,6 +70,7 @@
 //! assert_eq!(geometry.solid_fraction[grid.index(1, 1, 0)], 1.0);
 //! ```
 
+mod block;
 pub(crate) mod clip;
 mod geometry;
 mod measure;
@@ -79,6 +83,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
+pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };

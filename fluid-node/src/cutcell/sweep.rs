@@ -127,6 +127,24 @@ pub(crate) fn sweep_rows(
     fill_runs: bool,
     sink: &mut impl SweepSink,
 ) -> f64 {
+    sweep_rows_from(records, n, area, snap_tol, fill_runs, |_| (0, 0.0), sink)
+}
+
+/// [`sweep_rows`] with each row entered at `start(row) = (position, fraction)`: the sweep of a
+/// row begins at that position's lower face with that running fraction instead of at the row's
+/// start with 0 (the records of the row must lie at or above the position). Entered at an uncut
+/// cell with its solid fraction (an integer for a closed surface, the value the whole row's sweep
+/// snaps to there), a row gives from there on the bits of the whole row's sweep
+/// ([`crate::cutcell::compute_block`]).
+pub(crate) fn sweep_rows_from(
+    records: &[Record],
+    n: i32,
+    area: f64,
+    snap_tol: Option<f64>,
+    fill_runs: bool,
+    start: impl Fn(u64) -> (i32, f64),
+    sink: &mut impl SweepSink,
+) -> f64 {
     let mut max_defect: f64 = 0.0;
     // One cluster of adjacent cut cells: (position, summed flux, summed moment), and the running
     // fraction on each cell's lower face (`below`).
@@ -137,8 +155,8 @@ pub(crate) fn sweep_rows(
     let mut i = 0;
     while i < records.len() {
         let row = records[i].row;
-        let mut lambda = 0.0;
-        let mut next = 0; // first face (and cell) of the row not yet reported
+        // `next`: first face (and cell) of the row not yet reported.
+        let (mut next, mut lambda) = start(row);
         while i < records.len() && records[i].row == row {
             // Gather one cluster: cells at consecutive positions.
             cluster.clear();

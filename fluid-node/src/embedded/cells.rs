@@ -128,12 +128,18 @@ pub(super) fn oriented(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> [isize; 3
 /// sides of a grid plane, all of it. Such faces take no gas pressure, on either side of the
 /// exchange; the contact carries the bodies' push.
 pub(super) fn touches_gas(grid: &Grid, lambda: &[f64], s: &SubFace) -> bool {
+    touches_gas_with(grid, |c| lambda[c], s)
+}
+
+/// [`touches_gas`] with the solid fractions read through `lambda` (cell index to Λ: a block's
+/// geometry, whose arrays are its window's).
+pub(super) fn touches_gas_with(grid: &Grid, lambda: impl Fn(usize) -> f64, s: &SubFace) -> bool {
     let c = s.cell as usize;
-    if fluid_part(lambda[c]) > COVERED_TOLERANCE {
+    if fluid_part(lambda(c)) > COVERED_TOLERANCE {
         return true;
     }
     match faced(grid, s) {
-        Some(q) => fluid_part(lambda[q]) > COVERED_TOLERANCE,
+        Some(q) => fluid_part(lambda(q)) > COVERED_TOLERANCE,
         // Beyond the grid: the boundary condition is there; keep the face's pressure.
         None => true,
     }

@@ -3,11 +3,12 @@
 
 use protocol::sum::OddSum;
 
-use super::cells::{domain_face, pressure_cell, touches_gas};
+use super::cells::{domain_face, pressure_cell, touches_gas_with};
 use super::error::Reach;
 use super::levers::Levers;
 use super::{Embedded, EmbeddedError, SolidFrame};
-use crate::cutcell::compute;
+use crate::cutcell::{SubFace, compute, compute_block_cells};
+use crate::fv::FluidSolver;
 
 /// Force and torque per particle on one trial surface (eq. 23–25 of paper 003).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -23,48 +24,96 @@ impl Embedded {
     /// (eq. 23–25 of paper 003; torques about the trial centres of mass, with the lever arms
     /// of `embedded::levers`). The error names no step: the caller adds it
     /// ([`EmbeddedError::at_step`]).
-    pub fn loads(&mut self, trial: &SolidFrame) -> Result<Loads, EmbeddedError> {
-        let grid = &self.config.grid;
-        let d = grid.dim;
+    ///
+    /// Collective on a decomposed grid: each rank takes the sub-faces of its own block only
+    /// (the trial geometry of the block and one cell around it, `cutcell::compute_block_cells`), and
+    /// the terms of every rank are gathered on every rank and added per slot as one rank adds
+    /// them ([`OddSum`]: the sums do not depend on the terms' order), so every rank returns
+    /// the loads of one rank.
+    pub fn loads(
+        &mut self,
+        solver: &FluidSolver,
+        trial: &SolidFrame,
+    ) -> Result<Loads, EmbeddedError> {
+        let d = self.config.grid.dim;
         let nr = if d == 2 { 1 } else { 3 };
         let np = trial.n_particles();
-        compute(grid, &trial.surface(), &mut self.scratch.trial);
-        let geom = &self.scratch.trial;
         let levers = Levers::new(self.config.start_levers, &self.state.current, trial);
+        // Forces in slots `0..np d`, torques after them; summed apart from the sub-faces' order.
+        let mut sum = std::mem::take(&mut self.scratch.odd);
+        sum.clear();
+        let failed = match self.config.block {
+            None => {
+                let grid = &self.config.grid;
+                compute(grid, &trial.surface(), &mut self.scratch.trial);
+                let geom = &self.scratch.trial;
+                let lambda = |c: usize| geom.solid_fraction[c];
+                geom.subfaces
+                    .iter()
+                    .find_map(|s| self.push_load(s, trial, &levers, lambda, &mut sum).err())
+            }
+            Some(block) => {
+                let grid = &self.config.grid;
+                let geom = compute_block_cells(grid, &trial.surface(), block, 1);
+                let lambda = |c: usize| geom.solid_fraction_at(grid.ijk(c));
+                let mine = geom
+                    .subfaces
+                    .iter()
+                    .filter(|s| block.contains(grid.ijk(s.cell as usize)))
+                    .find_map(|s| {
+                        let pc = self.push_load(s, trial, &levers, lambda, &mut sum).err()?;
+                        Some((s.cell, s.element, pc))
+                    });
+                gather_terms(solver, mine, &mut sum).map(|(_, _, pc)| pc)
+            }
+        };
+        if let Some(pc) = failed {
+            sum.clear();
+            self.scratch.odd = sum;
+            return Err(self.outside_near(None, Reach::TrialSurface, pc));
+        }
         let mut loads = Loads {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],
         };
-        // Forces in slots `0..np d`, torques after them; summed apart from the sub-faces' order.
-        let mut sum = std::mem::take(&mut self.scratch.odd);
-        sum.clear();
-        for s in &geom.subfaces {
-            if !trial.wet[s.element as usize]
-                || domain_face(grid, s).is_some()
-                || self.opening(s, trial)
-                || !touches_gas(grid, &geom.solid_fraction, s)
-            {
-                continue;
-            }
-            let mut f = [0.0; 3];
-            let pc = pressure_cell(grid, &self.state.geom.solid_fraction, s) as u32;
-            let Some(p) = self.near.pressure_of(pc) else {
-                self.scratch.odd = sum;
-                return Err(self.outside_near(None, Reach::TrialSurface, pc));
-            };
-            for a in 0..d {
-                f[a] = -p * s.normal[a] * s.area;
-            }
-            let p = s.particle as usize;
-            for a in 0..d {
-                sum.push(p * d + a, f[a]);
-            }
-            let r = levers.lever(s);
-            push_moment(&mut sum, np * d, d, p, r, f);
-        }
         add_loads(&mut sum, &mut loads, np * d);
         self.scratch.odd = sum;
         Ok(loads)
+    }
+
+    /// Pushes the force and moment of wet sub-face `s` of `trial` (solid fractions of the trial
+    /// surface read through `lambda`) into `sum`; skips a sub-face that carries none. Errs
+    /// with the cell whose `p̄` it needs when that cell is not a near cell.
+    fn push_load(
+        &self,
+        s: &SubFace,
+        trial: &SolidFrame,
+        levers: &Levers,
+        lambda: impl Fn(usize) -> f64,
+        sum: &mut OddSum,
+    ) -> Result<(), u32> {
+        let grid = &self.config.grid;
+        let d = grid.dim;
+        if !trial.wet[s.element as usize]
+            || domain_face(grid, s).is_some()
+            || self.opening(s, trial)
+            || !touches_gas_with(grid, lambda, s)
+        {
+            return Ok(());
+        }
+        let mut f = [0.0; 3];
+        let pc = pressure_cell(grid, &self.state.geom.solid_fraction, s) as u32;
+        let p = self.near.pressure_of(pc).ok_or(pc)?;
+        for a in 0..d {
+            f[a] = -p * s.normal[a] * s.area;
+        }
+        let p = s.particle as usize;
+        for a in 0..d {
+            sum.push(p * d + a, f[a]);
+        }
+        let r = levers.lever(s);
+        push_moment(sum, trial.n_particles() * d, d, p, r, f);
+        Ok(())
     }
 
     /// The error for `what` reaching `cell`, outside the near cells.
@@ -106,4 +155,37 @@ pub(super) fn add_loads(sum: &mut OddSum, loads: &mut Loads, n_force: usize) {
     sum.add_into(&mut all);
     loads.torque = all.split_off(n_force);
     loads.force = all;
+}
+
+/// Every rank's load terms (and the first sub-face `(cell, element, p̄ cell)` whose `p̄` it
+/// lacked) on every rank (collective): `sum` gets all the terms, in rank order; returns the
+/// failure of the lowest sub-face in the one-rank order (cell, then element), the one one rank
+/// stops at.
+fn gather_terms(
+    solver: &FluidSolver,
+    mine: Option<(u32, u32, u32)>,
+    sum: &mut OddSum,
+) -> Option<(u32, u32, u32)> {
+    let none = (u32::MAX, u32::MAX, u32::MAX);
+    let (cell, element, pc) = mine.unwrap_or(none);
+    let mut bytes = Vec::with_capacity(12 + 12 * sum.terms().len());
+    for x in [cell, element, pc] {
+        bytes.extend(x.to_le_bytes());
+    }
+    for &(slot, value) in sum.terms() {
+        bytes.extend(slot.to_le_bytes());
+        bytes.extend(value.to_bits().to_le_bytes());
+    }
+    sum.clear();
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let mut first = none;
+    for part in solver.comm().all_gather(&bytes) {
+        let failed = (u32_at(&part, 0), u32_at(&part, 4), u32_at(&part, 8));
+        first = first.min(failed);
+        sum.extend(part[12..].chunks_exact(12).map(|t| {
+            let bits = u64::from_le_bytes(t[4..12].try_into().expect("8 bytes"));
+            (u32_at(t, 0), f64::from_bits(bits))
+        }));
+    }
+    (first != none).then_some(first)
 }

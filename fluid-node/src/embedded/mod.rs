@@ -22,9 +22,11 @@
 //!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
 //!
 //! On a grid decomposed over ranks ([`crate::fv::Slab`], a block) every rank holds the whole
-//! surface and runs all of this on the whole grid; the solver applies and gathers the sweeps'
-//! hooks per block, and the states of near cells come from their ranks ([`crate::fv::FluidSolver::cells_at`]), so
-//! every rank computes the bits of one rank (the fluid-node tests `fv_ranks`, docs/mpi.md).
+//! surface and runs all of this on the whole grid but the loads (each rank takes the sub-faces
+//! of its own block, and the terms of all are added as one rank adds them, `loads.rs`); the
+//! solver applies and gathers the sweeps' hooks per block, and the states of near cells come
+//! from their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of
+//! one rank (the fluid-node tests `fv_ranks`, docs/mpi.md).
 //!
 //! Properties (tested in the fluid-node tests `embedded_*`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the

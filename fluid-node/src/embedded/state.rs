@@ -8,7 +8,7 @@ use super::beyond::outside_domain;
 use super::cells::{CellKind, fluid_part, full_state};
 use super::near_wall::NearWall;
 use super::{EmbeddedError, Loads, SolidFrame};
-use crate::cutcell::{CutGeometry, SubfaceSwept, compute};
+use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver, SplitHooks};
@@ -52,6 +52,9 @@ pub(super) struct Config {
     /// The domain's sides, `[axis][low, high]` (a body must stay off the periodic ones:
     /// `beyond::outside_domain`; the gas it pushes out of the open ones leaves).
     pub(super) boundary: [[BoundaryKind; 2]; 3],
+    /// This rank's block on a grid decomposed over several ranks (`None` on one rank): the
+    /// loads take the sub-faces of its cells only (issue 40 item 1, `loads.rs`).
+    pub(super) block: Option<CellBox>,
 }
 
 /// What persists from one step to the next (and what a checkpoint restores).
@@ -142,7 +145,8 @@ impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
         // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16): the cut-cell data
+        // geometry and the correct on the whole grid (replicated, issue 16; the loads are taken
+        // by block, issue 40): the cut-cell data
         // are surface-sized, and the same inputs give every rank the bits of one rank. Only the
         // states of cells near the surface cross ranks (`FluidSolver::cells_at`).
         let grid = solver.global_grid().clone();
@@ -170,6 +174,13 @@ impl Embedded {
                 gamma: params.gamma,
                 vacuum: (params.vacuum_rho, params.vacuum_p),
                 boundary: params.boundary,
+                block: (solver.slab().ranks > 1).then(|| {
+                    let slab = solver.slab();
+                    CellBox {
+                        lo: slab.offset,
+                        hi: std::array::from_fn(|a| slab.offset[a] + slab.local.cells[a]),
+                    }
+                }),
                 grid,
             },
             state: State {

@@ -125,8 +125,9 @@ impl FluidModel for Leader<'_> {
     }
 
     fn loads(&mut self, plan: &StepPlan, state: &SolidState) -> Result<InterfaceLoads, Error> {
-        // Every rank holds the whole surface and the gathered pressures, so every rank computes
-        // the same loads (`crate::embedded`); rank 0's go to the coupler.
+        // Collective: every rank takes the sub-faces of its own block, the terms of all are
+        // gathered on every rank and added as one rank adds them (`Embedded::loads`), so every
+        // rank has the loads of one rank; rank 0's go to the coupler.
         self.announce(&Call::Loads(plan.clone(), Box::new(state.clone())));
         self.inner.loads(plan, state)
     }

@@ -48,8 +48,8 @@ fn the_load_is_continuous_across_the_grid_plane_beside_one_covered_cell() {
     assert!(report.ok(), "predict: {:?}", report.troubles);
     // Trials 1e-9 m before the plane (the face in cell 14) and 1e-9 m after it (in cell 15,
     // covered at t^n): the face moved 2e-9 m, the load must not jump.
-    let before = embedded.loads(&slab(0.375 - eps)).unwrap();
-    let after = embedded.loads(&slab(0.375 + eps)).unwrap();
+    let before = embedded.loads(&solver, &slab(0.375 - eps)).unwrap();
+    let after = embedded.loads(&solver, &slab(0.375 + eps)).unwrap();
     println!(
         "force x: before the plane {:.17e}, after it {:.17e}",
         before.force[0], after.force[0]
@@ -104,10 +104,10 @@ fn levers_on_f_n_give_the_torque_of_f_n_with_the_forces_of_f_n_plus_1() {
     let report = embedded.predict(&mut solver, dt);
     assert!(report.ok(), "predict: {:?}", report.troubles);
     let delta = 0.004;
-    let on_n = embedded.loads(&shell_particle(0.0)).unwrap();
-    let end = embedded.loads(&shell_particle(delta)).unwrap();
+    let on_n = embedded.loads(&solver, &shell_particle(0.0)).unwrap();
+    let end = embedded.loads(&solver, &shell_particle(delta)).unwrap();
     embedded.set_start_levers(true);
-    let start = embedded.loads(&shell_particle(delta)).unwrap();
+    let start = embedded.loads(&solver, &shell_particle(delta)).unwrap();
     println!(
         "torque on F^n {:e}, on F^(n+1): end levers {:e}, levers on F^n {:e}",
         on_n.torque[0], end.torque[0], start.torque[0]

@@ -99,7 +99,9 @@ fn run_with(v: f64, n: usize, t_end: f64, back: f64, lo: f64, hi: f64) -> Result
             return Err(format!("step {steps}: predict {:?}", report.troubles));
         }
         let current = embedded.surface().clone();
-        embedded.loads(&current).map_err(|e| e.to_string())?;
+        embedded
+            .loads(&solver, &current)
+            .map_err(|e| e.to_string())?;
         embedded
             .correct(&mut solver, dt, next, steps, false)
             .map_err(|e| format!("step {steps}: {e}"))?;

@@ -393,8 +393,8 @@ fn coupled_run(
                     assert!(predicted.ok(), "step {n}: {:?}", predicted.troubles);
                     let current = e.surface().clone();
                     let next = embedded_support::translated(&current, dt);
-                    let on_current = e.loads(&current).expect("loads on F^n");
-                    let on_next = e.loads(&next).expect("loads on the trial");
+                    let on_current = e.loads(&s, &current).expect("loads on F^n");
+                    let on_next = e.loads(&s, &next).expect("loads on the trial");
                     let report = e
                         .correct(&mut s, dt, next, n, n % 2 == 1)
                         .unwrap_or_else(|err| panic!("step {n}: {err}"));
@@ -486,6 +486,69 @@ pub(crate) fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool
 #[test]
 fn a_moving_body_across_the_cuts_2d_is_bit_identical_on_slabs_and_blocks() {
     let (grid, state) = blast(&[40, 48]);
+    let solid = moving_bodies_2d();
+    assert!(covers_across(&grid, &solid, 24), "the plate covers the cut");
+    let walls = [[BoundaryKind::Wall; 2]; 3];
+    for order in [5, 7] {
+        assert_coupled_same_for_ranks(
+            &format!("2-D osmp{order}"),
+            &grid,
+            &state,
+            &params(order, walls),
+            &solid,
+            10,
+            &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [3, 1, 1], [2, 4, 1]],
+        );
+    }
+    // Periodic along y, with a plate on planes 1–2 beside the seam between the last rank and
+    // rank 0 (each the other's neighbour there).
+    let solid = bodies(&[solid, seam_plate_2d()]);
+    let periodic = [
+        [BoundaryKind::Wall; 2],
+        [BoundaryKind::Periodic; 2],
+        [BoundaryKind::Wall; 2],
+    ];
+    assert_coupled_same_for_ranks(
+        "2-D periodic",
+        &grid,
+        &state,
+        &params(5, periodic),
+        &solid,
+        10,
+        &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [1, 3, 1]],
+    );
+}
+
+/// The same in 3-D: a rotated box and a plate two cells thick across the cut at z = 0.5,
+/// moving through it; eight steps visit every sweep order. Slabs of 2, 3 and 4, and blocks
+/// 1 × 2 × 2, 1 × 2 × 1 and 1 × 2 × 4 (y cut at 0.5 through both bodies; x is not cut in
+/// 3-D, `protocol::decomp`).
+#[test]
+fn a_moving_body_across_the_cuts_3d_is_bit_identical_on_slabs_and_blocks() {
+    let (grid, state) = blast(&[16, 16, 24]);
+    let solid = moving_bodies_3d();
+    assert!(covers_across(&grid, &solid, 12), "the plate covers the cut");
+    let open = [
+        [BoundaryKind::Wall, BoundaryKind::Outflow],
+        [BoundaryKind::Wall; 2],
+        [BoundaryKind::Outflow, BoundaryKind::Wall],
+    ];
+    let p = params(5, open);
+    let decomps = [
+        [1, 1, 2],
+        [1, 1, 4],
+        [1, 2, 2],
+        [1, 2, 1],
+        [1, 1, 3],
+        [1, 2, 4],
+    ];
+    assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &p, &solid, 8, &decomps);
+}
+
+/// The bodies of the 2-D test on the 40 × 48 blast: a tilted block, a plate two cells thick
+/// across the cut at y = 0.5, and two plates just beyond the lines of the ranks beside the cut at
+/// y = 0.25 on 4 ranks.
+pub(crate) fn moving_bodies_2d() -> SolidFrame {
     let block = embedded_support::polygon_2d(
         &[[0.70, 0.38], [0.90, 0.44], [0.84, 0.64], [0.66, 0.58]],
         [-1.0, 2.5],
@@ -512,72 +575,72 @@ fn a_moving_body_across_the_cuts_2d_is_bit_identical_on_slabs_and_blocks() {
         [0.2, 0.3],
         0.0,
     );
-    let solid = bodies(&[block, plate, above, below]);
-    assert!(covers_across(&grid, &solid, 24), "the plate covers the cut");
-    let walls = [[BoundaryKind::Wall; 2]; 3];
-    for order in [5, 7] {
-        assert_coupled_same_for_ranks(
-            &format!("2-D osmp{order}"),
-            &grid,
-            &state,
-            &params(order, walls),
-            &solid,
-            10,
-            &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [3, 1, 1], [2, 4, 1]],
-        );
-    }
-    // Periodic along y, with a plate on planes 1–2 beside the seam between the last rank and
-    // rank 0 (each the other's neighbour there).
-    let seam = embedded_support::polygon_2d(
+    bodies(&[block, plate, above, below])
+}
+
+/// A plate on planes 1–2 of the 40 × 48 blast, beside the periodic seam along y.
+pub(crate) fn seam_plate_2d() -> SolidFrame {
+    embedded_support::polygon_2d(
         &[[0.55, 0.0205], [0.75, 0.0205], [0.75, 0.063], [0.55, 0.063]],
         [0.0, 0.5],
         0.0,
-    );
-    let solid = bodies(&[solid, seam]);
-    let periodic = [
-        [BoundaryKind::Wall; 2],
-        [BoundaryKind::Periodic; 2],
-        [BoundaryKind::Wall; 2],
-    ];
-    assert_coupled_same_for_ranks(
-        "2-D periodic",
-        &grid,
-        &state,
-        &params(5, periodic),
-        &solid,
-        10,
-        &[[1, 2, 1], [1, 4, 1], [2, 2, 1], [1, 3, 1]],
-    );
+    )
 }
 
-/// The same in 3-D: a rotated box and a plate two cells thick across the cut at z = 0.5,
-/// moving through it; eight steps visit every sweep order. Slabs of 2, 3 and 4, and blocks
-/// 1 × 2 × 2, 1 × 2 × 1 and 1 × 2 × 4 (y cut at 0.5 through both bodies; x is not cut in
-/// 3-D, `protocol::decomp`).
-#[test]
-fn a_moving_body_across_the_cuts_3d_is_bit_identical_on_slabs_and_blocks() {
-    let (grid, state) = blast(&[16, 16, 24]);
+/// The bodies of the 3-D test on the 16 × 16 × 24 blast: a rotated box and a plate two cells
+/// thick across the cut at z = 0.5.
+pub(crate) fn moving_bodies_3d() -> SolidFrame {
     let tilt = embedded_support::rotation([0.6, 0.0, 0.8], 0.5);
     let block =
         embedded_support::box_3d([0.74, 0.5, 0.5], [0.12, 0.1, 0.15], tilt, [-1.0, 0.5, 2.5]);
     let flat = embedded_support::rotation([1.0, 0.0, 0.0], 0.0);
     let plate =
         embedded_support::box_3d([0.25, 0.3, 0.5], [0.12, 0.12, 0.05], flat, [0.0, 0.2, -0.6]);
-    let solid = bodies(&[block, plate]);
-    assert!(covers_across(&grid, &solid, 12), "the plate covers the cut");
-    let open = [
-        [BoundaryKind::Wall, BoundaryKind::Outflow],
-        [BoundaryKind::Wall; 2],
-        [BoundaryKind::Outflow, BoundaryKind::Wall],
-    ];
-    let p = params(5, open);
-    let decomps = [
-        [1, 1, 2],
-        [1, 1, 4],
-        [1, 2, 2],
-        [1, 2, 1],
-        [1, 1, 3],
-        [1, 2, 4],
-    ];
-    assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &p, &solid, 8, &decomps);
+    bodies(&[block, plate])
+}
+
+/// Issue 40 item 1, step 3: each rank takes the loads' terms of its own block's sub-faces, so
+/// a trial surface that reaches beyond the near cells (moved 4 cells: the sub-face whose `p̄`
+/// is missing lies in one rank's block) must be refused on every rank as one rank refuses it,
+/// naming the same cell.
+#[test]
+fn a_trial_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
+    let (grid, state) = blast(&[40, 48]);
+    let solid = moving_bodies_2d();
+    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
+    let refusals = |dims: [usize; 3]| -> Vec<String> {
+        let ranks = dims.iter().product();
+        let handles: Vec<_> = ThreadRanks::new(ranks)
+            .into_iter()
+            .map(|comm| {
+                let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+                let solid = solid.clone();
+                std::thread::spawn(move || {
+                    let dims = (ranks > 1).then_some(dims);
+                    let mut s =
+                        FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
+                            .expect("solver");
+                    let mut e = Embedded::new(&s, solid).expect("embedded");
+                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+                    assert!(e.predict(&mut s, dt).ok());
+                    // 1/30 s moves the tilted block (2.5 m/s along y) 4 cells of 1/48 m.
+                    let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
+                    e.loads(&s, &far)
+                        .expect_err("beyond the near cells")
+                        .to_string()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("rank thread"))
+            .collect()
+    };
+    let one = refusals([1, 1, 1]);
+    assert!(one[0].contains("the trial wet surface"), "{}", one[0]);
+    for dims in [[1, 2, 1], [2, 2, 1], [2, 4, 1]] {
+        for (r, refusal) in refusals(dims).iter().enumerate() {
+            assert_eq!(refusal, &one[0], "{dims:?} rank {r}");
+        }
+    }
 }

@@ -3,6 +3,7 @@
 //! `*_support` and `fv_common` modules hold the helpers the others share.
 
 mod cutcell_2d;
+mod cutcell_block;
 mod cutcell_cmd;
 mod cutcell_degenerate;
 mod cutcell_geometry;

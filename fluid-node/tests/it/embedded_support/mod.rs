@@ -202,7 +202,7 @@ pub fn step(
     let report = embedded.predict(solver, dt);
     assert!(report.ok(), "predict: {:?}", report.troubles);
     let current = embedded.surface().clone();
-    let loads = embedded.loads(&current).expect("loads");
+    let loads = embedded.loads(solver, &current).expect("loads");
     embedded
         .correct(solver, dt, next, step, false)
         .unwrap_or_else(|e| panic!("correct: {e}"));

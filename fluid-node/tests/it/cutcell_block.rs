@@ -1,0 +1,180 @@
+//! Issue 40 item 1, step 1: the geometry of a block and its halo from the elements that reach
+//! them (`cutcell::compute_block`) is the whole grid's geometry, bit for bit: Λ, λ along x and
+//! the sub-faces on every cell of the window, λ along every axis on the block's own faces, for
+//! the moving bodies of the `fv_ranks` tests at several positions, on their process grids, with
+//! halos from none (a block's own cells only) to the embedded part's; and the same for Λ, λ
+//! along x and the sub-faces of `compute_block_cells` (the loads' geometry).
+
+use fluid_node::cutcell::{
+    BlockGeometry, CellBox, CutGeometry, compute, compute_block, compute_block_cells,
+};
+use fluid_node::embedded::SolidFrame;
+use fluid_node::fv::slab::share;
+use fluid_node::grid::Grid;
+
+use crate::embedded_support::translated;
+use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
+
+/// Halos checked: none, one and two cells (rows swept whole where a wall along a cut axis
+/// enters the block), and wider ones.
+const HALOS: [usize; 5] = [0, 1, 2, 5, 12];
+
+/// What the blocks of one check did, summed.
+#[derive(Default)]
+struct Tally {
+    whole_rows: usize,
+    /// Blocks that clipped fewer elements than the surface holds.
+    fewer: usize,
+    blocks: usize,
+}
+
+/// Asserts every cell of the window (Λ, λ_x, sub-faces, cut cells) and every face of the
+/// block's cells (λ along every axis) as the whole grid has them.
+///
+/// `cells_only`: the geometry of `compute_block_cells`, λ along x only.
+fn assert_block_is_whole(
+    grid: &Grid,
+    whole: &CutGeometry,
+    b: &BlockGeometry,
+    cells_only: bool,
+    what: &str,
+) {
+    let w = b.window;
+    let dim = grid.dim;
+    for c in 0..grid.n_cells() {
+        let ijk = grid.ijk(c);
+        if !w.contains(ijk) {
+            continue;
+        }
+        let own = b.block.contains(ijk);
+        assert_eq!(
+            whole.solid_fraction[c].to_bits(),
+            b.solid_fraction_at(ijk).to_bits(),
+            "{what}: Λ of cell {ijk:?}"
+        );
+        for axis in 0..dim {
+            if axis > 0 && (!own || cells_only) {
+                continue;
+            }
+            for side in 0..2 {
+                let mut at = ijk;
+                at[axis] += side;
+                let f = fluid_node::cutcell::face_index(grid, axis, at);
+                assert_eq!(
+                    whole.face_fraction[axis][f].to_bits(),
+                    b.face_fraction_at(axis, at).to_bits(),
+                    "{what}: λ along {axis} of face {at:?} (own cell {own})"
+                );
+            }
+        }
+    }
+    let in_window = |cell: u32| w.contains(grid.ijk(cell as usize));
+    let expected: Vec<_> = whole
+        .subfaces
+        .iter()
+        .filter(|s| in_window(s.cell))
+        .collect();
+    assert_eq!(expected.len(), b.subfaces.len(), "{what}: sub-faces");
+    for (s, t) in expected.iter().zip(&b.subfaces) {
+        let bits = |s: &fluid_node::cutcell::SubFace, vs: &[[f64; 3]]| {
+            let v = &vs[s.first_vertex as usize..(s.first_vertex + s.n_vertices) as usize];
+            let mut x = vec![s.cell as u64, s.element as u64, s.particle as u64];
+            x.push(s.area.to_bits());
+            x.extend(s.normal.iter().chain(&s.centroid).map(|y| y.to_bits()));
+            x.extend(v.iter().flatten().map(|y| y.to_bits()));
+            x
+        };
+        assert_eq!(
+            bits(s, &whole.subface_vertices),
+            bits(t, &b.subface_vertices),
+            "{what}: sub-face of cell {} element {}",
+            s.cell,
+            s.element
+        );
+    }
+    let cut: Vec<u32> = whole
+        .cut_cells
+        .iter()
+        .copied()
+        .filter(|&c| in_window(c))
+        .collect();
+    assert_eq!(cut, b.cut_cells, "{what}: cut cells");
+}
+
+/// Every block of every process grid in `decomps`, with every halo, at `positions` steps of
+/// `dt` along the bodies' velocities.
+fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize; 3]]) -> Tally {
+    let mut tally = Tally::default();
+    for k in 0..4 {
+        let frame = translated(solid, k as f64 * dt);
+        let surface = frame.surface();
+        let mut whole = CutGeometry::new();
+        compute(grid, &surface, &mut whole);
+        assert_eq!(whole.diagnostics.n_skipped_elements, 0);
+        for dims in decomps {
+            let ranks: usize = dims.iter().product();
+            for r in 0..ranks {
+                let coords = [r % dims[0], r / dims[0] % dims[1], r / dims[0] / dims[1]];
+                let mut block = CellBox::whole(grid);
+                for a in 0..3 {
+                    let (first, own) = share(grid.cells[a], dims[a], coords[a]);
+                    (block.lo[a], block.hi[a]) = (first, first + own);
+                }
+                for halo in HALOS {
+                    let b = compute_block(grid, &surface, block, halo);
+                    let what = format!("{name}, position {k}, {dims:?} rank {r}, halo {halo}");
+                    assert_block_is_whole(grid, &whole, &b, false, &what);
+                    let cells = compute_block_cells(grid, &surface, block, halo);
+                    assert_block_is_whole(grid, &whole, &cells, true, &what);
+                    assert_eq!(cells.whole_rows, 0, "{what}: compute_block_cells");
+                    tally.whole_rows += b.whole_rows;
+                    tally.fewer += usize::from(b.clipped_elements < surface.n_elements());
+                    tally.blocks += 1;
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{name}: {} blocks, {} clipped fewer elements than the surface's, {} rows swept whole",
+        tally.blocks, tally.fewer, tally.whole_rows
+    );
+    tally
+}
+
+#[test]
+fn block_geometry_2d_is_the_whole_grids_on_every_process_grid() {
+    let (grid, _) = blast(&[40, 48]);
+    let solid = bodies(&[moving_bodies_2d(), seam_plate_2d()]);
+    // 0.006 s moves the fastest body (2.7 m/s) 0.8 cells of 1/48 m.
+    let decomps = [
+        [1, 2, 1],
+        [1, 4, 1],
+        [2, 2, 1],
+        [3, 1, 1],
+        [2, 4, 1],
+        [1, 3, 1],
+    ];
+    let tally = check("2-D", &grid, &solid, 0.006, &decomps);
+    assert!(tally.whole_rows > 0, "rows swept whole");
+    assert!(tally.fewer > tally.blocks / 2, "blocks clip fewer elements");
+}
+
+#[test]
+fn block_geometry_3d_is_the_whole_grids_on_every_process_grid() {
+    let (grid, _) = blast(&[16, 16, 24]);
+    let solid = moving_bodies_3d();
+    // 0.012 s moves the fastest body (2.7 m/s) 0.8 cells of 1/24 m.
+    let decomps = [
+        [1, 1, 2],
+        [1, 1, 4],
+        [1, 2, 2],
+        [1, 2, 1],
+        [1, 1, 3],
+        [1, 2, 4],
+    ];
+    let tally = check("3-D", &grid, &solid, 0.012, &decomps);
+    assert!(tally.whole_rows > 0, "rows swept whole");
+    // The bodies span 7 of the 24 cells along z and 8 of 16 along y: only the blocks of the
+    // narrower halos miss some of them (103 of 460 blocks).
+    assert!(tally.fewer > tally.blocks / 5, "blocks clip fewer elements");
+}
