@@ -86,11 +86,11 @@ impl FluidSolver {
 
 /// The constants of the CFL rate of a cell.
 pub(super) struct RateParams<'a> {
-    dim: usize,
-    gamma: f64,
-    vacuum_rho: f64,
-    vacuum_p: f64,
-    dx: &'a [f64],
+    pub(super) dim: usize,
+    pub(super) gamma: f64,
+    pub(super) vacuum_rho: f64,
+    pub(super) vacuum_p: f64,
+    pub(super) dx: &'a [f64],
 }
 
 impl RateParams<'_> {
@@ -124,7 +124,60 @@ impl RateParams<'_> {
         }
         rate
     }
+
+    /// [`RateParams::cell_rate`] of `RATE_LANES` cells of `NV` stored values each (`dim + 2`),
+    /// one cell a lane: the same IEEE operations in the same order in every lane, so the same
+    /// bits (NaN where `cell_rate` gives NaN), with selects where `cell_rate` branches. The
+    /// fixed-length loops over the lanes vectorise (`fv::isa`: no FMA, no reordering).
+    ///
+    /// NOTE: the cells are copied into one array per quantity first, so that the arithmetic
+    /// runs on whole vectors (4 divisions and a square root a cell, 8.5 % of a 3-D 128³ step
+    /// scalar).
+    #[inline(always)]
+    pub(super) fn cell_rates<const NV: usize>(&self, cells: &[f64]) -> [f64; RATE_LANES] {
+        let dim = NV - 2;
+        debug_assert_eq!(dim, self.dim);
+        let cells = &cells[..RATE_LANES * NV];
+        let (gamma, vacuum_rho, vacuum_p) = (self.gamma, self.vacuum_rho, self.vacuum_p);
+        let mut rho = [0.0; RATE_LANES];
+        // The momenta as `to_full` fills them: +0 along the axes the grid does not have.
+        let mut mom = [[0.0; RATE_LANES]; 3];
+        let mut energy = [0.0; RATE_LANES];
+        for l in 0..RATE_LANES {
+            rho[l] = cells[l * NV];
+            for a in 0..dim {
+                mom[a][l] = cells[l * NV + 1 + a];
+            }
+            energy[l] = cells[l * NV + NV - 1];
+        }
+        let dx: [f64; 3] = std::array::from_fn(|a| if a < dim { self.dx[a] } else { 1.0 });
+        let mut out = [0.0; RATE_LANES];
+        for l in 0..RATE_LANES {
+            // `primitive_floored`.
+            let inv_rho = 1.0 / rho[l].max(vacuum_rho);
+            let inv = if rho[l] > 0.0 { inv_rho } else { 0.0 };
+            let vel: [f64; 3] = std::array::from_fn(|a| mom[a][l] * inv);
+            let kinetic = 0.5 * (mom[0][l] * vel[0] + mom[1][l] * vel[1] + mom[2][l] * vel[2]);
+            let p = (gamma - 1.0) * (energy[l] - kinetic);
+            // `cell_rate`'s floor and `sound_speed`.
+            let floor = rho[l] < vacuum_rho && p < vacuum_p;
+            let rho_c = if floor { vacuum_rho } else { rho[l] };
+            let root = (gamma * p / rho_c).sqrt();
+            let c = if rho_c > 0.0 && p > 0.0 { root } else { 0.0 };
+            let (mut rate, mut finite) = (0.0, true);
+            for a in 0..dim {
+                let r = (vel[a].abs() + c) / dx[a];
+                finite &= r.is_finite();
+                rate = if r > rate { r } else { rate };
+            }
+            out[l] = if finite { rate } else { f64::NAN };
+        }
+        out
+    }
 }
+
+/// The cells [`RateParams::cell_rates`] takes at once (8 lanes of f64 in AVX-512).
+pub(super) const RATE_LANES: usize = 8;
 
 /// The faster of two `(rate, cell)` candidates of the CFL step: a NaN rate first (the lowest
 /// cell among NaNs), else the larger rate, the lower cell among equal ones.
