@@ -4,8 +4,10 @@ use rayon::prelude::*;
 
 use crate::fv::comm::{bytes_f64, f64_bytes};
 use crate::fv::euler::sound_speed;
+use crate::fv::isa::Isa;
 use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::{BLOCK_CELLS, to_full};
+use crate::fv::solver::totals::fastest_cell;
 
 impl FluidSolver {
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
@@ -25,28 +27,24 @@ impl FluidSolver {
     /// the lowest cell index, so the cell does not depend on the thread or rank count (a max
     /// is exact in any order).
     fn compute_max_dt(&self) -> (f64, usize) {
-        let (nvar, rates) = (self.state.nvar, self.rate_params());
+        let (nvar, rates, isa) = (self.state.nvar, self.rate_params(), self.rate_isa());
         let u = &self.state.u;
         let (rate, cell) = self.pool.install(|| {
             u.par_chunks(nvar * BLOCK_CELLS)
                 .enumerate()
-                .map(|(block, chunk)| {
-                    let mut acc: (f64, usize) = (0.0, block * BLOCK_CELLS);
-                    for (k, cell) in chunk.chunks_exact(nvar).enumerate() {
-                        let idx = block * BLOCK_CELLS + k;
-                        let r = rates.cell_rate(cell);
-                        if r.is_nan() {
-                            return (f64::NAN, idx);
-                        }
-                        if r > acc.0 {
-                            acc = (r, idx);
-                        }
-                    }
-                    acc
-                })
+                .map(|(block, chunk)| fastest_cell(isa, nvar, &rates, chunk, block * BLOCK_CELLS))
                 .reduce(|| (0.0, usize::MAX), fastest)
         });
         self.finish_max_dt((rate, cell))
+    }
+
+    /// The instruction set the rates are taken on: the line kernel's.
+    pub(super) fn rate_isa(&self) -> Isa {
+        self.scratch.first().map_or(Isa::Baseline, |s| {
+            s.lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .isa()
+        })
     }
 
     /// What [`RateParams::cell_rate`] needs of this solver.

@@ -209,11 +209,7 @@ impl FluidSolver {
         let plane = self.grid.n_cells() / self.grid.cells[dim - 1];
         let u = &self.state.u[first * plane * nvar..(first + acc.len()) * plane * nvar];
         let rates = self.rate_params();
-        let isa = self.scratch.first().map_or(Isa::Baseline, |s| {
-            s.lock()
-                .unwrap_or_else(|poisoned| poisoned.into_inner())
-                .isa()
-        });
+        let isa = self.rate_isa();
         self.pool.install(|| {
             acc.par_iter_mut()
                 .zip(fast.par_iter_mut())
@@ -225,9 +221,9 @@ impl FluidSolver {
                         None => {
                             let rates = rate.then_some(&rates);
                             *fast = match nvar {
-                                3 => sum_cells_on::<3>(isa, acc, cells, rates, block * plane),
-                                4 => sum_cells_on::<4>(isa, acc, cells, rates, block * plane),
-                                _ => sum_cells_on::<5>(isa, acc, cells, rates, block * plane),
+                                3 => sum_cells_on::<3, true>(isa, acc, cells, rates, block * plane),
+                                4 => sum_cells_on::<4, true>(isa, acc, cells, rates, block * plane),
+                                _ => sum_cells_on::<5, true>(isa, acc, cells, rates, block * plane),
                             };
                         }
                         Some(lambda) => {
@@ -301,8 +297,26 @@ impl FluidSolver {
     }
 }
 
+/// The fastest `(rate, cell)` of `cells` (`nvar` stored values each, numbered from `first`),
+/// as `compute_max_dt` scans them one at a time with [`RateParams::cell_rate`]: the first NaN,
+/// else the first of the largest rates; the rates [`RATE_LANES`] cells at a time on `isa`.
+pub(super) fn fastest_cell(
+    isa: Isa,
+    nvar: usize,
+    rates: &RateParams,
+    cells: &[f64],
+    first: usize,
+) -> (f64, usize) {
+    let mut none = [CompensatedSum::default(); NQ];
+    match nvar {
+        3 => sum_cells_on::<3, false>(isa, &mut none, cells, Some(rates), first),
+        4 => sum_cells_on::<4, false>(isa, &mut none, cells, Some(rates), first),
+        _ => sum_cells_on::<5, false>(isa, &mut none, cells, Some(rates), first),
+    }
+}
+
 /// [`sum_cells`] compiled for `isa` (the rates' vector width; the same bits on each, `fv::isa`).
-fn sum_cells_on<const NV: usize>(
+fn sum_cells_on<const NV: usize, const SUMS: bool>(
     isa: Isa,
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
@@ -313,39 +327,39 @@ fn sum_cells_on<const NV: usize>(
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512 if Isa::Avx512.supported() => {
             // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { sum_cells_avx512::<NV>(acc, cells, rates, first) }
+            unsafe { sum_cells_avx512::<NV, SUMS>(acc, cells, rates, first) }
         }
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 if Isa::Avx2.supported() => {
             // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { sum_cells_avx2::<NV>(acc, cells, rates, first) }
+            unsafe { sum_cells_avx2::<NV, SUMS>(acc, cells, rates, first) }
         }
-        _ => sum_cells::<NV>(acc, cells, rates, first),
+        _ => sum_cells::<NV, SUMS>(acc, cells, rates, first),
     }
 }
 
 /// [`sum_cells`] compiled for AVX2 (without FMA, `fv::isa`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn sum_cells_avx2<const NV: usize>(
+fn sum_cells_avx2<const NV: usize, const SUMS: bool>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV>(acc, cells, rates, first)
+    sum_cells::<NV, SUMS>(acc, cells, rates, first)
 }
 
 /// [`sum_cells`] compiled for AVX-512F (without FMA, `fv::isa`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn sum_cells_avx512<const NV: usize>(
+fn sum_cells_avx512<const NV: usize, const SUMS: bool>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV>(acc, cells, rates, first)
+    sum_cells::<NV, SUMS>(acc, cells, rates, first)
 }
 
 /// Adds the cells `cells` (`NV` stored values each: ρ, the momenta, E) into `acc` (the
@@ -359,8 +373,9 @@ fn sum_cells_avx512<const NV: usize>(
 /// the totals took 8 % of a 3-D step. Same operations in the same order, so the same bits.
 /// The rates are taken [`RATE_LANES`] cells at a time ([`RateParams::cell_rates`], the same
 /// bits as [`RateParams::cell_rate`], which takes the cells of a last short group).
+/// Without `SUMS`, only the rates, up to the first NaN (`acc` untouched).
 #[inline(always)]
-fn sum_cells<const NV: usize>(
+fn sum_cells<const NV: usize, const SUMS: bool>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
@@ -391,6 +406,12 @@ fn sum_cells<const NV: usize>(
                 }
             }
         }
+        if !SUMS {
+            if fast.0.is_nan() {
+                return fast;
+            }
+            continue;
+        }
         for cell in group.chunks_exact(NV) {
             for j in 0..NV {
                 let mut c = CompensatedSum {
@@ -401,6 +422,9 @@ fn sum_cells<const NV: usize>(
                 (sum[j], comp[j]) = (c.sum, c.comp);
             }
         }
+    }
+    if !SUMS {
+        return fast;
     }
     for j in 0..NV {
         acc[slot(j)] = CompensatedSum {
@@ -544,18 +568,38 @@ mod tests {
                         let want = reference(&rates, nv, cells, 1000);
                         let mut plain = [CompensatedSum::default(); NQ];
                         match nv {
-                            3 => sum_cells_on::<3>(Isa::Baseline, &mut plain, cells, None, 0),
-                            4 => sum_cells_on::<4>(Isa::Baseline, &mut plain, cells, None, 0),
-                            _ => sum_cells_on::<5>(Isa::Baseline, &mut plain, cells, None, 0),
+                            3 => sum_cells_on::<3, true>(Isa::Baseline, &mut plain, cells, None, 0),
+                            4 => sum_cells_on::<4, true>(Isa::Baseline, &mut plain, cells, None, 0),
+                            _ => sum_cells_on::<5, true>(Isa::Baseline, &mut plain, cells, None, 0),
                         };
                         for isa in Isa::available() {
                             let mut acc = [CompensatedSum::default(); NQ];
                             let got = match nv {
-                                3 => sum_cells_on::<3>(isa, &mut acc, cells, Some(&rates), 1000),
-                                4 => sum_cells_on::<4>(isa, &mut acc, cells, Some(&rates), 1000),
-                                _ => sum_cells_on::<5>(isa, &mut acc, cells, Some(&rates), 1000),
+                                3 => sum_cells_on::<3, true>(
+                                    isa,
+                                    &mut acc,
+                                    cells,
+                                    Some(&rates),
+                                    1000,
+                                ),
+                                4 => sum_cells_on::<4, true>(
+                                    isa,
+                                    &mut acc,
+                                    cells,
+                                    Some(&rates),
+                                    1000,
+                                ),
+                                _ => sum_cells_on::<5, true>(
+                                    isa,
+                                    &mut acc,
+                                    cells,
+                                    Some(&rates),
+                                    1000,
+                                ),
                             };
                             assert_eq!((got.0.to_bits(), got.1), (want.0.to_bits(), want.1));
+                            let alone = fastest_cell(isa, nv, &rates, cells, 1000);
+                            assert_eq!((alone.0.to_bits(), alone.1), (want.0.to_bits(), want.1));
                             let bits = |a: &[CompensatedSum; NQ]| {
                                 a.map(|c| (c.sum.to_bits(), c.comp.to_bits()))
                             };
