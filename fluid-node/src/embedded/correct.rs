@@ -67,7 +67,7 @@ impl Embedded {
         step: u64,
         explicit: bool,
     ) -> Result<CorrectReport, EmbeddedError> {
-        self.sweep(&accepted, step)?;
+        solver.install(|| self.sweep(&accepted, step))?;
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();

@@ -441,6 +441,73 @@ fn piece_counts_of_the_bench_sphere() {
     }
 }
 
+/// The prisms are clipped in parallel by runs of sub-faces (issue 36 item 4): on pools of 1, 2
+/// and 5 threads, and again into buffers that held a larger surface, the entries (sub-face,
+/// cell, volume bits) and counters are those of one thread, on the 64³ bench sphere (26 602
+/// sub-faces, 208 runs) and a 2-D disc (520 sub-faces, 5 runs).
+#[test]
+fn the_entries_are_the_same_on_any_number_of_threads() {
+    let entries = |sub: &SubfaceSwept| {
+        sub.entries
+            .iter()
+            .map(|e| (e.subface, e.cell, e.volume.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    let n = 64;
+    let grid3 = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
+    let before3 = sphere_mesh([0.5013, 0.4987, 0.5021], 0.3, n / 2, n);
+    let shift = [0.11, -0.07, 0.09].map(|d| d / n as f64);
+    let after3 = before3.map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]);
+    let grid2 = Grid::new(&[0.0; 2], &[1.0; 2], &[200; 2]).unwrap();
+    let before2 = shapes_2d().remove(0).1;
+    let after2 = before2.map(|p| [p[0] + 0.0013, p[1] - 0.0021, p[2]]);
+    for (grid, before, after) in [(&grid3, &before3, &after3), (&grid2, &before2, &after2)] {
+        let mut g1 = CutGeometry::new();
+        compute(grid, &after.surface(), &mut g1);
+        let run = |threads: usize, sub: &mut SubfaceSwept| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    subface_swept_volumes(grid, &before.surface(), &after.surface(), &g1, sub)
+                });
+        };
+        let mut one = SubfaceSwept::new();
+        run(1, &mut one);
+        assert!(g1.subfaces.len() > 100 && !one.entries.is_empty());
+        for threads in [2, 5] {
+            let mut many = SubfaceSwept::new();
+            run(threads, &mut many);
+            assert_eq!(entries(&many), entries(&one), "{threads} threads");
+            assert_eq!(
+                (many.n_pieces, many.n_skipped_subfaces),
+                (one.n_pieces, one.n_skipped_subfaces)
+            );
+        }
+        // Buffers of the 3-D sphere reused for this surface (fewer runs than buffers).
+        let mut reused = SubfaceSwept::new();
+        run(2, &mut reused);
+        let mut g_big = CutGeometry::new();
+        compute(&grid3, &after3.surface(), &mut g_big);
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+            .install(|| {
+                subface_swept_volumes(
+                    &grid3,
+                    &before3.surface(),
+                    &after3.surface(),
+                    &g_big,
+                    &mut reused,
+                )
+            });
+        run(2, &mut reused);
+        assert_eq!(entries(&reused), entries(&one));
+    }
+}
+
 /// Issue 35: an internal face of a 3-D tube lying on the grid plane `x = 0.5` up to round-off
 /// (vertices at `0.5 ± 1 ulp`), its particle moving 6e-8 m within the plane (the element and
 /// motion of the tube's step 6, bit for bit). Each sub-face's prism stays in the cells beside it

@@ -252,6 +252,11 @@ impl FluidSolver {
                 .set_isa(isa);
         }
     }
+    /// Runs `op` on this solver's thread pool (its `threads`), so that the rayon work it starts
+    /// (the embedded part's parallel loops) uses the scene's thread count.
+    pub fn install<R: Send>(&self, op: impl FnOnce() -> R + Send) -> R {
+        self.pool.install(op)
+    }
 
     /// This rank's grid: the cells of [`FluidSolver::state`] (the whole grid on one rank;
     /// on several, its `lower`/`upper` are those of the slab up to rounding, so positions are
