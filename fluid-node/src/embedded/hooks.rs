@@ -58,7 +58,8 @@ pub fn hook_halo(ng: usize) -> usize {
 /// cells (`cutcell::compute_block_cells`). With a block, bit for bit the whole grid's
 /// [`WallHooks::restricted`] to it.
 ///
-/// Pure; what an [`super::Embedded`] on a decomposed grid does in each predict, for tests.
+/// Pure; what an [`super::Embedded`] on a decomposed grid does in each predict, exposed for the
+/// tests and the benches.
 pub fn wall_hooks(grid: &Grid, ng: usize, frame: &SolidFrame, block: Option<CellBox>) -> WallHooks {
     let mut odd = OddSum::default();
     match block {
