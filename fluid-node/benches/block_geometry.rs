@@ -3,6 +3,10 @@
 //! `protocol::decomp::choose` cuts the grid: the loads' trial geometry (`compute_block_cells`,
 //! halo 1) and the whole geometry with the embedded part's halo (11); best time of repeats (one rank after the other
 //! in this one process, so no rank waits for a core), heap bytes and elements clipped per rank.
+//! Then the sweeps' hook inputs per rank (issue 40 item 1, step 2): `embedded::wall_hooks` of
+//! each block (its geometry with a halo of `hook_halo(3)` = 15 cells, and the ghost fills, wall
+//! runs and vacuum cells of its cells from it) against the whole grid's (`compute`, then the
+//! same from the whole geometry: what every rank derived before, with the geometry at hand).
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench block_geometry
@@ -22,6 +26,7 @@ mod cutcell_support;
 use fluid_node::cutcell::{
     CellBox, CutGeometry, Surface, compute, compute_block, compute_block_cells,
 };
+use fluid_node::embedded::{SolidFrame, hook_halo, wall_hooks};
 use fluid_node::fv::slab::share;
 use fluid_node::grid::Grid;
 
@@ -102,6 +107,66 @@ fn run(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
     }
 }
 
+/// The mesh as a frame at rest (one particle per mesh particle, every element wet).
+fn frame_of(mesh: &cutcell_support::Mesh) -> SolidFrame {
+    let np = mesh.particle.iter().max().map_or(1, |&p| p as usize + 1);
+    SolidFrame {
+        dim: 3,
+        position: vec![0.0; 3 * np],
+        velocity: vec![0.0; 3 * np],
+        angular_velocity: vec![0.0; 3 * np],
+        vertices: mesh.vertices.clone(),
+        elements: mesh.elements.clone(),
+        element_particle: mesh.particle.clone(),
+        wet: vec![true; mesh.elements.len() / 3],
+    }
+}
+
+/// The hook inputs per rank (`ng` = 3, OSMP 5) against the whole grid's.
+fn run_hooks(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
+    let ng = 3;
+    let frame = frame_of(mesh);
+    let t_compute = timed(reps, || {
+        let mut g = CutGeometry::new();
+        compute(grid, &frame.surface(), &mut g);
+        std::hint::black_box(&g);
+    });
+    let whole = wall_hooks(grid, ng, &frame, None);
+    let t_whole = timed(reps, || {
+        std::hint::black_box(wall_hooks(grid, ng, &frame, None));
+    });
+    let count = |h: &fluid_node::embedded::WallHooks| {
+        let fills: usize = h.ghosts.iter().map(Vec::len).sum();
+        let runs: usize = h.walls.iter().map(Vec::len).sum();
+        format!("{fills} / {runs} / {}", h.vacuum.len())
+    };
+    println!(
+        "{name}, hooks (ng {ng}, halo {}): whole grid {} (fills / runs / vacuum), compute {:.2} ms, then the hooks {:.2} ms",
+        hook_halo(ng),
+        count(&whole),
+        1e3 * t_compute,
+        1e3 * (t_whole - t_compute)
+    );
+    println!("| K | cut | rank | fills / runs / vacuum | ms |");
+    println!("| --- | --- | --- | --- | --- |");
+    for k in [1, 2, 4] {
+        let dims = protocol::decomp::choose(&grid.cells[..3], k, 6).expect("decomposition");
+        for r in 0..k {
+            let coords = [r % dims[0], r / dims[0] % dims[1], r / dims[0] / dims[1]];
+            let mut block = CellBox::whole(grid);
+            for a in 0..3 {
+                let (first, own) = share(grid.cells[a], dims[a], coords[a]);
+                (block.lo[a], block.hi[a]) = (first, first + own);
+            }
+            let h = wall_hooks(grid, ng, &frame, Some(block));
+            let t = timed(reps, || {
+                std::hint::black_box(wall_hooks(grid, ng, &frame, Some(block)));
+            });
+            println!("| {k} | {dims:?} | {r} | {} | {:.2} |", count(&h), 1e3 * t);
+        }
+    }
+}
+
 fn main() {
     let env = |key: &str, default: usize| {
         std::env::var(key)
@@ -130,7 +195,14 @@ fn main() {
         &boxes,
         reps,
     );
+    run_hooks(
+        &format!("opening-fracture-3d boxes, {n}^3"),
+        &grid,
+        &boxes,
+        reps,
+    );
     let grid = Grid::new(&[0.0; 3], &[1.0; 3], &[n; 3]).unwrap();
     let sphere = cutcell_support::sphere_mesh([0.5013, 0.4987, 0.5021], 0.3, n / 2, n);
     run(&format!("sphere r = 0.3, {n}^3"), &grid, &sphere, reps);
+    run_hooks(&format!("sphere r = 0.3, {n}^3"), &grid, &sphere, reps);
 }

@@ -161,7 +161,7 @@ fn faced(grid: &Grid, s: &SubFace) -> Option<usize> {
 ///
 /// NOTE: a covered cell's ghost state for a sweep mirrors the fluid on one side of its run
 /// only. A run of one cell, or the middle cell of an odd closed run, mirrors the side towards
-/// the grid's middle (`predict::ghost_fills`), so a face entering it from the other side took
+/// the grid's middle (`hooks::ghost_fills`), so a face entering it from the other side took
 /// the pressure beyond the body: the thin shell (`scenes/thin-shell.toml`, a cell covered
 /// between two cut cells at x = 319 dx) took 0.99999999 Pa on its upstream face on one side of
 /// the grid plane and the upstream 1.00077 Pa on the other, 5e-12 m apart, and the fixed point

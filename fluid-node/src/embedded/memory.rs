@@ -43,7 +43,6 @@ impl Embedded {
             + h.pressures.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&near.wall_pressure)
             + h.taps.iter().map(tap_bytes).sum::<usize>()
-            + vec_bytes(&near.walls)
             + vec_bytes(&scratch.content)
             + vec_bytes(&scratch.kind)
             + scratch.odd.capacity_bytes()

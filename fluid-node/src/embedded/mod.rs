@@ -23,10 +23,12 @@
 //!
 //! On a grid decomposed over ranks ([`crate::fv::Slab`], a block) every rank holds the whole
 //! surface and runs all of this on the whole grid but the loads (each rank takes the sub-faces
-//! of its own block, and the terms of all are added as one rank adds them, `loads.rs`); the
-//! solver applies and gathers the sweeps' hooks per block, and the states of near cells come
-//! from their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of
-//! one rank (the fluid-node tests `fv_ranks`, docs/mpi.md).
+//! of its own block, and the terms of all are added as one rank adds them, `loads.rs`) and the
+//! ghost fills, wall runs and vacuum cells the sweeps write into its cells (derived from the
+//! geometry of its block and a halo, `hooks.rs`, with the `U^n` of its near cells); the solver
+//! applies and gathers the sweeps' hooks per block, and the states of near cells come from
+//! their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of one
+//! rank (the fluid-node tests `fv_ranks` and `embedded_hooks_block`, docs/mpi.md).
 //!
 //! Properties (tested in the fluid-node tests `embedded_*`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the
@@ -60,7 +62,8 @@
 //! The files follow the step: `state` (configuration, what persists between steps, the step's
 //! near-surface data and the scratch, apart), `frame` (the solid as the core sees it), `cells`
 //! (per-cell helpers every stage uses), `near_wall` (the wall in a near cell, for the ghost
-//! states), `predict` (step 1), `loads` (step 2), `levers` (the loads' lever arms), `crack`
+//! states), `hooks` (the ghost fills, wall runs and vacuum cells of a rank's cells), `predict`
+//! (step 1), `loads` (step 2), `levers` (the loads' lever arms), `crack`
 //! (cells a crack opens), `correct` (eq. 12 and the solid flux), `mix` (small-cell mixing),
 //! `beyond` (elements beyond the domain), `memory` (heap bytes by part) and `error`.
 
@@ -73,6 +76,7 @@ mod correct;
 mod crack;
 mod error;
 mod frame;
+mod hooks;
 mod levers;
 mod loads;
 mod memory;
@@ -84,6 +88,7 @@ mod state;
 pub use correct::CorrectReport;
 pub use error::EmbeddedError;
 pub use frame::SolidFrame;
+pub use hooks::{WallHooks, hook_halo, wall_hooks};
 pub use loads::Loads;
 pub use memory::EmbeddedMemory;
 pub use state::{Embedded, InterfaceBudget};

@@ -1,16 +1,13 @@
 //! Step 1 of paper 003 §3.4: the split sweeps over the whole grid, with the ghost states of the
 //! covered cells, keeping `U^n`, `p̄` and the face fluxes of the cells near the wet surface.
 
-use super::cells::{domain_face, full_state, offsets, shifted, touches_gas};
-use super::near_wall::{
-    NEAR_WALL_SUMS, NW_AREA, NW_FACING, NW_FACING_LEN, NW_NORMAL, NW_VELOCITY, NW_WET_AREA,
-    NW_WET_NORMAL, NearWall,
-};
+use super::cells::{full_state, offsets, shifted};
+use super::hooks::{HookGeometry, NearView, block_wall_hooks};
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
-use crate::cutcell::face_index;
+use crate::cutcell::{CellBox, face_index};
 use crate::fv::euler::NQ;
 use crate::fv::sweep::{frame, from_local, to_local};
-use crate::fv::{FluidSolver, GhostFill, StepReport, Wall, WallRun, mirror};
+use crate::fv::{FluidSolver, GhostFill, StepReport, mirror};
 
 impl Embedded {
     /// Step 1 of paper 003 §3.4: the split sweeps, keeping what the correct needs.
@@ -88,19 +85,38 @@ impl Embedded {
     /// Near cells, their faces, the ghost fills, and `U^n` (after the first sweep's ghosts).
     fn prepare(&mut self, solver: &mut FluidSolver) {
         self.collect_near_cells();
-        let closed = self.near_walls();
-        self.vacuum_cells(&closed);
+        self.wall_hooks();
         self.taps();
-        // Ghost fills per axis.
-        for axis in 0..3 {
-            self.near.hooks.ghosts[axis].clear();
-            self.near.hooks.walls[axis].clear();
-        }
-        for axis in 0..self.config.grid.dim {
-            self.ghost_fills(axis);
-        }
         self.near.hooks.pressure_cells.clone_from(&self.near.cells);
         self.save_states(solver);
+    }
+
+    /// The ghost fills, wall runs and vacuum cells of this rank's cells: from the whole grid's
+    /// geometry on one rank, from the block's and a halo around it on a decomposed grid (the
+    /// same bits on the rank's cells; `hooks.rs`).
+    fn wall_hooks(&mut self) {
+        let (grid, ng) = (&self.config.grid, self.config.ng);
+        let (geom, current) = (&self.state.geom, &self.state.current);
+        let mut odd = std::mem::take(&mut self.scratch.odd);
+        let hooks = match self.config.block {
+            None => {
+                let view = HookGeometry {
+                    grid,
+                    window: CellBox::whole(grid),
+                    solid_fraction: &geom.solid_fraction,
+                    subfaces: &geom.subfaces,
+                };
+                let near = NearView {
+                    cells: &self.near.cells,
+                    slot_of: &self.near.slot_of,
+                };
+                view.wall_hooks(&near, current, ng, CellBox::whole(grid), &mut odd)
+            }
+            Some(block) => block_wall_hooks(grid, ng, current, block, &mut odd),
+        };
+        self.scratch.odd = odd;
+        let h = &mut self.near.hooks;
+        (h.ghosts, h.walls, h.vacuum) = (hooks.ghosts, hooks.walls, hooks.vacuum);
     }
 
     /// The cut cells of `F^n` dilated by [`NEAR_RADIUS`] cells, ascending, and their slots.
@@ -128,93 +144,6 @@ impl Embedded {
         near.cells.sort_unstable();
         for (k, &c) in near.cells.iter().enumerate() {
             near.slot_of[c as usize] = k as u32 + 1;
-        }
-    }
-
-    /// The wall of the near cells that hold sub-faces, summed apart from the sub-faces' order
-    /// (the sub-faces come in cell order; slots are the fields of `NearWall::from_sums`).
-    /// Returns, per slot, whether a covered near cell holds a wet face with no gas in front (see
-    /// `touches_gas`). The walls' velocities are still sums (see [`Embedded::vacuum_cells`]).
-    fn near_walls(&mut self) -> Vec<bool> {
-        let grid = &self.config.grid;
-        let dim = grid.dim;
-        let near = &mut self.near;
-        let current = &self.state.current;
-        let geom = &self.state.geom;
-        near.walls.clear();
-        near.walls.resize(near.cells.len(), NearWall::default());
-        let mut sum = std::mem::take(&mut self.scratch.odd);
-        let subfaces = &geom.subfaces;
-        let mut closed = vec![false; near.cells.len()];
-        let mut first = 0;
-        while first < subfaces.len() {
-            let cell = subfaces[first].cell;
-            let mut end = first;
-            sum.clear();
-            while end < subfaces.len() && subfaces[end].cell == cell {
-                let s = &subfaces[end];
-                let w = current.point_velocity(s.particle as usize, s.centroid);
-                for a in 0..3 {
-                    sum.push(NW_VELOCITY + a, s.area * w[a]);
-                    for b in 0..3 {
-                        let slot = NW_NORMAL + 3 * a + b;
-                        sum.push(slot, s.area * s.normal[a].abs() * s.normal[b]);
-                    }
-                }
-                sum.push(NW_AREA, s.area);
-                for a in 0..dim {
-                    if s.normal[a] != 0.0 {
-                        let side = usize::from(s.normal[a] < 0.0);
-                        let f = NW_FACING + NW_FACING_LEN * (2 * a + side);
-                        sum.push(f, s.area);
-                        for b in 0..3 {
-                            sum.push(f + 1 + b, s.area * w[b]);
-                            sum.push(f + 4 + b, s.area * s.normal[a].abs() * s.normal[b]);
-                        }
-                    }
-                }
-                if current.wet[s.element as usize] && domain_face(grid, s).is_none() {
-                    sum.push(NW_WET_AREA, s.area);
-                    for a in 0..3 {
-                        sum.push(NW_WET_NORMAL + a, s.area * s.normal[a]);
-                    }
-                    if !touches_gas(grid, &geom.solid_fraction, s) {
-                        closed[near.slot_of[cell as usize] as usize - 1] = true;
-                    }
-                }
-                end += 1;
-            }
-            let mut fields = [0.0; NEAR_WALL_SUMS];
-            sum.add_into(&mut fields);
-            let k = near.slot_of[cell as usize] as usize - 1;
-            near.walls[k] = NearWall::from_sums(&fields);
-            first = end;
-        }
-        self.scratch.odd = sum;
-        closed
-    }
-
-    /// Covered cells between the two faces of a crack that has just opened hold no fluid yet:
-    /// vacuum (paper 000 §3.2), not ghost states. Where the two faces lie on either side of a
-    /// grid plane (pressed walls whose faces were on it), each cell holds one, with the other's
-    /// covered cell in front (`closed`). Then the walls' velocities become area averages.
-    fn vacuum_cells(&mut self, closed: &[bool]) {
-        let near = &mut self.near;
-        let lambda = &self.state.geom.solid_fraction;
-        near.hooks.vacuum.clear();
-        for (k, &c) in near.cells.iter().enumerate() {
-            if lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
-                && (near.walls[k].is_crack() || closed[k])
-            {
-                near.hooks.vacuum.push(c);
-            }
-        }
-        for nw in &mut near.walls {
-            if nw.area > 0.0 {
-                for x in nw.velocity.iter_mut() {
-                    *x /= nw.area;
-                }
-            }
         }
     }
 
@@ -259,7 +188,8 @@ impl Embedded {
     }
 
     /// `U^n` of the near cells, with the ghosts of the first sweep in the covered ones (of a
-    /// later sweep where the first gives none).
+    /// later sweep where the first gives none): each rank takes those of its own near cells,
+    /// from its own ghost fills, and every rank gathers all of them (collective).
     fn save_states(&mut self, solver: &mut FluidSolver) {
         let dim = self.config.grid.dim;
         let order = crate::fv::sweep_order(dim, solver.steps());
@@ -267,7 +197,10 @@ impl Embedded {
         solver.apply_ghosts(first, &self.near.hooks.ghosts[first]);
         solver.apply_vacuum(&self.near.hooks.vacuum);
         let nvar = dim + 2;
-        let u = solver.cells_at(&self.near.cells);
+        let own: Vec<u32> = (self.near.cells.iter().copied())
+            .filter(|&c| solver.slab().to_local(c as usize).is_some())
+            .collect();
+        let u = solver.own_cells_at(&own);
         let mut ghosted: Vec<u32> = (self.near.hooks.ghosts[first].iter())
             .map(|g| g.cell)
             .collect();
@@ -287,24 +220,24 @@ impl Embedded {
             self.later_ghosts(solver, &order[1..], &ghosted)
         };
         let lambda = &self.state.geom.solid_fraction;
-        let near = &mut self.near;
-        near.saved.clear();
-        for (k, &c) in near.cells.iter().enumerate() {
+        let mut mine = Vec::with_capacity(u.len());
+        for (k, &c) in own.iter().enumerate() {
             let stale =
                 lambda[c as usize] >= 1.0 - COVERED_TOLERANCE && ghosted.binary_search(&c).is_err();
             if !stale {
-                near.saved.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
+                mine.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
             } else if let Ok(i) = later.binary_search_by_key(&c, |g| g.0) {
-                near.saved.extend_from_slice(&later[i].1[..nvar]);
+                mine.extend_from_slice(&later[i].1[..nvar]);
             } else {
-                near.saved.extend(std::iter::repeat_n(0.0, nvar));
+                mine.extend(std::iter::repeat_n(0.0, nvar));
             }
         }
+        self.near.saved = solver.gather_owned(&self.near.cells, mine);
     }
 
-    /// The ghost state of each covered near cell that the first sweep leaves without one, from
-    /// the first of the later sweeps (`axes`, in order) that gives it one, by cell (collective:
-    /// the mirrored cells may lie on other ranks).
+    /// The ghost state of each covered near cell of this rank that the first sweep leaves
+    /// without one, from the first of the later sweeps (`axes`, in order) that gives it one, by
+    /// cell (collective: the mirrored cells may lie on other ranks).
     fn later_ghosts(
         &self,
         solver: &FluidSolver,
@@ -329,10 +262,10 @@ impl Embedded {
         }
         picked.sort_by_key(|p| p.0);
         picked.dedup_by_key(|p| p.0);
-        let mut sources: Vec<u32> = picked.iter().map(|p| p.2.mirror_of).collect();
-        sources.sort_unstable();
-        sources.dedup();
-        let values = solver.cells_at(&sources);
+        let mut wanted: Vec<u32> = picked.iter().map(|p| p.2.mirror_of).collect();
+        wanted.sort_unstable();
+        wanted.dedup();
+        let (sources, values) = solver.cells_asked(&wanted);
         let nvar = dim + 2;
         picked
             .iter()
@@ -346,114 +279,5 @@ impl Embedded {
                 (cell, state)
             })
             .collect()
-    }
-
-    /// The ghost states of the covered near cells for the sweep along `axis`, and the walls
-    /// thinner than `2 ng` cells where that sweep cuts its pencils.
-    fn ghost_fills(&mut self, axis: usize) {
-        let grid = &self.config.grid;
-        let lambda = &self.state.geom.solid_fraction;
-        let n = grid.cells[axis] as isize;
-        let ng = self.config.ng as isize;
-        let near = &mut self.near;
-        let fills = &mut near.hooks.ghosts[axis];
-        let walls = &mut near.hooks.walls[axis];
-        let (slot_of, near_walls, near_cells) = (&near.slot_of, &near.walls, &near.cells);
-        // A crack cell is vacuum fluid to the sweeps, not a covered cell.
-        let vacuum = &near.hooks.vacuum;
-        let covered = |q: usize| {
-            lambda[q] >= 1.0 - COVERED_TOLERANCE && vacuum.binary_search(&(q as u32)).is_err()
-        };
-        let stride: usize = grid.cells[..axis].iter().product();
-        // The wall seen along the axis from `fluid` beside the covered cell `covered`: the fluid
-        // cell's sub-faces, else the covered cell's, else a wall at rest normal to the axis.
-        // The sub-faces turned towards the fluid first: a thin gap between a wall at rest and a
-        // moving one must mirror each side about its own wall.
-        let wall_seen = |fluid: usize, covered: usize, dir: isize| -> Wall {
-            let walls = [fluid, covered]
-                .map(|c| slot_of[c] as usize)
-                .map(|k| (k > 0).then(|| &near_walls[k - 1]));
-            walls
-                .iter()
-                .flatten()
-                .find_map(|w| w.facing(axis, dir))
-                .or_else(|| {
-                    walls
-                        .iter()
-                        .flatten()
-                        .find(|w| w.area > 0.0)
-                        .map(|w| w.along(axis))
-                })
-                .unwrap_or(Wall::at_rest(axis))
-        };
-        for &c in near_cells {
-            let c = c as usize;
-            if !covered(c) {
-                continue;
-            }
-            let ijk = grid.ijk(c);
-            let at = |m: isize| -> Option<usize> {
-                (0..n).contains(&m).then(|| {
-                    let mut q = ijk;
-                    q[axis] = m as usize;
-                    grid.index(q[0], q[1], q[2])
-                })
-            };
-            let is_covered = |m: isize| at(m).is_some_and(covered);
-            let m0 = ijk[axis] as isize;
-            for dir in [1isize, -1] {
-                // `c` starts a covered run seen from the fluid cell at `m0 − dir`.
-                let Some(fluid) = at(m0 - dir) else { continue };
-                if is_covered(m0 - dir) {
-                    continue;
-                }
-                let mut len = 0;
-                while len < 2 * ng && is_covered(m0 + dir * len) {
-                    len += 1;
-                }
-                let closed = len < 2 * ng && at(m0 + dir * len).is_some();
-                let wall = wall_seen(fluid, c, dir);
-                if closed && dir == 1 {
-                    let far = at(m0 + len).expect("closed");
-                    let last = at(m0 + len - 1).expect("in the run");
-                    walls.push(WallRun {
-                        pencil: (c % stride + (c / (stride * n as usize)) * stride) as u32,
-                        lo: m0 as u32,
-                        hi: (m0 + len) as u32,
-                        walls: [wall, wall_seen(far, last, -1)],
-                    });
-                }
-                // NOTE: the middle cell of an odd closed run takes the ghost of the side that
-                // faces the grid's middle along the axis (the lower side above the middle), so
-                // that the mirror image of a scene about that middle gets the mirrored fills.
-                let count = if closed {
-                    let mid = m0 + dir * ((len - 1) / 2);
-                    let lower_side_fills_middle = 2 * mid + 1 > n;
-                    if (dir == 1) == lower_side_fills_middle {
-                        (len + 1) / 2
-                    } else {
-                        len / 2
-                    }
-                } else {
-                    len.min(ng)
-                }
-                .min(ng);
-                let mut src = fluid;
-                for m in 0..count {
-                    let dst = at(m0 + dir * m).expect("inside the run");
-                    if let Some(s) = at(m0 - dir * (m + 1))
-                        && !is_covered(m0 - dir * (m + 1))
-                    {
-                        src = s;
-                    }
-                    fills.push(GhostFill {
-                        cell: dst as u32,
-                        mirror_of: src as u32,
-                        wall,
-                    });
-                }
-            }
-        }
-        walls.sort_unstable_by_key(|w| (w.pencil, w.lo));
     }
 }

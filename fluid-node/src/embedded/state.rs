@@ -6,7 +6,6 @@ use serde::{Deserialize, Serialize};
 
 use super::beyond::outside_domain;
 use super::cells::{CellKind, fluid_part, full_state};
-use super::near_wall::NearWall;
 use super::{EmbeddedError, Loads, SolidFrame};
 use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
@@ -53,7 +52,8 @@ pub(super) struct Config {
     /// `beyond::outside_domain`; the gas it pushes out of the open ones leaves).
     pub(super) boundary: [[BoundaryKind; 2]; 3],
     /// This rank's block on a grid decomposed over several ranks (`None` on one rank): the
-    /// loads take the sub-faces of its cells only (issue 40 item 1, `loads.rs`).
+    /// loads take the sub-faces of its cells only, and the sweeps' ghost fills, wall runs and
+    /// vacuum cells are those of its cells (issue 40 item 1, `loads.rs`, `hooks.rs`).
     pub(super) block: Option<CellBox>,
 }
 
@@ -84,8 +84,6 @@ pub(super) struct NearCells {
     /// `p̄` of each near cell: the one pressure of the wet faces it holds or faces, on every
     /// axis (see [`Embedded::predict`]).
     pub(super) wall_pressure: Vec<f64>,
-    /// The wall in each near cell (sub-faces of `F^n`), for the ghost states.
-    pub(super) walls: Vec<NearWall>,
 }
 
 /// Buffers of the stages, kept between steps only to reuse their allocations.
@@ -145,10 +143,10 @@ impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
         // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16; the loads are taken
-        // by block, issue 40): the cut-cell data
-        // are surface-sized, and the same inputs give every rank the bits of one rank. Only the
-        // states of cells near the surface cross ranks (`FluidSolver::cells_at`).
+        // geometry and the correct on the whole grid (replicated, issue 16; the loads and the
+        // sweeps' ghost fills, wall runs and vacuum cells are taken by block, issue 40): the
+        // cut-cell data are surface-sized, and the same inputs give every rank the bits of one
+        // rank. Only the states of cells near the surface cross ranks (`FluidSolver::cells_at`).
         let grid = solver.global_grid().clone();
         if grid.dim != solid.dim {
             return Err(EmbeddedError::Dimensions {
@@ -165,7 +163,6 @@ impl Embedded {
                 face_slots: Default::default(),
                 hooks: SplitHooks::default(),
                 wall_pressure: Vec::new(),
-                walls: Vec::new(),
             },
             config: Config {
                 fracture: false,

@@ -12,6 +12,7 @@ mod cutcell_support;
 mod cutcell_swept;
 mod embedded_boundary;
 mod embedded_crack;
+mod embedded_hooks_block;
 mod embedded_memory;
 mod embedded_piston;
 mod embedded_rest;

@@ -226,6 +226,13 @@ impl FluidSolver {
     /// that hold them, on every rank (collective on several ranks).
     pub fn cells_at(&self, cells: &[u32]) -> Vec<f64> {
         debug_assert!(cells.is_sorted());
+        let mine = self.own_cells_at(cells);
+        self.gather_owned(cells, mine)
+    }
+
+    /// The conserved values (`dim + 2` each) of this rank's cells among `cells` (whole grid),
+    /// in order.
+    pub fn own_cells_at(&self, cells: &[u32]) -> Vec<f64> {
         let nvar = self.state.nvar;
         let mut mine = Vec::new();
         for &c in cells {
@@ -233,9 +240,18 @@ impl FluidSolver {
                 mine.extend_from_slice(&self.state.u[c * nvar..(c + 1) * nvar]);
             }
         }
+        mine
+    }
+
+    /// `dim + 2` values per cell of `cells` (whole grid, ascending), on every rank, from the
+    /// values `mine` each rank gives for its own cells among them, in order (collective on
+    /// several ranks).
+    pub fn gather_owned(&self, cells: &[u32], mine: Vec<f64>) -> Vec<f64> {
+        debug_assert!(cells.is_sorted());
         if self.slab.ranks == 1 || cells.is_empty() {
             return mine;
         }
+        let nvar = self.state.nvar;
         let parts: Vec<Vec<f64>> = self
             .comm
             .all_gather(&f64_bytes(&mine))
@@ -252,6 +268,28 @@ impl FluidSolver {
             }
         }
         all
+    }
+
+    /// The cells (whole grid) any rank asks for in `wanted` (ascending), ascending, with their
+    /// conserved values (`dim + 2` each), on every rank (collective on several ranks: each rank
+    /// may ask for other cells).
+    pub fn cells_asked(&self, wanted: &[u32]) -> (Vec<u32>, Vec<f64>) {
+        debug_assert!(wanted.is_sorted());
+        if self.slab.ranks == 1 {
+            return (wanted.to_vec(), self.cells_at(wanted));
+        }
+        let mut all: Vec<u32> = self
+            .comm
+            .all_gather(&protocol::codec::encode_blob(&wanted.to_vec()))
+            .iter()
+            .flat_map(|b| {
+                protocol::codec::decode_blob::<Vec<u32>>(b).expect("ranks send valid cells")
+            })
+            .collect();
+        all.sort_unstable();
+        all.dedup();
+        let values = self.cells_at(&all);
+        (all, values)
     }
 
     /// Writes `values` (the first `dim + 2` of each) into the cells of the whole grid they

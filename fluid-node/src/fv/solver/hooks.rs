@@ -32,7 +32,8 @@ pub struct GhostFill {
 /// kept, not the whole grid. Cells, pencils and face positions are those of the whole grid.
 #[derive(Clone, Debug, Default)]
 pub struct SplitHooks {
-    /// Per axis: the ghost states written before the sweep along it, in order.
+    /// Per axis: the ghost states written before the sweep along it, in order (a rank writes
+    /// those of its own cells; the others may be left out).
     pub ghosts: [Vec<GhostFill>; 3],
     /// Cells whose `p̄` is recorded, ascending.
     pub pressure_cells: Vec<u32>,
@@ -43,7 +44,8 @@ pub struct SplitHooks {
     /// the whole pencil).
     pub taps: [FaceTap; 3],
     /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
-    /// by pencil and position.
+    /// by pencil and position (on a decomposed grid, those of the rank's pencils that reach its
+    /// line or its ghost cells suffice: `embedded::WallHooks::restricted`).
     pub walls: [Vec<WallRun>; 3],
     /// Covered cells that hold no fluid yet beside a wet face (a crack that has just opened,
     /// paper 000 §3.2): set to vacuum (all zero) before each sweep, after the ghosts, so the

@@ -1,0 +1,150 @@
+//! The embedded part's predict per rank (issue 40 item 1, step 2): `Embedded::predict` on K = 1,
+//! 2, 4 thread ranks (`fluid_node::ranks::threads`, one rayon thread each, cut as
+//! `protocol::decomp::choose` cuts the grid), each rank timing its own predicts (a rank's time
+//! includes its waits for the others at the collectives, and with more ranks than cores, for a
+//! core).
+//!
+//! ```text
+//! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
+//! RANKS_BENCH_N=64 RANKS_BENCH_STEPS=6 target/release/deps/embedded_ranks-HASH
+//! ```
+//!
+//! Only the public API of `fluid_node` is used, so the same file runs on an earlier commit.
+//! The body: the two particles of `scenes/opening-fracture-3d.toml` (the box `[0.6, 1.4]³` of
+//! its 2 m domain, split at x = 1, 12 triangles each), moving apart along x at 20 m/s, so that
+//! the crack between them opens (vacuum cells), in air at rest (ρ = 1.2, p = 1e5), OSMP 5
+//! (`ng` = 3), walls on every side, fracture on.
+
+use std::time::Instant;
+
+#[path = "../tests/it/cutcell_support/mod.rs"]
+mod cutcell_support;
+
+use fluid_node::embedded::{Embedded, SolidFrame};
+use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind};
+use fluid_node::grid::Grid;
+use fluid_node::ranks::threads::ThreadRanks;
+
+/// Speed of each box along x, away from the other \[m/s\].
+const SPEED: f64 = 20.0;
+
+fn params() -> FluidParams {
+    FluidParams {
+        gamma: 1.4,
+        cfl: 0.5,
+        flux: FluxKind::Osmp(5),
+        boundary: [[BoundaryKind::Wall; 2]; 3],
+        vacuum_rho: 1e-10,
+        vacuum_p: 1e-10,
+    }
+}
+
+/// The two boxes of opening-fracture-3d as one frame, particle 0 below x = 1, 1 above.
+fn boxes() -> SolidFrame {
+    let left = cutcell_support::box_mesh([0.6, 0.6, 0.6], [1.0, 1.4, 1.4]);
+    let right = cutcell_support::box_mesh([1.0, 0.6, 0.6], [1.4, 1.4, 1.4]);
+    let mut frame = SolidFrame {
+        dim: 3,
+        position: vec![0.8, 1.0, 1.0, 1.2, 1.0, 1.0],
+        velocity: vec![-SPEED, 0.0, 0.0, SPEED, 0.0, 0.0],
+        angular_velocity: vec![0.0; 6],
+        ..SolidFrame::default()
+    };
+    for (p, mesh) in [left, right].iter().enumerate() {
+        let first = (frame.vertices.len() / 3) as u32;
+        frame.vertices.extend_from_slice(&mesh.vertices);
+        frame
+            .elements
+            .extend(mesh.elements.iter().map(|v| v + first));
+        let n = mesh.elements.len() / 3;
+        frame
+            .element_particle
+            .extend(std::iter::repeat_n(p as u32, n));
+        frame.wet.extend(std::iter::repeat_n(true, n));
+    }
+    frame
+}
+
+/// The frame moved by its velocities over `dt` (each vertex with its particle's velocity).
+fn moved(frame: &SolidFrame, dt: f64) -> SolidFrame {
+    let mut next = frame.clone();
+    for (k, x) in next.position.iter_mut().enumerate() {
+        *x += dt * frame.velocity[k];
+    }
+    let mut particle_of = vec![0usize; frame.vertices.len() / 3];
+    for (e, nodes) in frame.elements.chunks_exact(3).enumerate() {
+        for &v in nodes {
+            particle_of[v as usize] = frame.element_particle[e] as usize;
+        }
+    }
+    for (k, x) in next.vertices.iter_mut().enumerate() {
+        *x += dt * frame.velocity[3 * particle_of[k / 3] + k % 3];
+    }
+    next
+}
+
+/// Each rank's predict times \[s\] over `steps` coupled steps on `ranks` thread ranks.
+fn predict_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<Vec<f64>> {
+    let handles: Vec<_> = ThreadRanks::new(ranks)
+        .into_iter()
+        .map(|comm| {
+            let (grid, state) = (grid.clone(), state.clone());
+            std::thread::spawn(move || {
+                let mut s = FluidSolver::decomposed(grid, params(), state, 1, Box::new(comm))
+                    .expect("solver");
+                let mut e = Embedded::new(&s, boxes()).expect("embedded");
+                e.set_fracture(true);
+                let mut times = Vec::new();
+                for n in 0..steps {
+                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+                    let t = Instant::now();
+                    let report = e.predict(&mut s, dt);
+                    times.push(t.elapsed().as_secs_f64());
+                    assert!(report.ok(), "step {n}: {:?}", report.troubles);
+                    let next = moved(e.surface(), dt);
+                    e.correct(&mut s, dt, next, n, false).expect("correct");
+                }
+                times
+            })
+        })
+        .collect();
+    handles
+        .into_iter()
+        .map(|h| h.join().expect("rank thread"))
+        .collect()
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let env = |key: &str, default: usize| {
+        std::env::var(key)
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(default)
+    };
+    let n = env("RANKS_BENCH_N", 64);
+    let steps = env("RANKS_BENCH_STEPS", 6) as u64;
+    let grid = Grid::new(&[0.0; 3], &[2.0; 3], &[n; 3]).unwrap();
+    let mut state = FluidState::zeros(3, grid.n_cells());
+    for c in 0..grid.n_cells() {
+        state.set_primitive(c, 1.2, [0.0; 3], 1e5, 1.4);
+    }
+    println!(
+        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict per rank, ms (median of the steps after the first)"
+    );
+    println!("| K | rank 0 | rank 1 | rank 2 | rank 3 |");
+    println!("| --- | --- | --- | --- | --- |");
+    for k in [1, 2, 4] {
+        let times = predict_times(&grid, &state, k, steps);
+        let cells: Vec<String> = times
+            .iter()
+            .map(|t| format!("{:.2}", 1e3 * median(&t[1..])))
+            .collect();
+        println!("| {k} | {} |", cells.join(" | "));
+    }
+}

@@ -1,0 +1,458 @@
+//! [`WallHooks`]: what the sweeps write into a rank's own cells in a coupled step (the ghost
+//! states, the walls where they cut their pencils, the vacuum cells), derived from a geometry of
+//! those cells and the cells around them: the whole grid's on one rank, on a decomposed grid
+//! the block's and a halo of [`hook_halo`] cells (`cutcell::compute_block_cells`), bit for bit
+//! those of the whole grid on the rank's cells (issue 40 item 1, step 2; docs/mpi.md).
+//!
+//! How far a rank's hooks reach, along a sweep axis, from its block (`ng` ghost cells of the
+//! sweeps, `overlap` = [`MAX_FIXES`] extra cells a decomposed line updates on each side):
+//! - a ghost fill of an own cell starts at a covered cell at most `ng − 1` cells beyond the block
+//!   and mirrors a fluid cell at most `2 ng − 1` cells beyond it;
+//! - the decomposed sweep reads the wall runs that reach its line and its ghost cells, `overlap
+//!   + ng` cells beyond the block (a run further away puts no mirror ghost into the line: see
+//!   [`WallHooks::restricted`]); a run is shorter than `2 ng` cells, so its cells and the fluid
+//!   cells at its ends lie within `overlap + 3 ng − 1` cells of the block;
+//! - whether a cell there is covered, near, a vacuum cell, and the wall it holds come from its
+//!   sub-faces, the solid fractions of its face neighbours and the cut cells within
+//!   [`NEAR_RADIUS`] of it; so a halo of `overlap + 3 ng + NEAR_RADIUS + 1` cells holds all of
+//!   it (Λ and the sub-faces of a block's geometry are exact in all of its window).
+
+use protocol::sum::OddSum;
+
+use super::cells::{domain_face, offsets, shifted, touches_gas_with};
+use super::near_wall::{
+    NEAR_WALL_SUMS, NW_AREA, NW_FACING, NW_FACING_LEN, NW_NORMAL, NW_VELOCITY, NW_WET_AREA,
+    NW_WET_NORMAL, NearWall,
+};
+use super::{COVERED_TOLERANCE, NEAR_RADIUS, SolidFrame};
+use crate::cutcell::{CellBox, SubFace, compute, compute_block_cells};
+use crate::fv::line::MAX_FIXES;
+use crate::fv::{GhostFill, Wall, WallRun};
+use crate::grid::Grid;
+
+/// What the sweeps of a coupled step write into a rank's cells (the inputs of
+/// [`crate::fv::SplitHooks`]); cells and pencils of the whole grid.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WallHooks {
+    /// Per axis: the ghost states of the covered cells written before the sweep along it, in
+    /// order (a later fill of a cell wins).
+    pub ghosts: [Vec<GhostFill>; 3],
+    /// Per axis: the walls thinner than `2 ng` cells where the sweep along it cuts its pencils,
+    /// sorted by pencil and position.
+    pub walls: [Vec<WallRun>; 3],
+    /// Covered cells that hold no fluid yet beside a wet face (a crack that has just opened),
+    /// ascending.
+    pub vacuum: Vec<u32>,
+}
+
+/// Cells of halo around a block whose geometry gives its [`WallHooks`] exactly, for sweeps with
+/// `ng` ghost cells (module docs): `MAX_FIXES + 3 ng + NEAR_RADIUS + 1` (15 for OSMP 5, 18 for
+/// OSMP 7).
+pub fn hook_halo(ng: usize) -> usize {
+    MAX_FIXES + 3 * ng + NEAR_RADIUS + 1
+}
+
+/// The [`WallHooks`] of the cells of `block` (`None`: the whole grid) for the surface and
+/// kinematics `frame` on `grid`, with `ng` ghost cells: from the whole grid's geometry
+/// (`cutcell::compute`) without a block, else from the block's and a halo of [`hook_halo`]
+/// cells (`cutcell::compute_block_cells`). With a block, bit for bit the whole grid's
+/// [`WallHooks::restricted`] to it.
+///
+/// Pure; what an [`super::Embedded`] on a decomposed grid does in each predict, exposed for the
+/// tests and the benches.
+pub fn wall_hooks(grid: &Grid, ng: usize, frame: &SolidFrame, block: Option<CellBox>) -> WallHooks {
+    let mut odd = OddSum::default();
+    match block {
+        None => {
+            let mut geom = crate::cutcell::CutGeometry::new();
+            compute(grid, &frame.surface(), &mut geom);
+            let view = HookGeometry {
+                grid,
+                window: CellBox::whole(grid),
+                solid_fraction: &geom.solid_fraction,
+                subfaces: &geom.subfaces,
+            };
+            let near = NearOfView::new(&view, &geom.cut_cells);
+            view.wall_hooks(&near.as_ref(), frame, ng, CellBox::whole(grid), &mut odd)
+        }
+        Some(block) => block_wall_hooks(grid, ng, frame, block, &mut odd),
+    }
+}
+
+/// The [`WallHooks`] of the cells of `block`, from the geometry of `frame`'s surface on the
+/// block and a halo of [`hook_halo`] cells; `odd` is scratch.
+pub(super) fn block_wall_hooks(
+    grid: &Grid,
+    ng: usize,
+    frame: &SolidFrame,
+    block: CellBox,
+    odd: &mut OddSum,
+) -> WallHooks {
+    let geom = compute_block_cells(grid, &frame.surface(), block, hook_halo(ng));
+    let view = HookGeometry {
+        grid,
+        window: geom.window,
+        solid_fraction: &geom.solid_fraction,
+        subfaces: &geom.subfaces,
+    };
+    let near = NearOfView::new(&view, &geom.cut_cells);
+    view.wall_hooks(&near.as_ref(), frame, ng, block, odd)
+}
+
+impl WallHooks {
+    /// What a rank of block `block` takes of these hooks (of the whole grid, or of a window
+    /// around the block), for sweeps with `ng` ghost cells: the ghost fills and vacuum cells of
+    /// its cells, and the wall runs of its pencils that reach its line (its cells and the
+    /// [`MAX_FIXES`] cells it updates on each side) or the `ng` ghost cells around it.
+    ///
+    /// NOTE: a segment between two runs is swept as a line of its own, its mirror ghosts taken
+    /// from its whole length; a decomposed line holds the part of it that it reaches, and the
+    /// segment's mirror ghosts only where they fall into the line's ghost cells
+    /// (`fv::sweep::advance_segments`). A run that ends `ng` or more cells below the line (or
+    /// starts as far above it) puts no ghost there, and without it the segment beside it still
+    /// starts below the line's ghost cells: the line's bits are the same without it.
+    pub fn restricted(&self, grid: &Grid, ng: usize, block: CellBox) -> WallHooks {
+        let reach = MAX_FIXES + ng;
+        let own = |c: u32| block.contains(grid.ijk(c as usize));
+        let mut out = WallHooks {
+            vacuum: self.vacuum.iter().copied().filter(|&c| own(c)).collect(),
+            ..WallHooks::default()
+        };
+        for axis in 0..grid.dim {
+            out.ghosts[axis] = (self.ghosts[axis].iter())
+                .filter(|g| own(g.cell))
+                .copied()
+                .collect();
+            let stride: usize = grid.cells[..axis].iter().product();
+            let n = grid.cells[axis];
+            out.walls[axis] = (self.walls[axis].iter())
+                .filter(|w| {
+                    let p = w.pencil as usize;
+                    let ijk = grid.ijk(p % stride + (p / stride) * stride * n);
+                    let across =
+                        (0..3).all(|a| a == axis || block.lo[a] <= ijk[a] && ijk[a] < block.hi[a]);
+                    across
+                        && w.hi as usize + reach > block.lo[axis]
+                        && (w.lo as usize) < block.hi[axis] + reach
+                })
+                .copied()
+                .collect();
+        }
+        out
+    }
+}
+
+/// The geometry the hooks are derived from: that of the cells of `window` (the whole grid on
+/// one rank), exact there (Λ and the sub-faces).
+pub(super) struct HookGeometry<'a> {
+    pub(super) grid: &'a Grid,
+    /// The cells the arrays hold.
+    pub(super) window: CellBox,
+    /// Λ per cell of the window ([`CellBox::index`]).
+    pub(super) solid_fraction: &'a [f64],
+    /// The sub-faces of the window's cells, by cell (global cell indices).
+    pub(super) subfaces: &'a [SubFace],
+}
+
+/// The near cells of a [`HookGeometry`] (cells of its window within [`NEAR_RADIUS`] of one of
+/// its cut cells), ascending, and `slot + 1` of each by window index (0 elsewhere).
+pub(super) struct NearView<'a> {
+    pub(super) cells: &'a [u32],
+    pub(super) slot_of: &'a [u32],
+}
+
+/// The near cells of a block's window, owned ([`NearView`] borrows them).
+struct NearOfView {
+    cells: Vec<u32>,
+    slot_of: Vec<u32>,
+}
+
+impl NearOfView {
+    /// The cells of `view`'s window within [`NEAR_RADIUS`] of one of `cut_cells` (global).
+    fn new(view: &HookGeometry, cut_cells: &[u32]) -> NearOfView {
+        let (grid, window) = (view.grid, view.window);
+        let mut slot_of = vec![0u32; window.n_cells()];
+        let mut cells = Vec::new();
+        let span = offsets(grid.dim, NEAR_RADIUS as isize);
+        for &c in cut_cells {
+            let ijk = grid.ijk(c as usize);
+            for d in std::iter::once(&[0isize; 3]).chain(&span) {
+                if let Some(q) = shifted(grid, ijk, *d)
+                    && window.contains(q)
+                {
+                    let k = window.index(q);
+                    if slot_of[k] == 0 {
+                        slot_of[k] = 1;
+                        cells.push(grid.index(q[0], q[1], q[2]) as u32);
+                    }
+                }
+            }
+        }
+        cells.sort_unstable();
+        for (k, &c) in cells.iter().enumerate() {
+            slot_of[window.index(grid.ijk(c as usize))] = k as u32 + 1;
+        }
+        NearOfView { cells, slot_of }
+    }
+
+    fn as_ref(&self) -> NearView<'_> {
+        NearView {
+            cells: &self.cells,
+            slot_of: &self.slot_of,
+        }
+    }
+}
+
+impl HookGeometry<'_> {
+    /// The [`WallHooks`] of the cells of `own` (within the window, at [`hook_halo`] cells
+    /// from its edges unless those are the grid's), with the kinematics of `frame`; `odd` is
+    /// scratch.
+    pub(super) fn wall_hooks(
+        &self,
+        near: &NearView,
+        frame: &SolidFrame,
+        ng: usize,
+        own: CellBox,
+        odd: &mut OddSum,
+    ) -> WallHooks {
+        let (mut walls, closed) = self.near_walls(near, frame, odd);
+        let vacuum = self.vacuum_cells(near, &mut walls, &closed);
+        let mut out = WallHooks::default();
+        for axis in 0..self.grid.dim {
+            let (fills, runs) = (&mut out.ghosts[axis], &mut out.walls[axis]);
+            self.ghost_fills(near, &walls, &vacuum, ng, axis, own, fills, runs);
+        }
+        out.vacuum = vacuum;
+        if own == CellBox::whole(self.grid) {
+            out
+        } else {
+            out.restricted(self.grid, ng, own)
+        }
+    }
+
+    /// Λ of cell `ijk` (0 beyond the window: only hooks that a rank drops read it).
+    fn lambda(&self, ijk: [usize; 3]) -> f64 {
+        if self.window.contains(ijk) {
+            self.solid_fraction[self.window.index(ijk)]
+        } else {
+            0.0
+        }
+    }
+
+    /// The wall of the near cells that hold sub-faces, summed apart from the sub-faces' order
+    /// (the sub-faces come in cell order; slots are the fields of `NearWall::from_sums`), per
+    /// near cell, and whether a covered near cell holds a wet face with no gas in front (see
+    /// `touches_gas`). The walls' velocities are still sums (see `vacuum_cells`).
+    fn near_walls(
+        &self,
+        near: &NearView,
+        current: &SolidFrame,
+        sum: &mut OddSum,
+    ) -> (Vec<NearWall>, Vec<bool>) {
+        let grid = self.grid;
+        let dim = grid.dim;
+        let mut walls = vec![NearWall::default(); near.cells.len()];
+        let mut closed = vec![false; near.cells.len()];
+        let lambda = |c: usize| self.lambda(grid.ijk(c));
+        let slot = |c: u32| near.slot_of[self.window.index(grid.ijk(c as usize))] as usize - 1;
+        let subfaces = self.subfaces;
+        let mut first = 0;
+        while first < subfaces.len() {
+            let cell = subfaces[first].cell;
+            let mut end = first;
+            sum.clear();
+            while end < subfaces.len() && subfaces[end].cell == cell {
+                let s = &subfaces[end];
+                let w = current.point_velocity(s.particle as usize, s.centroid);
+                for a in 0..3 {
+                    sum.push(NW_VELOCITY + a, s.area * w[a]);
+                    for b in 0..3 {
+                        let slot = NW_NORMAL + 3 * a + b;
+                        sum.push(slot, s.area * s.normal[a].abs() * s.normal[b]);
+                    }
+                }
+                sum.push(NW_AREA, s.area);
+                for a in 0..dim {
+                    if s.normal[a] != 0.0 {
+                        let side = usize::from(s.normal[a] < 0.0);
+                        let f = NW_FACING + NW_FACING_LEN * (2 * a + side);
+                        sum.push(f, s.area);
+                        for b in 0..3 {
+                            sum.push(f + 1 + b, s.area * w[b]);
+                            sum.push(f + 4 + b, s.area * s.normal[a].abs() * s.normal[b]);
+                        }
+                    }
+                }
+                if current.wet[s.element as usize] && domain_face(grid, s).is_none() {
+                    sum.push(NW_WET_AREA, s.area);
+                    for a in 0..3 {
+                        sum.push(NW_WET_NORMAL + a, s.area * s.normal[a]);
+                    }
+                    if !touches_gas_with(grid, lambda, s) {
+                        closed[slot(cell)] = true;
+                    }
+                }
+                end += 1;
+            }
+            let mut fields = [0.0; NEAR_WALL_SUMS];
+            sum.add_into(&mut fields);
+            walls[slot(cell)] = NearWall::from_sums(&fields);
+            first = end;
+        }
+        sum.clear();
+        (walls, closed)
+    }
+
+    /// Covered cells between the two faces of a crack that has just opened hold no fluid yet:
+    /// vacuum (paper 000 §3.2), not ghost states. Where the two faces lie on either side of a
+    /// grid plane (pressed walls whose faces were on it), each cell holds one, with the other's
+    /// covered cell in front (`closed`). Then the walls' velocities become area averages.
+    fn vacuum_cells(&self, near: &NearView, walls: &mut [NearWall], closed: &[bool]) -> Vec<u32> {
+        let grid = self.grid;
+        let mut vacuum = Vec::new();
+        for (k, &c) in near.cells.iter().enumerate() {
+            if self.lambda(grid.ijk(c as usize)) >= 1.0 - COVERED_TOLERANCE
+                && (walls[k].is_crack() || closed[k])
+            {
+                vacuum.push(c);
+            }
+        }
+        for nw in walls.iter_mut() {
+            if nw.area > 0.0 {
+                for x in nw.velocity.iter_mut() {
+                    *x /= nw.area;
+                }
+            }
+        }
+        vacuum
+    }
+
+    /// The ghost states of the covered near cells on the pencils through `own` for the sweep
+    /// along `axis`, and the walls thinner than `2 ng` cells where that sweep cuts them
+    /// (before [`WallHooks::restricted`]).
+    #[allow(clippy::too_many_arguments)]
+    fn ghost_fills(
+        &self,
+        near: &NearView,
+        near_walls: &[NearWall],
+        vacuum: &[u32],
+        ng: usize,
+        axis: usize,
+        own: CellBox,
+        fills: &mut Vec<GhostFill>,
+        walls: &mut Vec<WallRun>,
+    ) {
+        let grid = self.grid;
+        let window = self.window;
+        let n = grid.cells[axis] as isize;
+        let ng = ng as isize;
+        let slot_of = |q: [usize; 3]| -> usize {
+            if window.contains(q) {
+                near.slot_of[window.index(q)] as usize
+            } else {
+                0
+            }
+        };
+        // A crack cell is vacuum fluid to the sweeps, not a covered cell.
+        let covered = |q: [usize; 3]| {
+            self.lambda(q) >= 1.0 - COVERED_TOLERANCE
+                && vacuum
+                    .binary_search(&(grid.index(q[0], q[1], q[2]) as u32))
+                    .is_err()
+        };
+        let stride: usize = grid.cells[..axis].iter().product();
+        // The wall seen along the axis from `fluid` beside the covered cell `covered`: the fluid
+        // cell's sub-faces, else the covered cell's, else a wall at rest normal to the axis.
+        // The sub-faces turned towards the fluid first: a thin gap between a wall at rest and a
+        // moving one must mirror each side about its own wall.
+        let wall_seen = |fluid: [usize; 3], covered: [usize; 3], dir: isize| -> Wall {
+            let walls = [fluid, covered]
+                .map(slot_of)
+                .map(|k| (k > 0).then(|| &near_walls[k - 1]));
+            walls
+                .iter()
+                .flatten()
+                .find_map(|w| w.facing(axis, dir))
+                .or_else(|| {
+                    walls
+                        .iter()
+                        .flatten()
+                        .find(|w| w.area > 0.0)
+                        .map(|w| w.along(axis))
+                })
+                .unwrap_or(Wall::at_rest(axis))
+        };
+        let index = |q: [usize; 3]| grid.index(q[0], q[1], q[2]);
+        for &c in near.cells {
+            let c = c as usize;
+            let ijk = grid.ijk(c);
+            let on_own_pencil =
+                (0..3).all(|a| a == axis || own.lo[a] <= ijk[a] && ijk[a] < own.hi[a]);
+            if !on_own_pencil || !covered(ijk) {
+                continue;
+            }
+            let at = |m: isize| -> Option<[usize; 3]> {
+                (0..n).contains(&m).then(|| {
+                    let mut q = ijk;
+                    q[axis] = m as usize;
+                    q
+                })
+            };
+            let is_covered = |m: isize| at(m).is_some_and(covered);
+            let m0 = ijk[axis] as isize;
+            for dir in [1isize, -1] {
+                // `c` starts a covered run seen from the fluid cell at `m0 − dir`.
+                let Some(fluid) = at(m0 - dir) else { continue };
+                if is_covered(m0 - dir) {
+                    continue;
+                }
+                let mut len = 0;
+                while len < 2 * ng && is_covered(m0 + dir * len) {
+                    len += 1;
+                }
+                let closed = len < 2 * ng && at(m0 + dir * len).is_some();
+                let wall = wall_seen(fluid, ijk, dir);
+                if closed && dir == 1 {
+                    let far = at(m0 + len).expect("closed");
+                    let last = at(m0 + len - 1).expect("in the run");
+                    walls.push(WallRun {
+                        pencil: (c % stride + (c / (stride * n as usize)) * stride) as u32,
+                        lo: m0 as u32,
+                        hi: (m0 + len) as u32,
+                        walls: [wall, wall_seen(far, last, -1)],
+                    });
+                }
+                // NOTE: the middle cell of an odd closed run takes the ghost of the side that
+                // faces the grid's middle along the axis (the lower side above the middle), so
+                // that the mirror image of a scene about that middle gets the mirrored fills.
+                let count = if closed {
+                    let mid = m0 + dir * ((len - 1) / 2);
+                    let lower_side_fills_middle = 2 * mid + 1 > n;
+                    if (dir == 1) == lower_side_fills_middle {
+                        (len + 1) / 2
+                    } else {
+                        len / 2
+                    }
+                } else {
+                    len.min(ng)
+                }
+                .min(ng);
+                let mut src = fluid;
+                for m in 0..count {
+                    let dst = at(m0 + dir * m).expect("inside the run");
+                    if let Some(s) = at(m0 - dir * (m + 1))
+                        && !is_covered(m0 - dir * (m + 1))
+                    {
+                        src = s;
+                    }
+                    fills.push(GhostFill {
+                        cell: index(dst) as u32,
+                        mirror_of: index(src) as u32,
+                        wall,
+                    });
+                }
+            }
+        }
+        walls.sort_unstable_by_key(|w| (w.pencil, w.lo));
+    }
+}
