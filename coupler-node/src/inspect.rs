@@ -270,22 +270,28 @@ pub fn export_table(rec: &Recording, step: Option<u64>) -> Result<String, Record
 }
 
 fn table(messages: &[&Recorded]) -> Result<String, RecordError> {
-    let mut out = Vec::from(TABLE_HEADER);
-    out.push(b'\n');
+    let io = |e: csv::Error| RecordError::Io(e.to_string());
+    let mut out = csv::Writer::from_writer(Vec::new());
+    out.write_record(TABLE_HEADER.split(',')).map_err(io)?;
     for m in messages {
-        message_rows(&mut out, m).map_err(|e| RecordError::Io(e.to_string()))??;
+        message_rows(&mut out, m).map_err(io)??;
     }
+    let out = out
+        .into_inner()
+        .map_err(|e| RecordError::Io(e.to_string()))?;
     Ok(String::from_utf8(out).expect("the rows are UTF-8"))
 }
 
 /// Writes the rows of one message to `out` (outer error: writing; inner: decoding).
-fn message_rows(
-    out: &mut impl std::io::Write,
+// NOTE: the rows go through a `csv` writer, which quotes a field name (a key of the
+// diagnostics' JSON) holding a comma or a quote, and checks that every row has six fields.
+fn message_rows<W: std::io::Write>(
+    out: &mut csv::Writer<W>,
     m: &Recorded,
-) -> std::io::Result<Result<(), RecordError>> {
+) -> csv::Result<Result<(), RecordError>> {
     match message_fields_of(m) {
         Ok(Some((iteration, fields))) => {
-            let prefix = format!("{},{iteration},{}", m.step, m.topic);
+            let prefix = [m.step.to_string(), iteration.to_string(), m.topic.clone()];
             table_rows(out, &prefix, "", &fields).map(Ok)
         }
         Ok(None) => Ok(Ok(())),
@@ -355,7 +361,9 @@ pub fn stream_table(
         end: End::Unfinished,
     };
     let mut checked: Vec<u16> = Vec::new();
-    writeln!(out, "{TABLE_HEADER}").map_err(io("writing"))?;
+    let write = |e: csv::Error| RecordError::Io(format!("writing: {e}"));
+    let mut out = csv::Writer::from_writer(out);
+    out.write_record(TABLE_HEADER.split(',')).map_err(write)?;
     loop {
         let n = input.read(&mut piece).map_err(io("reading"))?;
         if n == 0 {
@@ -391,7 +399,7 @@ pub fn stream_table(
             {
                 continue;
             }
-            message_rows(out, &m).map_err(io("writing"))??;
+            message_rows(&mut out, &m).map_err(write)??;
             summary.messages += 1;
         }
     }
@@ -400,17 +408,22 @@ pub fn stream_table(
     Ok(summary)
 }
 
-/// Writes `prefix,field,index,value` rows for the numeric scalars in `value`.
-fn table_rows(
-    out: &mut impl std::io::Write,
-    prefix: &str,
+/// Writes `prefix,field,index,value` rows for the numeric scalars in `value` (`prefix`: step,
+/// iteration, channel).
+fn table_rows<W: std::io::Write>(
+    out: &mut csv::Writer<W>,
+    prefix: &[String; 3],
     name: &str,
     value: &Value,
-) -> std::io::Result<()> {
+) -> csv::Result<()> {
     let number = |v: &Value| match v {
         Value::Number(n) => Some(n.to_string()),
         Value::Bool(b) => Some(u8::from(*b).to_string()),
         _ => None,
+    };
+    let mut row = |index: usize, x: String| {
+        let fields = [name.to_string(), index.to_string(), x];
+        out.write_record(prefix.iter().chain(&fields))
     };
     match value {
         Value::Object(map) => {
@@ -426,7 +439,7 @@ fn table_rows(
         Value::Array(items) if items.iter().all(|v| !v.is_object() && !v.is_array()) => {
             for (i, v) in items.iter().enumerate() {
                 if let Some(x) = number(v) {
-                    writeln!(out, "{prefix},{name},{i},{x}")?;
+                    row(i, x)?;
                 }
             }
         }
@@ -437,7 +450,7 @@ fn table_rows(
         }
         scalar => {
             if let Some(x) = number(scalar) {
-                writeln!(out, "{prefix},{name},0,{x}")?;
+                row(0, x)?;
             }
         }
     }

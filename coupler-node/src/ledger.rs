@@ -62,32 +62,42 @@ pub struct LedgerEntry {
     pub solid_substeps: u32,
 }
 
-/// Header line of `ledger.csv` (DESIGN §7), without the newline.
-pub const CSV_HEADER: &str = "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,\
-solid_dissipated,interface_work,mass_rel_err,energy_rel_err,solid_substeps";
+/// Header of `ledger.csv` (DESIGN §7).
+pub const CSV_HEADER: [&str; 11] = [
+    "t",
+    "step",
+    "fluid_mass",
+    "fluid_energy",
+    "solid_kinetic",
+    "solid_elastic",
+    "solid_dissipated",
+    "interface_work",
+    "mass_rel_err",
+    "energy_rel_err",
+    "solid_substeps",
+];
 
 impl LedgerEntry {
-    /// The entry as one `ledger.csv` row (with its newline), in the columns of [`CSV_HEADER`]:
-    /// `solid_elastic` is the potential part of the solid's energy (`solid_energy` −
-    /// `solid_kinetic`: elastic links, contacts, gravity), `interface_work` the work the solid
-    /// received through the interface (`work_solid`; the fluid's side is `work_fluid` in the
-    /// diagnostics). Numbers print in Rust's shortest round-trip form, so they parse back to
-    /// the same bits.
-    pub fn csv_row(&self) -> String {
-        format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}\n",
-            self.t,
-            self.step,
-            self.fluid_mass,
-            self.fluid_energy,
-            self.solid_kinetic,
-            self.solid_energy - self.solid_kinetic,
-            self.solid_dissipated,
-            self.work_solid,
-            self.mass_rel_err,
-            self.energy_rel_err,
-            self.solid_substeps.max(1)
-        )
+    /// The entry as one `ledger.csv` row, in the columns of [`CSV_HEADER`]: `solid_elastic` is
+    /// the potential part of the solid's energy (`solid_energy` − `solid_kinetic`: elastic
+    /// links, contacts, gravity), `interface_work` the work the solid received through the
+    /// interface (`work_solid`; the fluid's side is `work_fluid` in the diagnostics). Numbers
+    /// print in Rust's shortest round-trip form, so they parse back to the same bits.
+    pub fn csv_record(&self) -> [String; 11] {
+        let number = |x: f64| format!("{x:e}");
+        [
+            number(self.t),
+            self.step.to_string(),
+            number(self.fluid_mass),
+            number(self.fluid_energy),
+            number(self.solid_kinetic),
+            number(self.solid_energy - self.solid_kinetic),
+            number(self.solid_dissipated),
+            number(self.work_solid),
+            number(self.mass_rel_err),
+            number(self.energy_rel_err),
+            self.solid_substeps.max(1).to_string(),
+        ]
     }
 }
 
@@ -238,12 +248,9 @@ mod tests {
         let mut f = totals(NodeKind::Fluid, 2.0, 10.0, 0.0, 0.0);
         f.t = s.t;
         let e = ledger.update(4, Some(&f), Some(&s));
-        let row = e.csv_row();
-        let cells: Vec<&str> = row.trim_end().split(',').collect();
-        let names: Vec<&str> = CSV_HEADER.split(',').collect();
-        assert_eq!(cells.len(), names.len(), "{row}");
+        let cells = e.csv_record();
         let value = |name: &str| -> f64 {
-            let i = names.iter().position(|n| *n == name).expect(name);
+            let i = CSV_HEADER.iter().position(|n| *n == name).expect(name);
             cells[i].parse().expect(name)
         };
         assert_eq!(value("step"), 4.0);

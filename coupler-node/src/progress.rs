@@ -12,6 +12,15 @@
 //! the other. The nodes' log lines clear the line before they start ([`protocol::logs`]); the bar
 //! comes back with the next step.
 
+// NOTE: written by hand, not with `indicatif` (issue 39 item 8), which would not keep what
+// docs/usage.md says: its stderr draw target hides the bar when stderr is not a terminal (a
+// piped run shows a plain line every 5 s here); its ETA is an exponentially weighted rate with a
+// 15 s weight that counts the time since the last update as no progress (here: simulated time
+// per wall second between completed steps of the last 30 s, `--` until two steps); and the
+// nodes, other processes, clear the line through `protocol::logs::CLEAR_LINE` before their log
+// lines, which its redraws do not know of. Keeping all that would take a custom draw target,
+// ETA and log bridge: more code than this file.
+
 use std::collections::VecDeque;
 use std::io::{IsTerminal, Write};
 use std::sync::Mutex;

@@ -16,41 +16,46 @@ use crate::record::{Background, Recorder};
 
 /// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
-/// `ledger.csv` (one row per accepted step, [`LedgerEntry::csv_row`]) and `links_broken.csv`
-/// ([`links_broken_rows`]).
+/// `ledger.csv` (one row per accepted step, [`LedgerEntry::csv_record`]) and `links_broken.csv`
+/// ([`links_broken_records`]).
 pub struct CsvFile {
     file: File,
     path: std::path::PathBuf,
     /// Bytes of whole rows in the file.
     len: u64,
+    /// The header's fields.
+    header: Vec<String>,
 }
 
 impl CsvFile {
-    /// Creates `path` and writes `header` (without its newline) as the first line.
-    pub fn create(path: &Path, header: &str) -> anyhow::Result<CsvFile> {
-        use std::io::Write;
-        let mut file =
-            File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let line = format!("{header}\n");
-        file.write_all(line.as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-        Ok(CsvFile {
-            file,
+    /// Creates `path` and writes `header` as the first line.
+    pub fn create(path: &Path, header: &[&str]) -> anyhow::Result<CsvFile> {
+        let mut csv = CsvFile {
+            file: File::create(path).with_context(|| format!("creating {}", path.display()))?,
             path: path.to_path_buf(),
-            len: line.len() as u64,
-        })
+            len: 0,
+            header: header.iter().map(|h| h.to_string()).collect(),
+        };
+        // (The error names the file.)
+        csv.append([header]).map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(csv)
     }
 
-    /// Appends `rows` (each with its newline) in one write; nothing for no rows. A write that
-    /// fails (a full disk) is cut back, so the file ends on a whole row.
-    pub fn append(&mut self, rows: &str) -> Result<(), SinkError> {
+    /// Appends `records` in one write; nothing for no records. A write that fails (a full disk)
+    /// is cut back, so the file ends on a whole row; a record of another length than the header
+    /// fails before anything is written. Either error ends the run, so no row follows it.
+    pub fn append<R: IntoIterator<Item = F>, F: AsRef<[u8]>>(
+        &mut self,
+        records: impl IntoIterator<Item = R>,
+    ) -> Result<(), SinkError> {
         use std::io::{Seek, Write};
-        if rows.is_empty() {
-            return Ok(());
-        }
-        match self.file.write_all(rows.as_bytes()) {
-            Ok(()) => {
-                self.len += rows.len() as u64;
+        let written = self
+            .format(records)
+            .map_err(std::io::Error::from)
+            .and_then(|rows| self.file.write_all(&rows).map(|()| rows.len()));
+        match written {
+            Ok(bytes) => {
+                self.len += bytes as u64;
                 Ok(())
             }
             Err(source) => {
@@ -62,6 +67,26 @@ impl CsvFile {
                 })
             }
         }
+    }
+
+    /// `records` as CSV rows.
+    // NOTE: through a `csv` writer, which quotes a field that needs it and refuses a row of
+    // another length than the header (a field left out of a row would otherwise shift the
+    // columns silently). The header is written first, so the writer knows its length, and its
+    // bytes are dropped.
+    fn format<R: IntoIterator<Item = F>, F: AsRef<[u8]>>(
+        &self,
+        records: impl IntoIterator<Item = R>,
+    ) -> csv::Result<Vec<u8>> {
+        let mut table = csv::Writer::from_writer(Vec::new());
+        table.write_record(&self.header)?;
+        table.flush()?;
+        let header_bytes = table.get_ref().len();
+        for record in records {
+            table.write_record(record)?;
+        }
+        table.flush()?;
+        Ok(table.get_ref()[header_bytes..].to_vec())
     }
 }
 
@@ -89,17 +114,24 @@ const SUMMARY_BASE_BYTES: u64 = 16 << 10;
 /// channels included), an upper estimate.
 const SUMMARY_BYTES_PER_CHUNK: u64 = 256;
 
-/// Header line of `links_broken.csv` (DESIGN §7), without the newline.
-pub const LINKS_BROKEN_HEADER: &str = "t,step,a,b";
+/// Header of `links_broken.csv` (DESIGN §7).
+pub const LINKS_BROKEN_HEADER: [&str; 4] = ["t", "step", "a", "b"];
 
-/// The `links_broken.csv` rows of one accepted step (each with its newline): `t` the end of the
-/// solid sub-step that broke the link (the step's end without sub-steps) in shortest
-/// round-trip form, `step` from 0, `a, b` the particle ids of each link broken in it, in the
-/// order they broke. Empty when none broke.
-pub fn links_broken_rows(step: u64, links: &[(f64, [u32; 2])]) -> String {
+/// The `links_broken.csv` rows of one accepted step: `t` the end of the solid sub-step that
+/// broke the link (the step's end without sub-steps) in shortest round-trip form, `step` from 0,
+/// `a, b` the particle ids of each link broken in it, in the order they broke. Empty when none
+/// broke.
+pub fn links_broken_records(step: u64, links: &[(f64, [u32; 2])]) -> Vec<[String; 4]> {
     links
         .iter()
-        .map(|(t, [a, b])| format!("{t:e},{step},{a},{b}\n"))
+        .map(|(t, [a, b])| {
+            [
+                format!("{t:e}"),
+                format!("{step}"),
+                format!("{a}"),
+                format!("{b}"),
+            ]
+        })
         .collect()
 }
 
@@ -177,12 +209,12 @@ impl RunSink {
             largest_step: 0,
             steps: 0,
             frames: matches!(level, RecordLevel::All | RecordLevel::Exchange),
-            ledger: CsvFile::create(&out.join("ledger.csv"), CSV_HEADER)?,
+            ledger: CsvFile::create(&out.join("ledger.csv"), &CSV_HEADER)?,
             links_broken: scene
                 .solid
                 .as_ref()
                 .is_some_and(|s| s.fracture.is_some())
-                .then(|| CsvFile::create(&out.join("links_broken.csv"), LINKS_BROKEN_HEADER))
+                .then(|| CsvFile::create(&out.join("links_broken.csv"), &LINKS_BROKEN_HEADER))
                 .transpose()?,
             out: out.to_path_buf(),
             first_output: u32::from(scene.initial_output()),
@@ -283,14 +315,14 @@ impl RecordSink for RunSink {
     }
 
     fn ledger(&mut self, entry: &LedgerEntry) -> Result<(), SinkError> {
-        self.ledger.append(&entry.csv_row())
+        self.ledger.append([entry.csv_record()])
     }
 
     fn links_broken(&mut self, step: u64, links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
         self.broken.extend(links.iter().map(|(_, pair)| *pair));
         self.links_broken
             .as_mut()
-            .map_or(Ok(()), |csv| csv.append(&links_broken_rows(step, links)))
+            .map_or(Ok(()), |csv| csv.append(links_broken_records(step, links)))
     }
 
     fn views(&mut self, output: Option<u32>, t: f64) -> Result<(), SinkError> {
@@ -329,5 +361,42 @@ impl RecordSink for RunSink {
             )));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_csv_file_holds_whole_rows_of_the_header_length_and_quotes_what_needs_it() {
+        let dir = std::env::temp_dir().join(format!("cosim-sink-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("links_broken.csv");
+        let mut csv = CsvFile::create(&path, &LINKS_BROKEN_HEADER).expect("creates");
+        csv.append(links_broken_records(3, &[(6e-4, [0, 1]), (6e-4, [3, 4])]))
+            .expect("appends");
+        csv.append(links_broken_records(4, &[])).expect("nothing");
+        let read = || std::fs::read_to_string(&path).expect("reads");
+        assert_eq!(read(), "t,step,a,b\n6e-4,3,0,1\n6e-4,3,3,4\n");
+        // A row of another length is refused, and nothing of it reaches the file.
+        let err = csv
+            .append([["1e-3", "5", "2"]])
+            .expect_err("three fields")
+            .to_string();
+        assert!(
+            err.starts_with(&format!("writing {}: ", path.display()))
+                && err.contains("found record with 3 fields"),
+            "{err}"
+        );
+        assert_eq!(read(), "t,step,a,b\n6e-4,3,0,1\n6e-4,3,3,4\n");
+        // A field with a comma or a quote is quoted (none of ours has one).
+        let mut named = CsvFile::create(&dir.join("named.csv"), &["name", "x"]).expect("creates");
+        named
+            .append([["a,b", "1"], ["say \"hi\"", "2"]])
+            .expect("appends");
+        let text = std::fs::read_to_string(dir.join("named.csv")).expect("reads");
+        assert_eq!(text, "name,x\n\"a,b\",1\n\"say \"\"hi\"\"\",2\n");
+        let _ = std::fs::remove_dir_all(dir);
     }
 }

@@ -338,21 +338,21 @@ impl NodeModel for RealFluid {
             return Ok(());
         }
         let dim = self.dim();
-        let vel = ["u", "v", "w"][..dim].join(",");
         let started = std::mem::replace(&mut self.probes_started, true);
         for probe in &mut self.probes {
-            let mut text = if started {
-                String::new()
-            } else {
-                format!("t,rho,{vel},p\n")
-            };
-            for [t, rho, u @ .., p] in &probe.rows {
-                let vel: Vec<String> = u[..dim].iter().map(|v| format!("{v:e}")).collect();
-                text.push_str(&format!("{t:e},{rho:e},{},{p:e}\n", vel.join(",")));
+            let mut table = csv::Writer::from_writer(Vec::new());
+            if !started {
+                let vel = &["u", "v", "w"][..dim];
+                table.write_record(["t", "rho"].iter().chain(vel).chain(&["p"]))?;
             }
+            for [t, rho, u @ .., p] in &probe.rows {
+                let row = [t, rho].into_iter().chain(&u[..dim]).chain([p]);
+                table.write_record(row.map(|x| format!("{x:e}")))?;
+            }
+            table.flush()?;
             probe.rows.clear();
             let path = out.join(format!("probe_{}.csv", probe.name));
-            crate::output::append_or_create(&path, started, text.as_bytes())?;
+            crate::output::append_or_create(&path, started, table.get_ref())?;
         }
         Ok(())
     }

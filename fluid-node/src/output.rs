@@ -28,27 +28,26 @@ pub fn write_fluid_csv(
     header.extend_from_slice(&vels[..dim]);
     header.push("p");
     header.push("alpha");
-    writeln!(w, "{}", header.join(","))?;
+    let mut table = csv::Writer::from_writer(w);
+    table.write_record(&header)?;
     for idx in 0..grid.n_cells() {
-        let x = grid.cell_center(grid.ijk(idx));
-        let (rho, vel, p) = state.primitive(idx, gamma);
-        let mut line = String::with_capacity(128);
         if alpha.is_some_and(|a| a[idx] <= 0.0) {
             // Covered by the solid: no fluid (the state there is a ghost).
             continue;
         }
+        let x = grid.cell_center(grid.ijk(idx));
+        let (rho, vel, p) = state.primitive(idx, gamma);
         for xa in &x[..dim] {
-            line.push_str(&format!("{xa:.9e},"));
+            table.write_field(format!("{xa:.9e}"))?;
         }
-        line.push_str(&format!("{rho:.12e},"));
+        table.write_field(format!("{rho:.12e}"))?;
         for v in &vel[..dim] {
-            line.push_str(&format!("{v:.12e},"));
+            table.write_field(format!("{v:.12e}"))?;
         }
         let a = alpha.and_then(|a| a.get(idx).copied()).unwrap_or(1.0);
-        line.push_str(&format!("{p:.12e},{a}"));
-        writeln!(w, "{line}")?;
+        table.write_record([format!("{p:.12e}"), a.to_string()])?;
     }
-    Ok(())
+    table.flush()
 }
 
 /// The fluid as VTK XML image data (`.vti` bytes, compressed binary): cell data `rho`
@@ -176,41 +175,39 @@ pub fn write_surface_csv(w: &mut impl Write, surface: &SolidFrame) -> std::io::R
             header.push(format!("{a}{v}"));
         }
     }
-    writeln!(w, "{}", header.join(","))?;
+    let mut table = csv::Writer::from_writer(w);
+    table.write_record(&header)?;
     for (e, nodes) in surface.elements.chunks_exact(d).enumerate() {
-        let mut line = format!(
-            "{e},{},{}",
-            surface.element_particle[e],
-            u8::from(surface.wet[e])
-        );
+        table.write_field(e.to_string())?;
+        table.write_field(surface.element_particle[e].to_string())?;
+        table.write_field(u8::from(surface.wet[e]).to_string())?;
         for &v in nodes {
             for x in &surface.vertices[v as usize * d..(v as usize + 1) * d] {
-                line.push_str(&format!(",{x:.12e}"));
+                table.write_field(format!("{x:.12e}"))?;
             }
         }
-        writeln!(w, "{line}")?;
+        table.write_record(None::<&[u8]>)?;
     }
-    Ok(())
+    table.flush()
 }
 
 /// Writes the fluid loads of the last step per particle: `particle,fx,fy[,fz],m` (2-D, torque
 /// about z) or `...,mx,my,mz` (3-D) [N, N m; 2-D per unit depth].
 pub fn write_loads_csv(w: &mut impl Write, dim: usize, loads: &Loads) -> std::io::Result<()> {
     let header = if dim == 2 {
-        "particle,fx,fy,m"
+        &["particle", "fx", "fy", "m"][..]
     } else {
-        "particle,fx,fy,fz,mx,my,mz"
+        &["particle", "fx", "fy", "fz", "mx", "my", "mz"]
     };
-    writeln!(w, "{header}")?;
+    let mut table = csv::Writer::from_writer(w);
+    table.write_record(header)?;
     let nr = if dim == 2 { 1 } else { 3 };
     for (p, f) in loads.force.chunks_exact(dim).enumerate() {
-        let mut line = p.to_string();
-        for x in f.iter().chain(&loads.torque[p * nr..(p + 1) * nr]) {
-            line.push_str(&format!(",{x:.12e}"));
-        }
-        writeln!(w, "{line}")?;
+        table.write_field(p.to_string())?;
+        let moments = &loads.torque[p * nr..(p + 1) * nr];
+        table.write_record(f.iter().chain(moments).map(|x| format!("{x:.12e}")))?;
     }
-    Ok(())
+    table.flush()
 }
 
 /// Replaces `path` with `bytes` through a temporary file beside it and a rename, so that a

@@ -44,7 +44,8 @@ pub struct RealSolid {
 struct Probe {
     name: String,
     particle: ParticleId,
-    rows: Vec<String>,
+    /// `t, x, y[, z], vx, vy[, vz], sigma_n` per recorded step, formatted.
+    rows: Vec<Vec<String>>,
 }
 
 impl RealSolid {
@@ -281,16 +282,13 @@ impl NodeModel for RealSolid {
         for probe in &mut self.probes {
             let x = self.solid.position(probe.particle);
             let v = self.solid.velocity(probe.particle);
-            let cols: Vec<String> = x[..dim]
-                .iter()
+            let s = sigma[probe.particle.0 as usize];
+            let row = [&t]
+                .into_iter()
+                .chain(&x[..dim])
                 .chain(&v[..dim])
-                .map(|c| format!("{c:e}"))
-                .collect();
-            probe.rows.push(format!(
-                "{t:e},{},{:e}",
-                cols.join(","),
-                sigma[probe.particle.0 as usize]
-            ));
+                .chain([&s]);
+            probe.rows.push(row.map(|c| format!("{c:e}")).collect());
         }
     }
 
@@ -300,22 +298,19 @@ impl NodeModel for RealSolid {
             return Ok(());
         }
         let dim = self.solid.dim();
-        let axes = ["x", "y", "z"][..dim].join(",");
-        let vels = ["vx", "vy", "vz"][..dim].join(",");
         let started = std::mem::replace(&mut self.probes_started, true);
         for probe in &mut self.probes {
-            let mut text = if started {
-                String::new()
-            } else {
-                format!("t,{axes},{vels},sigma_n\n")
-            };
-            for row in &probe.rows {
-                text.push_str(row);
-                text.push('\n');
+            let mut table = csv::Writer::from_writer(Vec::new());
+            if !started {
+                let (axes, vels) = (&["x", "y", "z"][..dim], &["vx", "vy", "vz"][..dim]);
+                table.write_record(["t"].iter().chain(axes).chain(vels).chain(&["sigma_n"]))?;
             }
-            probe.rows.clear();
+            for row in probe.rows.drain(..) {
+                table.write_record(row)?;
+            }
+            table.flush()?;
             let path = out.join(format!("probe_{}.csv", probe.name));
-            crate::output::append_or_create(&path, started, text.as_bytes())?;
+            crate::output::append_or_create(&path, started, table.get_ref())?;
         }
         Ok(())
     }

@@ -166,7 +166,8 @@ pub fn write_particles_csv(w: &mut impl Write, solid: &Solid) -> io::Result<()> 
         header.extend(["theta", "omega"].map(String::from));
     }
     header.push("sigma_n".into());
-    writeln!(w, "{}", header.join(","))?;
+    let mut table = csv::Writer::from_writer(w);
+    table.write_record(&header)?;
     let sigma = solid.normal_stress();
     for (p, s) in sigma.iter().enumerate() {
         let id = ParticleId(p as u32);
@@ -185,9 +186,9 @@ pub fn write_particles_csv(w: &mut impl Write, solid: &Solid) -> io::Result<()> 
             row.push(format!("{:e}", omega[2]));
         }
         row.push(format!("{s:e}"));
-        writeln!(w, "{}", row.join(","))?;
+        table.write_record(&row)?;
     }
-    Ok(())
+    table.flush()
 }
 
 /// Writes the particles as legacy-VTK polydata: every face moved rigidly with its particle

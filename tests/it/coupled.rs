@@ -297,19 +297,11 @@ const ROD: &str = r#"
 fn max_pressure_error(out: &std::path::Path) -> f64 {
     let mut worst: f64 = 0.0;
     for k in 0.. {
-        let Ok(text) = std::fs::read_to_string(out.join(format!("fluid_{k}.csv"))) else {
+        let path = out.join(format!("fluid_{k}.csv"));
+        if !path.exists() {
             break;
-        };
-        let mut lines = text.lines();
-        let header: Vec<&str> = lines.next().expect("header").split(',').collect();
-        let col = header.iter().position(|h| *h == "p").expect("p column");
-        for line in lines {
-            let p: f64 = line
-                .split(',')
-                .nth(col)
-                .expect("p")
-                .parse()
-                .expect("number");
+        }
+        for p in cosim_tests::csv_column(&path, "p") {
             worst = worst.max((p - 1.0).abs());
         }
     }

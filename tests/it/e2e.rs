@@ -165,20 +165,13 @@ fn check_ledger_csv_and_record(out: &Path) {
     let s = summary(out);
     let steps = s["steps"].as_u64().expect("steps");
     let text = std::fs::read_to_string(out.join("ledger.csv")).expect("ledger.csv");
-    let mut lines = text.lines();
     assert_eq!(
-        lines.next(),
+        text.lines().next(),
         Some(
             "t,step,fluid_mass,fluid_energy,solid_kinetic,solid_elastic,solid_dissipated,interface_work,mass_rel_err,energy_rel_err,solid_substeps"
         )
     );
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|c| c.parse().unwrap_or_else(|e| panic!("{l}: {e}")))
-                .collect()
-        })
-        .collect();
+    let rows = cosim_tests::read_table(&out.join("ledger.csv")).rows;
     assert_eq!(rows.len() as u64, steps, "one row per step");
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(row.len(), 11);
@@ -523,9 +516,8 @@ fn sod_runs_end_to_end_and_matches_the_exact_solution() {
     assert!(s["mass_rel_err"].as_f64().expect("mass") < 1e-12, "{s}");
     let outputs = std::fs::read_to_string(out.join("outputs.csv")).expect("outputs.csv");
     assert_eq!(outputs.lines().collect::<Vec<_>>(), ["k,t", "0,2e-1"]);
-    let csv = std::fs::read_to_string(out.join("fluid_0.csv")).expect("fluid_0.csv");
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("x,rho,u,p,alpha"));
+    let csv = cosim_tests::read_table(&out.join("fluid_0.csv"));
+    assert_eq!(csv.header, ["x", "rho", "u", "p", "alpha"]);
     use fluid_node::fv::exact_riemann::{ExactRiemann, Prim1};
     let exact = ExactRiemann::new(
         Prim1 {
@@ -543,11 +535,7 @@ fn sod_runs_end_to_end_and_matches_the_exact_solution() {
     .expect("exact solution");
     let mut l1 = 0.0;
     let mut n = 0;
-    for line in lines {
-        let v: Vec<f64> = line
-            .split(',')
-            .map(|x| x.parse().expect("number"))
-            .collect();
+    for v in &csv.rows {
         let h = 1.0 / 400.0;
         let rho = exact.cell_average(v[0] - h / 2.0, v[0] + h / 2.0, 0.5, 0.2)[0];
         l1 += (v[1] - rho).abs() / 400.0;
@@ -664,11 +652,7 @@ particle_at = [0.95, 0.0]
     let probe = std::fs::read_to_string(out.join("probe_tip.csv")).expect("probe");
     assert!(probe.starts_with("t,x,y,vx,vy,sigma_n\n"), "{probe}");
     // The tip falls under gravity: its last y is below its first.
-    let ys: Vec<f64> = probe
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(2).expect("y").parse().expect("number"))
-        .collect();
+    let ys = cosim_tests::csv_column(&out.join("probe_tip.csv"), "y");
     assert!(ys.len() as u64 == s["steps"].as_u64().expect("steps"));
     assert!(ys.last() < ys.first(), "{:?} {:?}", ys.first(), ys.last());
     let _ = std::fs::remove_dir_all(dir);
@@ -678,12 +662,7 @@ particle_at = [0.95, 0.0]
 fn density_wave_scene_returns_to_its_initial_state() {
     let out = out_dir("density-wave");
     run_scene(&workspace().join("scenes/density-wave.toml"), &out, &[]);
-    let csv = std::fs::read_to_string(out.join("fluid_0.csv")).expect("fluid_0.csv");
-    let rows: Vec<Vec<f64>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|x| x.parse().expect("number")).collect())
-        .collect();
+    let rows = cosim_tests::read_table(&out.join("fluid_0.csv")).rows;
     let h = 1.0 / rows.len() as f64;
     let two_pi = 2.0 * std::f64::consts::PI;
     // After one period the exact cell averages are the initial ones.

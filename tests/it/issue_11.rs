@@ -220,22 +220,13 @@ fn an_output_time_of_zero_writes_the_initial_state_as_output_zero() {
     assert_eq!(code, Some(0), "{stderr}");
     let out = dir.join("out");
     let outputs = std::fs::read_to_string(out.join("outputs.csv")).expect("outputs.csv");
-    let ts: Vec<f64> = outputs
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).expect("t").parse().expect("t"))
-        .collect();
+    let ts = cosim_tests::csv_column(&out.join("outputs.csv"), "t");
     assert_eq!(ts.len(), 3, "{outputs}");
     assert_eq!(ts[0], 0.0, "{outputs}");
     assert!((ts[1] - 0.1).abs() < 1e-12, "{outputs}");
     // Output 0 is the initial Sod state: density 1 on the left, 0.125 on the right.
-    let csv = std::fs::read_to_string(out.join("fluid_0.csv")).expect("fluid_0.csv");
-    let rho: Vec<f64> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).expect("rho").parse().expect("rho"))
-        .collect();
-    assert_eq!(rho.first(), Some(&1.0), "{csv}");
+    let rho = cosim_tests::csv_column(&out.join("fluid_0.csv"), "rho");
+    assert_eq!(rho.first(), Some(&1.0), "{rho:?}");
     assert_eq!(rho.last(), Some(&0.125));
     assert!(out.join("fluid_2.csv").exists());
     let _ = std::fs::remove_dir_all(dir);

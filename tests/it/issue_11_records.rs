@@ -64,19 +64,17 @@ fn issue_11_a_killed_coupler_leaves_a_record_standard_readers_read_to_its_last_s
     // Issue 15, item 6: ledger.csv keeps a row for every step the record completed (and at
     // most the steps the record's thread had not written yet, `record::MAX_LAG_STEPS` + 1 in
     // flight since issue 39 item 4, and the one whose row was written just before the kill).
-    let ledger = std::fs::read_to_string(out.join("ledger.csv")).expect("ledger.csv");
-    let steps: Vec<u64> = ledger
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).expect("step").parse().expect("a step"))
-        .collect();
+    let steps = cosim_tests::csv_column(&out.join("ledger.csv"), "step");
     assert!(
         (diagnostics.len()..=diagnostics.len() + record::MAX_LAG_STEPS + 2).contains(&steps.len()),
         "{} ledger rows, {} completed steps in the record",
         steps.len(),
         diagnostics.len()
     );
-    assert_eq!(steps, (0..steps.len() as u64).collect::<Vec<_>>());
+    assert_eq!(
+        steps,
+        (0..steps.len()).map(|s| s as f64).collect::<Vec<_>>()
+    );
     // Every completed step has its frames, both ways, for both nodes.
     for topic in [
         "/fluid-to-coupler",

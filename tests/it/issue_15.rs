@@ -23,31 +23,9 @@ fn sod(dir: &Path, name: &str, output: &str) -> PathBuf {
 
 /// `k,t` of `outputs.csv`.
 fn output_times(out: &Path) -> Vec<(u32, f64)> {
-    std::fs::read_to_string(out.join("outputs.csv"))
-        .expect("outputs.csv")
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let (k, t) = l.split_once(',').expect("k,t");
-            (k.parse().expect("k"), t.parse().expect("t"))
-        })
-        .collect()
-}
-
-/// Column `col` of a CSV file's rows.
-fn csv_column(path: &Path, col: usize) -> Vec<f64> {
-    std::fs::read_to_string(path)
-        .expect("csv")
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.split(',')
-                .nth(col)
-                .expect("column")
-                .parse()
-                .expect("number")
-        })
-        .collect()
+    let table = cosim_tests::read_table(&out.join("outputs.csv"));
+    let pairs = table.pairs("k", "t").expect("k,t");
+    pairs.into_iter().map(|(k, t)| (k as u32, t)).collect()
 }
 
 /// Checks that `OUT/<kind>.pvd` lists `<kind>_<k>.<ext>` at each output's time, in order, and
@@ -92,7 +70,7 @@ fn issue_15_vtk_xml_files_and_their_series_hold_the_csv_outputs() {
             .array("CellData", "rho")
             .and_then(|a| a.as_f64())
             .expect("rho");
-        let csv = csv_column(&out.join(format!("fluid_{k}.csv")), 1);
+        let csv = cosim_tests::csv_column(&out.join(format!("fluid_{k}.csv")), "rho");
         assert_eq!(rho.len(), csv.len());
         // The CSV holds 13 significant digits.
         for (cell, (a, b)) in rho.iter().zip(&csv).enumerate() {
@@ -123,15 +101,13 @@ fn issue_15_vtk_xml_files_and_their_series_hold_the_csv_outputs() {
         .array("Points", "Points")
         .and_then(|a| a.as_f64())
         .expect("points");
-    let csv = std::fs::read_to_string(out.join(format!("solid_{k}.csv"))).expect("csv");
-    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
-    let dim = if header.contains(&"z") { 3 } else { 2 };
-    let n = csv.lines().count() - 1;
-    assert_eq!(points.len(), 3 * n);
+    let csv = cosim_tests::read_table(&out.join(format!("solid_{k}.csv")));
+    let dim = if csv.column("z").is_some() { 3 } else { 2 };
+    assert_eq!(points.len(), 3 * csv.rows.len());
     for d in 0..dim {
         // The CSV writes `{:e}`, which reads back to the same double.
-        let column = csv_column(&out.join(format!("solid_{k}.csv")), 1 + d);
-        for (p, x) in column.iter().enumerate() {
+        for (p, row) in csv.rows.iter().enumerate() {
+            let x = row[1 + d];
             assert_eq!(
                 points[3 * p + d].to_bits(),
                 x.to_bits(),

@@ -414,11 +414,8 @@ fn issue_38_a_write_error_stops_the_run_naming_the_file_with_every_output_readab
     for csv in ["ledger.csv", "outputs.csv"] {
         let text = std::fs::read_to_string(out.join(csv)).expect(csv);
         assert!(text.ends_with('\n'), "{csv} ends mid-row");
-        let columns = text.lines().next().expect("header").split(',').count();
-        assert!(
-            text.lines().all(|l| l.split(',').count() == columns),
-            "{csv} has a partial row"
-        );
+        // (A partial row is a ragged row or a cut number: the table names it.)
+        cosim_tests::read_table(&out.join(csv));
     }
 }
 

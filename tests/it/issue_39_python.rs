@@ -77,16 +77,13 @@ fn the_python_reader_reads_what_the_run_wrote() {
     assert_eq!(f("last_energy_rel_err"), last.energy_rel_err);
 
     // The last output's fluid and particles.
-    let outputs = std::fs::read_to_string(out.join("outputs.csv")).expect("outputs.csv");
-    let rows: Vec<&str> = outputs.lines().skip(1).collect();
+    let outputs = cosim_tests::read_table(&out.join("outputs.csv"));
+    let rows = outputs.pairs("k", "t").expect("k,t");
     assert_eq!(u("outputs"), rows.len() as u64);
-    let (k, t) = rows
-        .last()
-        .expect("an output")
-        .split_once(',')
-        .expect("k,t");
-    assert_eq!(u("output_k"), k.parse::<u64>().expect("k"));
-    assert_eq!(f("output_t"), t.parse::<f64>().expect("t"));
+    let (k, t) = rows.last().copied().expect("an output");
+    let k = k as u64;
+    assert_eq!(u("output_k"), k);
+    assert_eq!(f("output_t"), t);
     let fluid =
         parse(&std::fs::read(out.join(format!("fluid_{k}.vti"))).expect("vti")).expect("vti");
     let p = fluid

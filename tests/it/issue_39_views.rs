@@ -329,16 +329,11 @@ fn the_record_shows_the_run_in_foxglove() {
         views(&b.join("exchange.mcap")),
         "the same bytes in two runs"
     );
-    let outputs = std::fs::read_to_string(a.join("outputs.csv")).expect("outputs.csv");
-    let times: Vec<(u32, f64)> = outputs
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let (k, t) = l.split_once(',').expect("k,t");
-            (k.parse().expect("k"), t.parse().expect("t"))
-        })
+    let outputs = cosim_tests::read_table(&a.join("outputs.csv"));
+    let times: Vec<(u32, f64)> = (outputs.pairs("k", "t").expect("k,t").into_iter())
+        .map(|(k, t)| (k as u32, t))
         .collect();
-    assert_eq!(times.len(), 2, "{outputs}");
+    assert_eq!(times.len(), 2, "{outputs:?}");
     for topic in ["/foxglove/fluid", "/foxglove/solid"] {
         assert_eq!(
             got[topic].len(),
@@ -445,16 +440,11 @@ fn a_3d_run_shows_its_slice_faces_and_broken_links() {
     std::fs::write(&scene, SCENE_3D).expect("scene");
     let out = dir.join("out");
     run_scene(&scene, &out, &[]);
-    let broken = std::fs::read_to_string(out.join("links_broken.csv")).expect("links_broken");
-    let pairs: Vec<[usize; 2]> = broken
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let v: Vec<&str> = l.split(',').collect();
-            [v[2].parse().expect("a"), v[3].parse().expect("b")]
-        })
+    let broken = cosim_tests::read_table(&out.join("links_broken.csv"));
+    let pairs: Vec<[usize; 2]> = (broken.pairs("a", "b").expect("a,b").into_iter())
+        .map(|(a, b)| [a as usize, b as usize])
         .collect();
-    assert_eq!(pairs, [[0, 1]], "{broken}");
+    assert_eq!(pairs, [[0, 1]], "{broken:?}");
     let got = views(&out.join("exchange.mcap"));
     // Outputs 0 (t = 0, before the break), 1 (t = 0.05) and 2 (t_end), after it.
     assert_eq!(got["/foxglove/fluid"].len(), 3);

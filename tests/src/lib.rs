@@ -1,15 +1,34 @@
 //! Helpers of the end-to-end tests: the whole co-simulation in one process over the in-memory
-//! transport (the baseline against which the bus is measured), and paths of the node binaries.
+//! transport (the baseline against which the bus is measured), paths of the node binaries, and
+//! the runs' CSV files read back.
 
 use std::time::Duration;
 
 pub mod corpus;
 
 use coupler_node::driver::{self, Abort, DriverConfig, RecordSink, SinkError, Summary};
+use coupler_node::report::data::Table;
 use coupler_node::scheme::{Coupler, CouplerConfig};
 use protocol::scene::Scene;
 use protocol::transport::{Link, MemoryTransport};
 use protocol::wire::NodeKind;
+
+/// A numeric CSV file of a run, read as `coupler-node report` reads it (the `csv` crate): a
+/// ragged row or a value that is no number panics naming the file, the line and the column.
+pub fn read_table(path: &std::path::Path) -> Table {
+    let text =
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+    Table::parse(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Column `name` of the CSV file `path` ([`read_table`]); panics without that column.
+pub fn csv_column(path: &std::path::Path, name: &str) -> Vec<f64> {
+    let table = read_table(path);
+    let col = table
+        .column(name)
+        .unwrap_or_else(|| panic!("{}: no column {name}", path.display()));
+    table.rows.iter().map(|row| row[col]).collect()
+}
 
 /// Every frame the coupler saw, in order: `(from, to, bytes)`.
 #[derive(Default)]
@@ -43,8 +62,9 @@ impl RecordSink for MemorySink {
         Ok(())
     }
     fn links_broken(&mut self, step: u64, links: &[(f64, [u32; 2])]) -> Result<(), SinkError> {
-        self.links_broken
-            .push_str(&coupler_node::sink::links_broken_rows(step, links));
+        for row in coupler_node::sink::links_broken_records(step, links) {
+            self.links_broken.push_str(&(row.join(",") + "\n"));
+        }
         Ok(())
     }
     fn end_step(&mut self) -> Result<(), SinkError> {

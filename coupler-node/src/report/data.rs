@@ -15,37 +15,51 @@ pub struct Table {
 }
 
 impl Table {
-    /// Parses `text` (`what` names it in errors).
+    /// Parses `text` (`what` names it in errors): a header line, then rows of numbers as long
+    /// as the header. Fields are trimmed; quoted fields, CRLF line ends and empty lines are
+    /// read as CSV has them.
     pub fn parse(text: &str, what: &str) -> Result<Table, ReportError> {
-        let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .ok_or_else(|| ReportError::Empty { what: what.into() })?
-            .split(',')
-            .map(|h| h.trim().to_string())
+        let csv_error = |source| ReportError::Csv {
+            what: what.into(),
+            source,
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .from_reader(text.as_bytes());
+        let header: Vec<String> = reader
+            .headers()
+            .map_err(csv_error)?
+            .iter()
+            .map(str::to_string)
             .collect();
+        if header.is_empty() {
+            return Err(ReportError::Empty { what: what.into() });
+        }
         let mut rows = Vec::new();
-        for (i, line) in lines.enumerate() {
-            if line.trim().is_empty() {
-                continue;
-            }
-            let row: Vec<f64> = line
-                .split(',')
-                .map(|v| v.trim().parse::<f64>())
-                .collect::<Result<_, _>>()
-                .map_err(|source| ReportError::Number {
+        for record in reader.records() {
+            let record = record.map_err(|source| match source.kind() {
+                csv::ErrorKind::UnequalLengths { pos, len, .. } => ReportError::RowLength {
                     what: what.into(),
-                    line: i + 2,
-                    source,
-                })?;
-            if row.len() != header.len() {
-                return Err(ReportError::RowLength {
-                    what: what.into(),
-                    line: i + 2,
-                    values: row.len(),
+                    line: pos.as_ref().map_or(0, |p| line_at(text, p.byte())),
+                    values: *len as usize,
                     columns: header.len(),
-                });
-            }
+                },
+                _ => csv_error(source),
+            })?;
+            let line = record.position().map_or(0, |p| line_at(text, p.byte()));
+            let row = record
+                .iter()
+                .zip(&header)
+                .map(|(value, column)| {
+                    value.parse::<f64>().map_err(|source| ReportError::Number {
+                        what: what.into(),
+                        line,
+                        column: column.clone(),
+                        value: value.to_string(),
+                        source,
+                    })
+                })
+                .collect::<Result<_, _>>()?;
             rows.push(row);
         }
         Ok(Table { header, rows })
@@ -61,6 +75,17 @@ impl Table {
         let (i, j) = (self.column(x)?, self.column(y)?);
         Some(self.rows.iter().map(|r| (r[i], r[j])).collect())
     }
+}
+
+/// The line (from 1) of `text` on which the CSV record found at `byte` starts.
+// NOTE: the `csv` reader (1.4) takes a record's position before the empty lines and the line
+// end it skips, so its line is short by those (by one for every row of a CRLF file); its byte
+// offset is right, and the line is counted from it.
+fn line_at(text: &str, byte: u64) -> u64 {
+    let (before, after) = text.as_bytes().split_at((byte as usize).min(text.len()));
+    let newlines = |bytes: &[u8]| bytes.iter().filter(|b| **b == b'\n').count() as u64;
+    let skipped = after.iter().take_while(|b| matches!(b, b'\r' | b'\n'));
+    newlines(before) + skipped.filter(|b| **b == b'\n').count() as u64 + 1
 }
 
 /// One step's energy balance from the diagnostics.
@@ -158,11 +183,37 @@ mod tests {
         let err = Table::parse("t,x\n0,1,2\n", "probe")
             .expect_err("ragged")
             .to_string();
-        assert!(err.contains("line 2 has 3 values"), "{err}");
-        let err = Table::parse("t,x\n0,abc\n", "probe")
+        assert_eq!(err, "probe: line 2 has 3 values, the header 2");
+        let err = Table::parse("t,x\n0,1\n\n1,2\n2\n", "probe")
+            .expect_err("short")
+            .to_string();
+        assert_eq!(err, "probe: line 5 has 1 values, the header 2");
+        let err = Table::parse("t,x\n0,1\n0.5,abc\n", "probe")
             .expect_err("not a number")
             .to_string();
-        assert!(err.contains("probe: line 2"), "{err}");
+        assert_eq!(
+            err,
+            "probe: line 3, column x: \"abc\" is not a number (invalid float literal)"
+        );
+        let err = Table::parse("", "probe").expect_err("empty").to_string();
+        assert_eq!(err, "probe: empty");
+    }
+
+    #[test]
+    fn tables_read_quoted_fields_crlf_and_padded_numbers() {
+        let text = "\"t\", x\r\n0,\"1.5\"\r\n\r\n2e-3, -4 \r\n";
+        let t = Table::parse(text, "probe").expect("parses");
+        assert_eq!(t.header, ["t", "x"]);
+        assert_eq!(t.rows, [[0.0, 1.5], [2e-3, -4.0]]);
+        // The line of a bad row is counted past empty lines and CRLF line ends.
+        let err = Table::parse(&format!("{text}\r\n5,x\r\n"), "probe")
+            .expect_err("not a number")
+            .to_string();
+        assert!(err.starts_with("probe: line 6, column x: "), "{err}");
+        let err = Table::parse(&format!("{text}\r\n\r\n5\r\n"), "probe")
+            .expect_err("short")
+            .to_string();
+        assert_eq!(err, "probe: line 7 has 1 values, the header 2");
     }
 
     #[test]

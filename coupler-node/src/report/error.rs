@@ -12,12 +12,16 @@ pub enum ReportError {
         what: String,
     },
     /// A value of a CSV table that is not a number.
-    #[error("{what}: line {line}: {source}")]
+    #[error("{what}: line {line}, column {column}: {value:?} is not a number ({source})")]
     Number {
         /// The table.
         what: String,
         /// Line of the file, from 1.
-        line: usize,
+        line: u64,
+        /// The column's name (header).
+        column: String,
+        /// The value as the file has it (trimmed).
+        value: String,
         /// The parser's error.
         source: std::num::ParseFloatError,
     },
@@ -27,11 +31,19 @@ pub enum ReportError {
         /// The table.
         what: String,
         /// Line of the file, from 1.
-        line: usize,
+        line: u64,
         /// Values in the row.
         values: usize,
         /// Columns of the header.
         columns: usize,
+    },
+    /// A CSV table that could not be read as CSV (not UTF-8, say); the error names the line.
+    #[error("{what}: {source}")]
+    Csv {
+        /// The table.
+        what: String,
+        /// The CSV reader's error.
+        source: csv::Error,
     },
     /// A diagnostics object that is not JSON.
     #[error("diagnostics object {index}: {source}")]

@@ -61,14 +61,31 @@ fn read_table(path: &Path) -> anyhow::Result<Table> {
     Table::parse(&text, &path.display().to_string()).map_err(|e| anyhow::anyhow!(e))
 }
 
-fn write_csv(path: &Path, header: &str, series: &[Series]) -> anyhow::Result<()> {
-    let mut text = format!("series,{header}\n");
-    for s in series {
-        for (x, y) in &s.points {
-            text.push_str(&format!("{},{x:e},{y:e}\n", s.label));
-        }
+/// Writes `path`: a header row, then `records` (each as long as the header). A label holding a
+/// comma or a quote is quoted.
+fn write_table<R: IntoIterator<Item = String>>(
+    path: &Path,
+    header: &[&str],
+    records: impl IntoIterator<Item = R>,
+) -> anyhow::Result<()> {
+    let mut table = csv::Writer::from_path(path)?;
+    table.write_record(header)?;
+    for record in records {
+        table.write_record(record)?;
     }
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+    table.flush()?;
+    Ok(())
+}
+
+/// Writes the points of `series` as `series,<x>,<y>` rows (`axes` names the two columns).
+fn write_csv(path: &Path, axes: [&str; 2], series: &[Series]) -> anyhow::Result<()> {
+    let rows = series.iter().flat_map(|s| {
+        s.points
+            .iter()
+            .map(|(x, y)| [s.label.clone(), format!("{x:e}"), format!("{y:e}")])
+    });
+    write_table(path, &["series", axes[0], axes[1]], rows)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes a chart and its CSV; returns the SVG's path.
@@ -82,7 +99,7 @@ fn chart(
 ) -> anyhow::Result<()> {
     let svg = out.join(format!("{stem}.svg"));
     line_chart(&svg, title, axes.0, axes.1, series).map_err(|e| anyhow::anyhow!(e))?;
-    write_csv(&out.join(format!("{stem}.csv")), "x,y", series)?;
+    write_csv(&out.join(format!("{stem}.csv")), ["x", "y"], series)?;
     written.push(svg);
     Ok(())
 }
@@ -436,7 +453,7 @@ pub fn energy(runs: &[PathBuf], scales: &[f64], out: &Path) -> anyhow::Result<()
         &series,
     )
     .map_err(|e| anyhow::anyhow!(e))?;
-    write_csv(&out.with_extension("csv"), "t,error", &series)
+    write_csv(&out.with_extension("csv"), ["t", "error"], &series)
 }
 
 /// Largest |p − `reference`| over the cells of each fluid output of `run`, against the
@@ -482,7 +499,7 @@ pub fn pressure(runs: &[PathBuf], reference: f64, out: &Path) -> anyhow::Result<
         &series,
     )
     .map_err(|e| anyhow::anyhow!(e))?;
-    write_csv(&out.with_extension("csv"), "t,error", &series)
+    write_csv(&out.with_extension("csv"), ["t", "error"], &series)
 }
 
 /// The probed particle's x of `reference` at time `t`, linear between its samples (`None`
@@ -580,15 +597,26 @@ pub fn work_precision(
         .map(|r| work_point(r, &reference, probe))
         .collect::<anyhow::Result<_>>()?;
     create_parent(out)?;
-    let mut table = String::from("run,group,wall_s,steps,energy_error,displacement_error\n");
-    for p in &points {
-        table.push_str(&format!(
-            "{},{},{:e},{},{:e},{:e}\n",
-            p.run, p.group, p.wall_s, p.steps, p.energy_error, p.displacement_error
-        ));
-    }
     let csv = out.with_extension("csv");
-    std::fs::write(&csv, table).with_context(|| format!("writing {}", csv.display()))?;
+    let header = [
+        "run",
+        "group",
+        "wall_s",
+        "steps",
+        "energy_error",
+        "displacement_error",
+    ];
+    let rows = points.iter().map(|p| {
+        [
+            p.run.clone(),
+            p.group.clone(),
+            format!("{:e}", p.wall_s),
+            p.steps.to_string(),
+            format!("{:e}", p.energy_error),
+            format!("{:e}", p.displacement_error),
+        ]
+    });
+    write_table(&csv, &header, rows).with_context(|| format!("writing {}", csv.display()))?;
     let curves = |error: fn(&WorkPoint) -> f64| -> Vec<Series> {
         let mut groups: Vec<String> = points.iter().map(|p| p.group.clone()).collect();
         groups.dedup();
@@ -634,7 +662,37 @@ pub fn work_precision(
 
 #[cfg(test)]
 mod tests {
-    use super::interpolate;
+    use super::{Series, interpolate, write_csv};
+
+    #[test]
+    fn a_chart_csv_quotes_a_label_with_a_comma_and_reads_back() {
+        let dir = std::env::temp_dir().join(format!("cosim-report-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("chart.csv");
+        let series = [
+            Series {
+                label: "run 1, dt/2".into(),
+                points: vec![(0.5, 1e-7)],
+            },
+            Series {
+                label: "plain".into(),
+                points: vec![(1.0, -2.0)],
+            },
+        ];
+        write_csv(&path, ["t", "error"], &series).expect("writes");
+        let text = std::fs::read_to_string(&path).expect("reads");
+        assert_eq!(
+            text,
+            "series,t,error\n\"run 1, dt/2\",5e-1,1e-7\nplain,1e0,-2e0\n"
+        );
+        let rows: Vec<(String, f64, f64)> = csv::Reader::from_path(&path)
+            .expect("opens")
+            .deserialize()
+            .collect::<Result<_, _>>()
+            .expect("reads back");
+        assert_eq!(rows[0], ("run 1, dt/2".to_string(), 0.5, 1e-7));
+        let _ = std::fs::remove_dir_all(dir);
+    }
 
     #[test]
     fn the_reference_is_interpolated_linearly_inside_its_samples_only() {

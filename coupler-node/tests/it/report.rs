@@ -140,19 +140,11 @@ fn figures_plot_the_probes_and_draw_each_field() {
     }
     assert!(page.contains("<h3>Output 0 (t = 1e-1 s)</h3>"), "{page}");
     // The numbers behind a chart are the probe's, exactly.
-    let csv = std::fs::read_to_string(out.join("probes_displacement.csv")).expect("csv");
-    let rows: Vec<(String, f64, f64)> = csv
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let v: Vec<&str> = l.split(',').collect();
-            (
-                v[0].to_string(),
-                v[1].parse().unwrap(),
-                v[2].parse().unwrap(),
-            )
-        })
-        .collect();
+    let rows: Vec<(String, f64, f64)> = csv::Reader::from_path(out.join("probes_displacement.csv"))
+        .expect("csv")
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .expect("rows of a label and two numbers");
     assert_eq!(rows.len(), 4);
     assert_eq!(rows[1].0, "far");
     assert_eq!((rows[1].1, rows[1].2), (0.05, 0.5));

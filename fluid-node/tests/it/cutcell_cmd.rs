@@ -80,13 +80,12 @@ fn box_stl(lo: [f64; 3], hi: [f64; 3], angle: f64, shift: [f64; 3]) -> String {
 
 /// Columns `cols` of a CSV file's rows, as numbers.
 fn csv_rows(path: &std::path::Path, cols: &[usize]) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(path)
+    csv::Reader::from_path(path)
         .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let words: Vec<&str> = l.split(',').collect();
-            cols.iter().map(|&c| words[c].parse().unwrap()).collect()
+        .records()
+        .map(|row| {
+            let row = row.unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            cols.iter().map(|&c| row[c].parse().unwrap()).collect()
         })
         .collect()
 }

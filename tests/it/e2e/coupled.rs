@@ -108,17 +108,7 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     // The coupled outputs: fluid cells with their fluid fraction, the wet surface, the loads.
     let fluid = std::fs::read_to_string(a.join("fluid_1.csv")).expect("fluid_1.csv");
     assert!(fluid.starts_with("x,y,rho,u,v,p,alpha\n"));
-    let alphas: Vec<f64> = fluid
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.rsplit(',')
-                .next()
-                .expect("alpha")
-                .parse()
-                .expect("number")
-        })
-        .collect();
+    let alphas = cosim_tests::csv_column(&a.join("fluid_1.csv"), "alpha");
     assert!(alphas.iter().all(|a| *a > 0.0 && *a <= 1.0));
     assert!(alphas.len() < 60 * 30, "covered cells are left out");
     assert!(alphas.iter().any(|a| *a < 1.0), "cut cells are listed");

@@ -180,15 +180,20 @@ fn drift(case: &Case, out: &Path) -> Result<f64, String> {
         .find(|p| p.exists())
         .ok_or("no fluid output")?;
     let text = std::fs::read_to_string(&last).map_err(|e| e.to_string())?;
+    let table = coupler_node::report::data::Table::parse(&text, &last.display().to_string())
+        .map_err(|e| e.to_string())?;
     let stream = velocity_of(&case.toml);
     let c_sound = (GAMMA * P / RHO).sqrt();
     let dim = case.dim;
+    if table.header.len() != 2 * dim + 3 {
+        return Err(format!(
+            "{}: {} columns",
+            last.display(),
+            table.header.len()
+        ));
+    }
     let mut worst: f64 = 0.0;
-    for line in text.lines().skip(1) {
-        let v: Vec<f64> = line.split(',').filter_map(|x| x.parse().ok()).collect();
-        if v.len() != 2 * dim + 3 {
-            return Err(format!("{}: a row of {} numbers", last.display(), v.len()));
-        }
+    for v in &table.rows {
         let rho = v[dim];
         worst = worst.max((rho - RHO).abs() / RHO);
         for a in 0..dim {

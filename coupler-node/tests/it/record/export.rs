@@ -9,23 +9,13 @@ fn the_tidy_table_has_one_row_per_number_and_reads_back() {
     let (bytes, _, _) = record_run(3, RecordLevel::Exchange);
     let rec = read_recording(&bytes).unwrap();
     let csv = export_table(&rec, None).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some(TABLE_HEADER));
+    assert_eq!(csv.lines().next(), Some(TABLE_HEADER));
     type Row = (u64, u32, String, String, u64, f64);
-    let rows: Vec<Row> = lines
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            assert_eq!(c.len(), 6, "{l}");
-            (
-                c[0].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
-                c[1].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
-                c[2].to_string(),
-                c[3].to_string(),
-                c[4].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
-                c[5].parse().unwrap_or_else(|e| panic!("{l}: {e}")),
-            )
-        })
-        .collect();
+    // (A row of another length or a field of another type fails, naming its line.)
+    let rows: Vec<Row> = csv::Reader::from_reader(csv.as_bytes())
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .unwrap_or_else(|e| panic!("{e}"));
     let pick = |step: u64, iteration: u32, channel: &str, field: &str| -> Vec<f64> {
         rows.iter()
             .filter(|r| r.0 == step && r.1 == iteration && r.2 == channel && r.3 == field)
