@@ -226,7 +226,7 @@ fn issue_16_clamped_beam_3d_across_the_cuts_is_bit_identical_on_1_2_3_4_and_8_ra
 /// slabs of 2, 3 and 4, blocks 1 × 2 × 4 on 8 ranks and 1 × 2 × 2 from the key give the
 /// frames and files of one rank.
 #[test]
-fn issue_40_opening_fracture_3d_is_bit_identical_on_1_2_3_4_and_8_ranks() {
+fn issue_16_opening_fracture_3d_fragmenting_is_bit_identical_on_1_2_3_4_and_8_ranks() {
     let dir = out_dir("mpi-fracture-3d");
     std::fs::create_dir_all(&dir).expect("dir");
     let text = std::fs::read_to_string(
