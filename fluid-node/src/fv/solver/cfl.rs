@@ -7,7 +7,6 @@ use crate::fv::euler::sound_speed;
 use crate::fv::isa::Isa;
 use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::{BLOCK_CELLS, to_full};
-use crate::fv::solver::totals::fastest_cell;
 
 impl FluidSolver {
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
@@ -172,6 +171,105 @@ impl RateParams<'_> {
         }
         out
     }
+}
+
+/// Folds the rates of `group` (at most [`RATE_LANES`] cells of `NV` stored values, numbered
+/// from `first`) into the fastest `(rate, cell)` so far, as `compute_max_dt` scans cells one at
+/// a time: a NaN rate is taken and ends the group, else a larger rate (the first of equal ones).
+/// A whole group takes [`RateParams::cell_rates`], a last short one [`RateParams::cell_rate`].
+#[inline(always)]
+pub(super) fn fold_rates<const NV: usize>(
+    rates: &RateParams,
+    group: &[f64],
+    first: usize,
+    fast: &mut (f64, usize),
+) {
+    let mut r = [0.0; RATE_LANES];
+    if group.len() == RATE_LANES * NV {
+        r = rates.cell_rates::<NV>(group);
+    } else {
+        for (r, cell) in r.iter_mut().zip(group.chunks_exact(NV)) {
+            *r = rates.cell_rate(cell);
+        }
+    }
+    for (k, &r) in r.iter().take(group.len() / NV).enumerate() {
+        if r.is_nan() || r > fast.0 {
+            *fast = (r, first + k);
+            if r.is_nan() {
+                break;
+            }
+        }
+    }
+}
+
+/// The fastest `(rate, cell)` of `cells` (`nvar` stored values each, numbered from `first`),
+/// as `compute_max_dt` scans them one at a time with [`RateParams::cell_rate`]: the first NaN,
+/// else the first of the largest rates; the rates [`RATE_LANES`] cells at a time on `isa`.
+pub(super) fn fastest_cell(
+    isa: Isa,
+    nvar: usize,
+    rates: &RateParams,
+    cells: &[f64],
+    first: usize,
+) -> (f64, usize) {
+    match nvar {
+        3 => fastest_on::<3>(isa, rates, cells, first),
+        4 => fastest_on::<4>(isa, rates, cells, first),
+        _ => fastest_on::<5>(isa, rates, cells, first),
+    }
+}
+
+/// [`fastest_cells`] compiled for `isa` (the same bits on each, `fv::isa`).
+fn fastest_on<const NV: usize>(
+    isa: Isa,
+    rates: &RateParams,
+    cells: &[f64],
+    first: usize,
+) -> (f64, usize) {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 if Isa::Avx512.supported() => {
+            // SAFETY: the CPU has AVX-512F (checked on the line above).
+            unsafe { fastest_avx512::<NV>(rates, cells, first) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::Avx2.supported() => {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            unsafe { fastest_avx2::<NV>(rates, cells, first) }
+        }
+        _ => fastest_cells::<NV>(rates, cells, first),
+    }
+}
+
+/// [`fastest_cells`] compiled for AVX2 (without FMA, `fv::isa`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn fastest_avx2<const NV: usize>(rates: &RateParams, cells: &[f64], first: usize) -> (f64, usize) {
+    fastest_cells::<NV>(rates, cells, first)
+}
+
+/// [`fastest_cells`] compiled for AVX-512F (without FMA, `fv::isa`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn fastest_avx512<const NV: usize>(
+    rates: &RateParams,
+    cells: &[f64],
+    first: usize,
+) -> (f64, usize) {
+    fastest_cells::<NV>(rates, cells, first)
+}
+
+/// [`fastest_cell`] of cells of `NV` values, up to the first NaN.
+#[inline(always)]
+fn fastest_cells<const NV: usize>(rates: &RateParams, cells: &[f64], first: usize) -> (f64, usize) {
+    let mut fast: (f64, usize) = (0.0, first);
+    for (g, group) in cells.chunks(RATE_LANES * NV).enumerate() {
+        fold_rates::<NV>(rates, group, first + g * RATE_LANES, &mut fast);
+        if fast.0.is_nan() {
+            break;
+        }
+    }
+    fast
 }
 
 /// The cells [`RateParams::cell_rates`] takes at once (8 lanes of f64 in AVX-512).

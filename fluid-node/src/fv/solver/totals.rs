@@ -7,7 +7,7 @@ use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
 use crate::fv::isa::Isa;
 use crate::fv::slab::{put_block, rank_of, take_block};
-use crate::fv::solver::cfl::{RATE_LANES, RateParams, fastest};
+use crate::fv::solver::cfl::{RATE_LANES, RateParams, fastest, fold_rates};
 use crate::fv::solver::{FluidSolver, Totals};
 use crate::fv::state::FluidState;
 
@@ -221,9 +221,9 @@ impl FluidSolver {
                         None => {
                             let rates = rate.then_some(&rates);
                             *fast = match nvar {
-                                3 => sum_cells_on::<3, true>(isa, acc, cells, rates, block * plane),
-                                4 => sum_cells_on::<4, true>(isa, acc, cells, rates, block * plane),
-                                _ => sum_cells_on::<5, true>(isa, acc, cells, rates, block * plane),
+                                3 => sum_cells_on::<3>(isa, acc, cells, rates, block * plane),
+                                4 => sum_cells_on::<4>(isa, acc, cells, rates, block * plane),
+                                _ => sum_cells_on::<5>(isa, acc, cells, rates, block * plane),
                             };
                         }
                         Some(lambda) => {
@@ -297,26 +297,8 @@ impl FluidSolver {
     }
 }
 
-/// The fastest `(rate, cell)` of `cells` (`nvar` stored values each, numbered from `first`),
-/// as `compute_max_dt` scans them one at a time with [`RateParams::cell_rate`]: the first NaN,
-/// else the first of the largest rates; the rates [`RATE_LANES`] cells at a time on `isa`.
-pub(super) fn fastest_cell(
-    isa: Isa,
-    nvar: usize,
-    rates: &RateParams,
-    cells: &[f64],
-    first: usize,
-) -> (f64, usize) {
-    let mut none = [CompensatedSum::default(); NQ];
-    match nvar {
-        3 => sum_cells_on::<3, false>(isa, &mut none, cells, Some(rates), first),
-        4 => sum_cells_on::<4, false>(isa, &mut none, cells, Some(rates), first),
-        _ => sum_cells_on::<5, false>(isa, &mut none, cells, Some(rates), first),
-    }
-}
-
 /// [`sum_cells`] compiled for `isa` (the rates' vector width; the same bits on each, `fv::isa`).
-fn sum_cells_on<const NV: usize, const SUMS: bool>(
+fn sum_cells_on<const NV: usize>(
     isa: Isa,
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
@@ -327,39 +309,39 @@ fn sum_cells_on<const NV: usize, const SUMS: bool>(
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512 if Isa::Avx512.supported() => {
             // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { sum_cells_avx512::<NV, SUMS>(acc, cells, rates, first) }
+            unsafe { sum_cells_avx512::<NV>(acc, cells, rates, first) }
         }
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 if Isa::Avx2.supported() => {
             // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { sum_cells_avx2::<NV, SUMS>(acc, cells, rates, first) }
+            unsafe { sum_cells_avx2::<NV>(acc, cells, rates, first) }
         }
-        _ => sum_cells::<NV, SUMS>(acc, cells, rates, first),
+        _ => sum_cells::<NV>(acc, cells, rates, first),
     }
 }
 
 /// [`sum_cells`] compiled for AVX2 (without FMA, `fv::isa`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn sum_cells_avx2<const NV: usize, const SUMS: bool>(
+fn sum_cells_avx2<const NV: usize>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV, SUMS>(acc, cells, rates, first)
+    sum_cells::<NV>(acc, cells, rates, first)
 }
 
 /// [`sum_cells`] compiled for AVX-512F (without FMA, `fv::isa`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn sum_cells_avx512<const NV: usize, const SUMS: bool>(
+fn sum_cells_avx512<const NV: usize>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV, SUMS>(acc, cells, rates, first)
+    sum_cells::<NV>(acc, cells, rates, first)
 }
 
 /// Adds the cells `cells` (`NV` stored values each: ρ, the momenta, E) into `acc` (the
@@ -373,9 +355,8 @@ fn sum_cells_avx512<const NV: usize, const SUMS: bool>(
 /// the totals took 8 % of a 3-D step. Same operations in the same order, so the same bits.
 /// The rates are taken [`RATE_LANES`] cells at a time ([`RateParams::cell_rates`], the same
 /// bits as [`RateParams::cell_rate`], which takes the cells of a last short group).
-/// Without `SUMS`, only the rates, up to the first NaN (`acc` untouched).
 #[inline(always)]
-fn sum_cells<const NV: usize, const SUMS: bool>(
+fn sum_cells<const NV: usize>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
@@ -389,28 +370,7 @@ fn sum_cells<const NV: usize, const SUMS: bool>(
         if let Some(rates) = rates
             && !fast.0.is_nan()
         {
-            let mut r = [0.0; RATE_LANES];
-            if group.len() == RATE_LANES * NV {
-                r = rates.cell_rates::<NV>(group);
-            } else {
-                for (r, cell) in r.iter_mut().zip(group.chunks_exact(NV)) {
-                    *r = rates.cell_rate(cell);
-                }
-            }
-            for (k, &r) in r.iter().take(group.len() / NV).enumerate() {
-                if r.is_nan() || r > fast.0 {
-                    fast = (r, first + g * RATE_LANES + k);
-                    if r.is_nan() {
-                        break;
-                    }
-                }
-            }
-        }
-        if !SUMS {
-            if fast.0.is_nan() {
-                return fast;
-            }
-            continue;
+            fold_rates::<NV>(rates, group, first + g * RATE_LANES, &mut fast);
         }
         for cell in group.chunks_exact(NV) {
             for j in 0..NV {
@@ -422,9 +382,6 @@ fn sum_cells<const NV: usize, const SUMS: bool>(
                 (sum[j], comp[j]) = (c.sum, c.comp);
             }
         }
-    }
-    if !SUMS {
-        return fast;
     }
     for j in 0..NV {
         acc[slot(j)] = CompensatedSum {
@@ -462,6 +419,7 @@ impl CompensatedSum {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fv::solver::cfl::fastest_cell;
 
     /// Cells of `nv` values: gas, vacuum-floored round-off, ρ ≤ 0, p < 0, NaN and ±∞ in any
     /// value, and repeated cells (tied rates), drawn by a fixed splitmix64.
@@ -568,34 +526,16 @@ mod tests {
                         let want = reference(&rates, nv, cells, 1000);
                         let mut plain = [CompensatedSum::default(); NQ];
                         match nv {
-                            3 => sum_cells_on::<3, true>(Isa::Baseline, &mut plain, cells, None, 0),
-                            4 => sum_cells_on::<4, true>(Isa::Baseline, &mut plain, cells, None, 0),
-                            _ => sum_cells_on::<5, true>(Isa::Baseline, &mut plain, cells, None, 0),
+                            3 => sum_cells_on::<3>(Isa::Baseline, &mut plain, cells, None, 0),
+                            4 => sum_cells_on::<4>(Isa::Baseline, &mut plain, cells, None, 0),
+                            _ => sum_cells_on::<5>(Isa::Baseline, &mut plain, cells, None, 0),
                         };
                         for isa in Isa::available() {
                             let mut acc = [CompensatedSum::default(); NQ];
                             let got = match nv {
-                                3 => sum_cells_on::<3, true>(
-                                    isa,
-                                    &mut acc,
-                                    cells,
-                                    Some(&rates),
-                                    1000,
-                                ),
-                                4 => sum_cells_on::<4, true>(
-                                    isa,
-                                    &mut acc,
-                                    cells,
-                                    Some(&rates),
-                                    1000,
-                                ),
-                                _ => sum_cells_on::<5, true>(
-                                    isa,
-                                    &mut acc,
-                                    cells,
-                                    Some(&rates),
-                                    1000,
-                                ),
+                                3 => sum_cells_on::<3>(isa, &mut acc, cells, Some(&rates), 1000),
+                                4 => sum_cells_on::<4>(isa, &mut acc, cells, Some(&rates), 1000),
+                                _ => sum_cells_on::<5>(isa, &mut acc, cells, Some(&rates), 1000),
                             };
                             assert_eq!((got.0.to_bits(), got.1), (want.0.to_bits(), want.1));
                             let alone = fastest_cell(isa, nv, &rates, cells, 1000);
