@@ -9,9 +9,9 @@
 
 use fluid_node::cutcell::CellBox;
 use fluid_node::embedded::{SolidFrame, WallHooks, hook_halo, wall_hooks};
-use fluid_node::fv::slab::share;
 use fluid_node::grid::Grid;
 
+use crate::cutcell_block::rank_block;
 use crate::embedded_support::{polygon_2d, translated};
 use crate::fv_ranks::{bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
 
@@ -39,12 +39,7 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
             for dims in decomps {
                 let ranks: usize = dims.iter().product();
                 for r in 0..ranks {
-                    let coords = [r % dims[0], r / dims[0] % dims[1], r / dims[0] / dims[1]];
-                    let mut block = CellBox::whole(grid);
-                    for a in 0..3 {
-                        let (first, own) = share(grid.cells[a], dims[a], coords[a]);
-                        (block.lo[a], block.hi[a]) = (first, first + own);
-                    }
+                    let block = rank_block(grid, *dims, r);
                     let what = format!("{name}, position {k}, ng {ng}, {dims:?} rank {r}");
                     let expected = whole.restricted(grid, ng, block);
                     let got = wall_hooks(grid, ng, &frame, Some(block));
