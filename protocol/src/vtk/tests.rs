@@ -107,6 +107,21 @@ fn the_compression_header_is_vtks() {
 }
 
 #[test]
+fn blocks_compressed_on_a_pool_give_the_bytes_of_one_thread() {
+    // 10 x 25 x 20 cells: rho 40 000 bytes, velocity 120 000 (four blocks, the last partial).
+    let image = image([10, 25, 20]);
+    let alone = image_data(&image, "pool");
+    for threads in [1, 2, 5] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let on_pool = pool.install(|| image_data(&image, "pool"));
+        assert!(on_pool == alone, "{threads} threads: the bytes differ");
+    }
+}
+
+#[test]
 fn poly_data_round_trips_with_point_and_cell_arrays() {
     for kind in [PolyCells::Lines, PolyCells::Polys] {
         let points = values(3 * 7);

@@ -344,15 +344,23 @@ impl XmlFile {
 }
 
 /// Appends VTK's compression header and the zlib blocks of `raw` to `out`.
+///
+/// NOTE: the blocks are compressed independently (VTK's format), so a writer called on a rayon
+/// pool (the fluid node calls it on its own) compresses them on that pool, with the same bytes in
+/// the same order; called from any other thread, on that thread alone (no global pool behind a
+/// node's `threads`).
 fn compress_into(raw: &[u8], out: &mut Vec<u8>) {
-    let blocks: Vec<Vec<u8>> = raw
-        .chunks(BLOCK_SIZE)
-        .map(|block| {
-            let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
-            z.write_all(block).expect("writing to a Vec cannot fail");
-            z.finish().expect("writing to a Vec cannot fail")
-        })
-        .collect();
+    use rayon::prelude::*;
+    let deflate = |block: &[u8]| {
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        z.write_all(block).expect("writing to a Vec cannot fail");
+        z.finish().expect("writing to a Vec cannot fail")
+    };
+    let blocks: Vec<Vec<u8>> = if rayon::current_thread_index().is_some() {
+        raw.par_chunks(BLOCK_SIZE).map(deflate).collect()
+    } else {
+        raw.chunks(BLOCK_SIZE).map(deflate).collect()
+    };
     let last = raw.len() % BLOCK_SIZE;
     let mut header = vec![blocks.len() as u64, BLOCK_SIZE as u64, last as u64];
     header.extend(blocks.iter().map(|b| b.len() as u64));
