@@ -475,20 +475,31 @@ impl Mixing<'_> {
     fn predicted(&self, solver: &mut FluidSolver, groups: &[(usize, usize)]) -> Predicted {
         let grid = self.grid;
         let wide = offsets(grid.dim, WIDEN_RINGS as isize);
-        let mut reads: Vec<u32> = Vec::new();
+        // NOTE: the cells are marked in a bit set of the grid and read out in order, the
+        // ascending list without duplicates that sorting them all gave (the sort of the 125
+        // cells around each of them was 6 % of the fluid node's time in `cube-mobile-walls`
+        // on 50³).
+        let mut marked = vec![0u64; grid.n_cells().div_ceil(64)];
+        let mut mark = |c: usize| marked[c / 64] |= 1 << (c % 64);
         for &(root, k) in groups {
             for c in [root, self.near[k] as usize] {
-                reads.push(c as u32);
+                mark(c);
                 let ijk = grid.ijk(c);
                 for d in &wide {
                     if let Some(q) = shifted(grid, ijk, *d) {
-                        reads.push(grid.index(q[0], q[1], q[2]) as u32);
+                        mark(grid.index(q[0], q[1], q[2]));
                     }
                 }
             }
         }
-        reads.sort_unstable();
-        reads.dedup();
+        let mut reads: Vec<u32> = Vec::new();
+        for (w, &bits) in marked.iter().enumerate() {
+            let mut bits = bits;
+            while bits != 0 {
+                reads.push((64 * w) as u32 + bits.trailing_zeros());
+                bits &= bits - 1;
+            }
+        }
         let values = solver.cells_at(&reads);
         Predicted {
             reads,

@@ -155,16 +155,27 @@ impl Embedded {
             let stride: usize = grid.cells[..axis].iter().product();
             let n = grid.cells[axis];
             let count = grid.n_cells() / n;
-            let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * near.cells.len());
+            // NOTE: the faces `(pencil, position)` are marked in a bit set of `p (n + 1) + m`
+            // and read out in order: the ascending list without duplicates that sorting them
+            // gave (that sort was 1.3 % of the fluid node's time in `cube-mobile-walls`).
+            let mut marked = vec![0u64; (count * (n + 1)).div_ceil(64)];
             for &c in &near.cells {
                 let c = c as usize;
                 let m = (c / stride) % n;
                 let p = c % stride + (c / (stride * n)) * stride;
-                keys.push((p as u32, m as u32));
-                keys.push((p as u32, m as u32 + 1));
+                for f in [p * (n + 1) + m, p * (n + 1) + m + 1] {
+                    marked[f / 64] |= 1 << (f % 64);
+                }
             }
-            keys.sort_unstable();
-            keys.dedup();
+            let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * near.cells.len());
+            for (w, &bits) in marked.iter().enumerate() {
+                let mut bits = bits;
+                while bits != 0 {
+                    let f = 64 * w + bits.trailing_zeros() as usize;
+                    keys.push(((f / (n + 1)) as u32, (f % (n + 1)) as u32));
+                    bits &= bits - 1;
+                }
+            }
             let tap = &mut near.hooks.taps[axis];
             tap.clear(count);
             for &(p, m) in &keys {
