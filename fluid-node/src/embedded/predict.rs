@@ -85,7 +85,7 @@ impl Embedded {
     /// Near cells, their faces, the ghost fills, and `U^n` (after the first sweep's ghosts).
     fn prepare(&mut self, solver: &mut FluidSolver) {
         self.collect_near_cells();
-        self.wall_hooks();
+        self.wall_hooks(solver);
         self.taps();
         self.near.hooks.pressure_cells.clone_from(&self.near.cells);
         self.save_states(solver);
@@ -93,12 +93,13 @@ impl Embedded {
 
     /// The ghost fills, wall runs and vacuum cells of this rank's cells: from the whole grid's
     /// geometry on one rank, from the block's and a halo around it on a decomposed grid (the
-    /// same bits on the rank's cells; `hooks.rs`).
-    fn wall_hooks(&mut self) {
+    /// same bits on the rank's cells; `hooks.rs`). On the fluid's pool (the cells' walls are
+    /// summed in parallel, the same bits on any number of threads).
+    fn wall_hooks(&mut self, solver: &FluidSolver) {
         let (grid, ng) = (&self.config.grid, self.config.ng);
         let (geom, current) = (&self.state.geom, &self.state.current);
-        let mut odd = std::mem::take(&mut self.scratch.odd);
-        let hooks = match self.config.block {
+        let (block, near) = (self.config.block, &self.near);
+        let hooks = solver.install(|| match block {
             None => {
                 let view = HookGeometry {
                     grid,
@@ -107,14 +108,13 @@ impl Embedded {
                     subfaces: &geom.subfaces,
                 };
                 let near = NearView {
-                    cells: &self.near.cells,
-                    slot_of: &self.near.slot_of,
+                    cells: &near.cells,
+                    slot_of: &near.slot_of,
                 };
-                view.wall_hooks(&near, current, ng, CellBox::whole(grid), &mut odd)
+                view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
-            Some(block) => block_wall_hooks(grid, ng, current, block, &mut odd),
-        };
-        self.scratch.odd = odd;
+            Some(block) => block_wall_hooks(grid, ng, current, block),
+        });
         let h = &mut self.near.hooks;
         (h.ghosts, h.walls, h.vacuum) = (hooks.ghosts, hooks.walls, hooks.vacuum);
     }
