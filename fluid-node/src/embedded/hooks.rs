@@ -219,10 +219,14 @@ impl HookGeometry<'_> {
         let (mut walls, closed) = self.near_walls(near, frame);
         let vacuum = self.vacuum_cells(near, &mut walls, &closed);
         let mut out = WallHooks::default();
-        for axis in 0..self.grid.dim {
-            let (fills, runs) = (&mut out.ghosts[axis], &mut out.walls[axis]);
-            self.ghost_fills(near, &walls, &vacuum, ng, axis, own, fills, runs);
-        }
+        // (Each axis's fills and runs are its own: the axes run in parallel on the pool.)
+        let dim = self.grid.dim;
+        (out.ghosts.par_iter_mut().zip(&mut out.walls))
+            .enumerate()
+            .take(dim)
+            .for_each(|(axis, (fills, runs))| {
+                self.ghost_fills(near, &walls, &vacuum, ng, axis, own, fills, runs);
+            });
         out.vacuum = vacuum;
         if own == CellBox::whole(self.grid) {
             out
