@@ -22,6 +22,14 @@ pub fn odd_sum(terms: &mut [f64]) -> f64 {
     signed_halves(terms.iter().copied())
 }
 
+/// One slot's sum as [`OddSum::add_into`] takes it (to add it to the slot's value): the terms
+/// sorted by magnitude (reordered), then the positive and the negative ones each from the
+/// smallest up, then the two sums. Unlike [`odd_sum`], one term `-0` gives `+0`.
+pub fn slot_sum(terms: &mut [f64]) -> f64 {
+    terms.sort_unstable_by(|a, b| a.abs().total_cmp(&b.abs()));
+    signed_halves(terms.iter().copied())
+}
+
 /// `Σ positives + Σ negatives` of terms sorted by magnitude, each half in the given order.
 #[inline]
 fn signed_halves(sorted: impl Iterator<Item = f64>) -> f64 {
@@ -130,8 +138,7 @@ impl OddSum {
             begin = end as usize;
             if !run.is_empty() {
                 // (One term too goes through the halves: `0 + -0` is `+0`.)
-                run.sort_unstable_by(|a, b| a.abs().total_cmp(&b.abs()));
-                out[s] += signed_halves(run.iter().copied());
+                out[s] += slot_sum(run);
             }
         }
     }

@@ -6,6 +6,7 @@ use protocol::sum::OddSum;
 use super::cells::{domain_face, pressure_cell, touches_gas_with};
 use super::error::Reach;
 use super::levers::Levers;
+use super::pool_sum::add_on_pool;
 use super::{Embedded, EmbeddedError, SolidFrame};
 use crate::cutcell::{SubFace, Surface, compute, compute_block_cells};
 use crate::fv::FluidSolver;
@@ -97,7 +98,7 @@ impl Embedded {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],
         };
-        add_loads(&mut sum, &mut loads, np * d);
+        solver.install(|| add_loads(&mut sum, &mut loads, np * d));
         self.scratch.odd = sum;
         Ok(loads)
     }
@@ -169,11 +170,12 @@ pub(super) fn push_moment(
     }
 }
 
-/// Adds the force slots (`0..n_force`) and torque slots (after them) of `sum` into `loads`.
+/// Adds the force slots (`0..n_force`) and torque slots (after them) of `sum` into `loads`, in
+/// parallel on the pool the call runs in ([`add_on_pool`]).
 pub(super) fn add_loads(sum: &mut OddSum, loads: &mut Loads, n_force: usize) {
     let mut all = std::mem::take(&mut loads.force);
     all.append(&mut loads.torque);
-    sum.add_into(&mut all);
+    add_on_pool(sum, &mut all);
     loads.torque = all.split_off(n_force);
     loads.force = all;
 }

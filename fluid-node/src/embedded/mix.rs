@@ -4,6 +4,8 @@
 //! Groups whose mixture is not physical merge with the groups beside them, then widen into
 //! rings of free cells. Every sum over a group's members is independent of their order.
 
+use rayon::prelude::*;
+
 use super::cells::{
     CellKind, face_neighbours, fluid_part, max_abs, offsets, oriented, part_of, shifted, sum_parts,
 };
@@ -155,7 +157,11 @@ impl Embedded {
             nvar,
         };
         let kind = &mut self.scratch.kind;
-        let mut groups: Vec<(usize, usize)> = sources.iter().map(|&k| (m.root(k), k)).collect();
+        // NOTE: each source's walk to its root reads only what the mixing reads (none of it
+        // changes while groups form), so the walks run in parallel on the fluid's pool and are
+        // collected in the sources' order: the same groups on any number of threads.
+        let mut groups: Vec<(usize, usize)> =
+            solver.install(|| sources.par_iter().map(|&k| (m.root(k), k)).collect());
         groups.sort_unstable();
         let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
