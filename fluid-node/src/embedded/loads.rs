@@ -62,7 +62,8 @@ impl Embedded {
                 let current = self.state.current.surface();
                 let reuse = same_surface(&trial.surface(), &current);
                 if !reuse {
-                    compute(grid, &trial.surface(), &mut self.scratch.trial);
+                    let geom = &mut self.scratch.trial;
+                    solver.install(|| compute(grid, &trial.surface(), geom));
                 }
                 let geom = if reuse {
                     &self.state.geom
