@@ -7,7 +7,8 @@
 use rayon::prelude::*;
 
 use super::cells::{
-    CellKind, face_neighbours, fluid_part, max_abs, offsets, oriented, part_of, shifted, sum_parts,
+    CellKind, cell_bits, face_neighbours, fluid_part, mark_around, marked_cells, max_abs, offsets,
+    oriented, part_of, shifted, sum_parts,
 };
 use super::state::Config;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, WIDEN_RINGS};
@@ -480,32 +481,17 @@ impl Mixing<'_> {
     /// [`WIDEN_RINGS`] of them (collective).
     fn predicted(&self, solver: &mut FluidSolver, groups: &[(usize, usize)]) -> Predicted {
         let grid = self.grid;
-        let wide = offsets(grid.dim, WIDEN_RINGS as isize);
-        // NOTE: the cells are marked in a bit set of the grid and read out in order, the
-        // ascending list without duplicates that sorting them all gave (the sort of the 125
-        // cells around each of them was 6 % of the fluid node's time in `cube-mobile-walls`
-        // on 50³).
-        let mut marked = vec![0u64; grid.n_cells().div_ceil(64)];
-        let mut mark = |c: usize| marked[c / 64] |= 1 << (c % 64);
+        // NOTE: the cells are marked in a bit set of the grid, a row of each neighbourhood at a
+        // time, and read out in order: the ascending list without duplicates that sorting them
+        // all gave (the sort of the 125 cells around each of them was 6 % of the fluid node's
+        // time in `cube-mobile-walls` on 50³).
+        let mut marked = cell_bits(grid);
         for &(root, k) in groups {
             for c in [root, self.near[k] as usize] {
-                mark(c);
-                let ijk = grid.ijk(c);
-                for d in &wide {
-                    if let Some(q) = shifted(grid, ijk, *d) {
-                        mark(grid.index(q[0], q[1], q[2]));
-                    }
-                }
+                mark_around(&mut marked, grid, grid.ijk(c), WIDEN_RINGS);
             }
         }
-        let mut reads: Vec<u32> = Vec::new();
-        for (w, &bits) in marked.iter().enumerate() {
-            let mut bits = bits;
-            while bits != 0 {
-                reads.push((64 * w) as u32 + bits.trailing_zeros());
-                bits &= bits - 1;
-            }
-        }
+        let reads: Vec<u32> = marked_cells(&marked).map(|c| c as u32).collect();
         let values = solver.cells_at(&reads);
         Predicted {
             reads,

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::cells::{full_state, offsets, shifted};
+use super::cells::{cell_bits, full_state, mark_around, marked_cells};
 use super::hooks::{HookGeometry, NearView, block_wall_hooks};
 use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
@@ -130,29 +130,16 @@ impl Embedded {
             near.slot_of[c as usize] = 0;
         }
         near.cells.clear();
-        let r = NEAR_RADIUS as isize;
-        let span: Vec<[isize; 3]> = offsets(grid.dim, r);
-        // NOTE: marked in a bit set of the grid and read out in order: the ascending list that
-        // sorting them gave (that sort was 1.2 % of the fluid node's time in
-        // `cube-mobile-walls` on 50³).
-        let mut marked = vec![0u64; grid.n_cells().div_ceil(64)];
+        // NOTE: marked in a bit set of the grid, a row of each neighbourhood at a time, and
+        // read out in order: the ascending list that sorting them gave (that sort was 1.2 % of
+        // the fluid node's time in `cube-mobile-walls` on 50³).
+        let mut marked = cell_bits(grid);
         for &c in &self.state.geom.cut_cells {
-            let ijk = grid.ijk(c as usize);
-            for d in std::iter::once(&[0isize; 3]).chain(&span) {
-                if let Some(n) = shifted(grid, ijk, *d) {
-                    let n = grid.index(n[0], n[1], n[2]);
-                    marked[n / 64] |= 1 << (n % 64);
-                }
-            }
+            mark_around(&mut marked, grid, grid.ijk(c as usize), NEAR_RADIUS);
         }
-        for (w, &bits) in marked.iter().enumerate() {
-            let mut bits = bits;
-            while bits != 0 {
-                let c = 64 * w + bits.trailing_zeros() as usize;
-                near.slot_of[c] = near.cells.len() as u32 + 1;
-                near.cells.push(c as u32);
-                bits &= bits - 1;
-            }
+        for c in marked_cells(&marked) {
+            near.slot_of[c] = near.cells.len() as u32 + 1;
+            near.cells.push(c as u32);
         }
     }
 
