@@ -84,6 +84,10 @@ pub struct CutGeometry {
     subface_scratch: Vec<SubFace>,
     /// One per [`CLIP_CHUNK`] elements: their pieces and sub-faces, clipped apart.
     clip_chunks: Vec<ClipChunk>,
+    /// The records, scratch and row counts of the z sweep (run beside the y sweep's).
+    records_z: Vec<Record>,
+    scratch_z: Vec<Record>,
+    counts_z: Vec<u32>,
 }
 
 /// Elements one task of [`clip_surface`] clips, in their order.
@@ -168,6 +172,9 @@ impl CutGeometry {
             + vec_bytes(&self.counts)
             + vec_bytes(&self.piece_subface)
             + vec_bytes(&self.subface_scratch)
+            + vec_bytes(&self.records_z)
+            + vec_bytes(&self.scratch_z)
+            + vec_bytes(&self.counts_z)
             + vec_bytes(&self.clip_chunks)
             + (self.clip_chunks.iter())
                 .map(|c| {
@@ -234,11 +241,10 @@ pub fn compute(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     // NOTE: x first: its sweep fills Λ and λ_x of the covered runs contiguously and lists them;
     // the y and z sweeps then report only the faces of cut cells, and the faces of covered cells
     // are filled from the listed x runs, again contiguously.
-    for axis in 0..grid.dim {
-        sweep_axis(grid, axis, out);
-        if axis == 0 {
-            order_subfaces(grid, out);
-        }
+    sweep_axis(grid, 0, out);
+    order_subfaces(grid, out);
+    if grid.dim > 1 {
+        sweep_across(grid, out);
     }
     fill_covered_faces(grid, out);
     // NOTE: the key is unique (first_vertex), so the unstable, allocation-free sort is
@@ -553,10 +559,12 @@ fn sweep_axis(grid: &Grid, axis: usize, out: &mut CutGeometry) {
         counts,
         ..
     } = out;
-    build_records(grid, axis, pieces, records);
-    let (b, c) = other_axes(axis);
-    sort_records_by_rows(records, scratch, counts, grid.cells[b] * grid.cells[c]);
-    let mut sink = GeometrySink {
+    let sort = SortBuffers {
+        records,
+        scratch,
+        counts,
+    };
+    let sink = GeometrySink {
         grid,
         axis,
         volume: grid.cell_volume(),
@@ -566,15 +574,113 @@ fn sweep_axis(grid: &Grid, axis: usize, out: &mut CutGeometry) {
         faces_written: &mut written_faces[axis],
         covered_runs,
     };
-    let defect = sweep_rows(
+    let defect = sweep_pieces(pieces, sort, sink);
+    diagnostics.max_uncut_defect = diagnostics.max_uncut_defect.max(defect);
+}
+
+/// The sweeps along y and z after the one along x, in parallel on the pool the call runs in.
+///
+/// NOTE: after the x sweep (which fills Λ and the covered runs) a sweep along y or z writes
+/// only its own axis's face fractions and written ranges, from the pieces and buffers of its
+/// own: the two run at once, and their defects are taken in axis order as one thread took
+/// them. The same bits on any number of threads.
+fn sweep_across(grid: &Grid, out: &mut CutGeometry) {
+    let CutGeometry {
+        face_fraction: [_, faces_y, faces_z],
+        written_faces: [_, written_y, written_z],
+        diagnostics,
+        pieces,
         records,
+        scratch,
+        counts,
+        records_z,
+        scratch_z,
+        counts_z,
+        ..
+    } = out;
+    let pieces = &*pieces;
+    let mut y = move || {
+        let sort = SortBuffers {
+            records,
+            scratch,
+            counts,
+        };
+        sweep_faces(grid, 1, pieces, sort, faces_y, written_y)
+    };
+    let (defect_y, defect_z) = if grid.dim == 3 {
+        let z = move || {
+            let sort = SortBuffers {
+                records: records_z,
+                scratch: scratch_z,
+                counts: counts_z,
+            };
+            sweep_faces(grid, 2, pieces, sort, faces_z, written_z)
+        };
+        let (dy, dz) = rayon::join(y, z);
+        (dy, Some(dz))
+    } else {
+        (y(), None)
+    };
+    diagnostics.max_uncut_defect = diagnostics.max_uncut_defect.max(defect_y);
+    if let Some(d) = defect_z {
+        diagnostics.max_uncut_defect = diagnostics.max_uncut_defect.max(d);
+    }
+}
+
+/// The sweep of `pieces` along `axis` (y or z: faces only, see [`sweep_across`]) into `faces`
+/// and `faces_written`; returns the largest uncut defect.
+fn sweep_faces(
+    grid: &Grid,
+    axis: usize,
+    pieces: &[Piece],
+    sort: SortBuffers,
+    faces: &mut [f64],
+    faces_written: &mut Vec<(u32, u32)>,
+) -> f64 {
+    // (Only the x sweep writes cells and runs: these stay empty.)
+    let (mut cells_written, mut covered_runs) = (Vec::new(), Vec::new());
+    let sink = GeometrySink {
+        grid,
+        axis,
+        volume: grid.cell_volume(),
+        cells: &mut [],
+        faces,
+        cells_written: &mut cells_written,
+        faces_written,
+        covered_runs: &mut covered_runs,
+    };
+    let defect = sweep_pieces(pieces, sort, sink);
+    debug_assert!(cells_written.is_empty() && covered_runs.is_empty());
+    defect
+}
+
+/// The buffers of one sweep's sort of the pieces' records.
+struct SortBuffers<'a> {
+    records: &'a mut Vec<Record>,
+    scratch: &'a mut Vec<Record>,
+    counts: &'a mut Vec<u32>,
+}
+
+/// Sorts the records of `pieces` along `sink.axis` by rows and sweeps them into `sink`;
+/// returns the largest uncut defect.
+fn sweep_pieces(pieces: &[Piece], sort: SortBuffers, mut sink: GeometrySink) -> f64 {
+    let (grid, axis) = (sink.grid, sink.axis);
+    build_records(grid, axis, pieces, sort.records);
+    let (b, c) = other_axes(axis);
+    sort_records_by_rows(
+        sort.records,
+        sort.scratch,
+        sort.counts,
+        grid.cells[b] * grid.cells[c],
+    );
+    sweep_rows(
+        sort.records,
         grid.cells[axis] as i32,
         face_area(grid, axis),
         Some(SNAP_TOLERANCE),
         axis == 0,
         &mut sink,
-    );
-    diagnostics.max_uncut_defect = diagnostics.max_uncut_defect.max(defect);
+    )
 }
 
 /// Sets the y (and z) faces of the covered runs of the x sweep: both faces of every uncut cell

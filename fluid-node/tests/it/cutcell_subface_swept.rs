@@ -508,10 +508,11 @@ fn the_entries_are_the_same_on_any_number_of_threads() {
     }
 }
 
-/// The elements are clipped in parallel by runs (issue 36 item 4): on pools of 1, 2 and 5
-/// threads, and again into buffers that held a larger surface, `compute` gives the bits of one
-/// thread (Λ, λ, sub-faces, their vertices, cut cells, diagnostics), on the 64³ bench sphere
-/// (3 968 triangles, 16 runs) and a 2-D disc of 700 segments (3 runs).
+/// The elements are clipped in parallel by runs, and the y and z sweeps run together (issue 36
+/// item 4): on pools of 1, 2 and 5 threads, and again into buffers that held a larger surface,
+/// `compute` gives the bits of one thread (Λ, λ, sub-faces, their vertices, cut cells,
+/// diagnostics), on the 64³ bench sphere (3 968 triangles, 16 runs) and a 2-D disc of 700
+/// segments (3 runs).
 #[test]
 fn the_geometry_is_the_same_on_any_number_of_threads() {
     let n = 64;
