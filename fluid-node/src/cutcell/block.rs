@@ -241,7 +241,8 @@ fn block_geometry(
         _ if a < dim => (rows.lo[a] as i32 - 1, rows.hi[a] as i32),
         _ => (0, 0),
     });
-    clip_elements(grid, surface, keep, Some(reach), sub, &mut clipped);
+    let all = 0..surface.n_elements();
+    clip_elements(grid, surface, all, keep, Some(reach), sub, &mut clipped);
     out.clipped_elements = n_kept;
     out.n_pieces = pieces.len();
     let covered_runs = sweep_x(grid, &rows, &pieces, &piece_subface, &mut out);
@@ -471,7 +472,8 @@ fn sweep_whole_rows(
         n_whole += usize::from(meets);
         meets
     };
-    clip_elements(grid, surface, meets_row, None, |_| None, &mut clipped);
+    let all = 0..surface.n_elements();
+    clip_elements(grid, surface, all, meets_row, None, |_| None, &mut clipped);
     let mut records = Vec::new();
     for (order, piece) in row_pieces.iter().enumerate() {
         let cell = piece.cell;

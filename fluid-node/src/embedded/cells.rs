@@ -256,6 +256,54 @@ pub(super) fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[us
     Some(out)
 }
 
+/// A bit set of the cells of `grid` (one bit per cell, by [`Grid::index`]).
+pub(super) fn cell_bits(grid: &Grid) -> Vec<u64> {
+    vec![0u64; grid.n_cells().div_ceil(64)]
+}
+
+/// Marks in `marked` (see [`cell_bits`]) cell `ijk` and the cells within `r` of it along each
+/// active axis that lie in the grid: those of `ijk` and [`offsets`]`(dim, r)` that [`shifted`]
+/// gives. Each row along x is a run of consecutive bits, set a word at a time.
+pub(super) fn mark_around(marked: &mut [u64], grid: &Grid, ijk: [usize; 3], r: usize) {
+    let span = |a: usize| {
+        let r = if a < grid.dim { r } else { 0 };
+        (
+            ijk[a].saturating_sub(r),
+            (ijk[a] + r).min(grid.cells[a] - 1),
+        )
+    };
+    let (x, y, z) = (span(0), span(1), span(2));
+    for k in z.0..=z.1 {
+        for j in y.0..=y.1 {
+            let (first, last) = (grid.index(x.0, j, k), grid.index(x.1, j, k));
+            let (w0, w1) = (first / 64, last / 64);
+            let low = !0u64 << (first % 64);
+            let high = !0u64 >> (63 - last % 64);
+            if w0 == w1 {
+                marked[w0] |= low & high;
+            } else {
+                marked[w0] |= low;
+                marked[w0 + 1..w1].fill(!0);
+                marked[w1] |= high;
+            }
+        }
+    }
+}
+
+/// The cells marked in `marked` (see [`cell_bits`]), ascending.
+pub(super) fn marked_cells(marked: &[u64]) -> impl Iterator<Item = usize> + '_ {
+    marked.iter().enumerate().flat_map(|(w, &bits)| {
+        let mut bits = bits;
+        std::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let c = 64 * w + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                c
+            })
+        })
+    })
+}
+
 /// Cell `c`'s content as a part of a mixture: what the correct left in it (`content`, by slot
 /// `slot_of[c] - 1`, unless its `kind` is still `Predicted`), or else its predicted state
 /// `u(q)` times its fluid fraction `alpha`.
@@ -283,4 +331,44 @@ pub(super) fn part_of(
 /// The largest `|x|` of `values` (0 for none); exact in any order.
 pub(super) fn max_abs(values: &[f64]) -> f64 {
     values.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{cell_bits, mark_around, marked_cells, offsets, shifted};
+    use crate::grid::Grid;
+
+    /// The marked runs are the cells of the offsets that [`shifted`] keeps, on 1-, 2- and 3-D
+    /// grids, at the edges and corners, with runs across 64-bit words and longer than one.
+    #[test]
+    fn marking_around_cells_gives_the_shifted_neighbourhoods() {
+        let grids = [
+            Grid::new(&[0.0], &[1.0], &[150]).unwrap(),
+            Grid::new(&[0.0; 2], &[1.0; 2], &[13, 70]).unwrap(),
+            Grid::new(&[0.0; 3], &[1.0; 3], &[9, 7, 11]).unwrap(),
+            Grid::new(&[0.0; 3], &[1.0; 3], &[130, 3, 4]).unwrap(),
+        ];
+        for grid in &grids {
+            for r in [0, 1, 2, 70] {
+                let n = grid.n_cells();
+                let picks = [0, 1, n / 2, n / 3 + 5, n - 2, n - 1];
+                let mut marked = cell_bits(grid);
+                let mut expected: Vec<usize> = Vec::new();
+                for &c in &picks {
+                    let ijk = grid.ijk(c);
+                    mark_around(&mut marked, grid, ijk, r);
+                    expected.push(c);
+                    for d in offsets(grid.dim, r as isize) {
+                        if let Some(q) = shifted(grid, ijk, d) {
+                            expected.push(grid.index(q[0], q[1], q[2]));
+                        }
+                    }
+                }
+                expected.sort_unstable();
+                expected.dedup();
+                let got: Vec<usize> = marked_cells(&marked).collect();
+                assert_eq!(got, expected, "{:?}, r = {r}", grid.cells);
+            }
+        }
+    }
 }

@@ -4,6 +4,7 @@
 //! ([`super::mix`]) and the check of what was written.
 
 use protocol::sum::OddSum;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::beyond::{outside_domain, sweep_beyond};
@@ -14,6 +15,7 @@ use super::cells::{
 use super::error::Reach;
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
+use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{Surface, compute, face_index, subface_swept_volumes};
 use crate::fv::euler::NQ;
@@ -44,6 +46,18 @@ pub struct CorrectReport {
     pub dropped: f64,
 }
 
+/// Near cells one task of [`Embedded::fluid_fluxes`] updates at least (any split gives the
+/// same bits).
+const CELLS_PER_TASK: usize = 256;
+
+/// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
+/// sides change in the outflow, `(added, amount)` in the order one thread adds them.
+struct CellUpdate {
+    content: [f64; NQ],
+    leaving: [(bool, [f64; NQ]); 6],
+    n_leaving: usize,
+}
+
 /// What the solid flux gave the fluid in one step.
 struct Exchanged {
     /// Work \[J\].
@@ -71,15 +85,16 @@ impl Embedded {
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();
-        let mut leaving = self.fluid_fluxes(dt, step, explicit, &opening, &mut report)?;
+        let mut leaving = self.fluid_fluxes(solver, dt, step, explicit, &opening, &mut report)?;
         // What the solid flux and the swept amounts add to each near cell's content (slots
         // `k NQ + q`), summed apart from the sub-faces' order.
         let mut gained = std::mem::take(&mut self.scratch.odd_content);
         gained.clear();
-        let exchanged = self.solid_flux(dt, &accepted, explicit, &mut gained);
+        let exchanged = self.solid_flux(solver, dt, &accepted, explicit, &mut gained);
         let swept = self.swept_amounts(step, &source_scale, &mut gained);
         if swept.is_ok() {
-            gained.add_into(self.scratch.content.as_flattened_mut());
+            let content = self.scratch.content.as_flattened_mut();
+            solver.install(|| add_on_pool(&mut gained, content));
         }
         self.scratch.odd_content = gained;
         swept?;
@@ -229,6 +244,7 @@ impl Embedded {
     /// face's fluid part (0 where the body covers it).
     fn fluid_fluxes(
         &mut self,
+        solver: &FluidSolver,
         dt: f64,
         step: u64,
         explicit: bool,
@@ -236,7 +252,6 @@ impl Embedded {
         report: &mut CorrectReport,
     ) -> Result<[f64; NQ], EmbeddedError> {
         let mut leaving = [0.0; NQ];
-        let volume = self.config.grid.cell_volume();
         let n_near = self.near.cells.len();
         self.scratch.content.clear();
         self.scratch.content.resize(n_near, [0.0; NQ]);
@@ -244,53 +259,105 @@ impl Embedded {
         self.scratch.kind.resize(n_near, CellKind::Predicted);
         let flush = self.flush_faces();
         self.mark_surface_cells(step, explicit)?;
-        let grid = &self.config.grid;
         let cracking = opening.contains(&true);
-        for k in 0..n_near {
-            let c = self.near.cells[k] as usize;
-            let Some(faces) = self.touched_faces(k, &flush, opening, cracking) else {
-                continue;
-            };
+        // NOTE: each cell's update reads only its own kind and the fluxes kept by the predict,
+        // so the cells are updated in parallel on the fluid's pool; what leaves through open
+        // sides is then added up cell by cell in the cells' order, as one thread did: the
+        // same bits on any number of threads.
+        let this = &*self;
+        let updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
+            (0..n_near)
+                .into_par_iter()
+                .with_min_len(CELLS_PER_TASK)
+                .filter_map(|k| {
+                    let update = this.cell_update(k, dt, step, &flush, opening, cracking);
+                    update.transpose().map(|u| (k, u))
+                })
+                .collect()
+        });
+        for (k, update) in updates {
+            let u = update?;
             self.scratch.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
-            let ijk = grid.ijk(c);
-            let nvar = grid.dim + 2;
-            let alpha = fluid_part(self.scratch.trial.solid_fraction[c]);
-            let covered_at_n = self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE;
-            let u0 = self.near.saved(k, nvar);
-            let mut acc = [0.0; NQ];
-            for q in 0..nvar {
-                acc[q] = alpha * u0[q];
-            }
-            for a in 0..grid.dim {
-                let Some((fl, fr)) = self.face_fluxes(a, c, dt, opening, cracking) else {
-                    return Err(EmbeddedError::FluxNotKept { step, cell: ijk });
-                };
-                let sigma = dt / grid.dx[a];
-                let (wl, wr) = (fluid_part(faces[a][0]), fluid_part(faces[a][1]));
-                // (The sweeps counted the flux of a cell that was not covered at t^n.)
-                let counted = f64::from(u8::from(!covered_at_n));
-                let open = self.config.boundary[a].map(BoundaryKind::is_open);
-                if ijk[a] == 0 && open[0] {
-                    for q in 0..NQ {
-                        leaving[q] -= (wl - counted) * fl[q] * sigma * volume;
+            for &(gone, v) in &u.leaving[..u.n_leaving] {
+                for q in 0..NQ {
+                    if gone {
+                        leaving[q] += v[q];
+                    } else {
+                        leaving[q] -= v[q];
                     }
                 }
-                if ijk[a] + 1 == grid.cells[a] && open[1] {
-                    for q in 0..NQ {
-                        leaving[q] += (wr - counted) * fr[q] * sigma * volume;
-                    }
-                }
-                let dim = grid.dim;
-                acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
-                for b in 0..dim {
-                    acc[1 + b] += sigma * (wl * fl[1 + b] - wr * fr[1 + b]);
-                }
-                acc[dim + 1] += sigma * (wl * fl[4] - wr * fr[4]);
             }
-            self.scratch.content[k] = acc;
+            self.scratch.content[k] = u.content;
         }
         Ok(leaving)
+    }
+
+    /// Eq. (12–13) for near cell `k`, if the solid touches it: its content and what its
+    /// weighted fluxes through open domain sides change in the outflow (see
+    /// [`Embedded::fluid_fluxes`]).
+    fn cell_update(
+        &self,
+        k: usize,
+        dt: f64,
+        step: u64,
+        flush: &[(usize, usize, f64)],
+        opening: &[bool],
+        cracking: bool,
+    ) -> Result<Option<CellUpdate>, EmbeddedError> {
+        let volume = self.config.grid.cell_volume();
+        let grid = &self.config.grid;
+        let c = self.near.cells[k] as usize;
+        let Some(faces) = self.touched_faces(k, flush, opening, cracking) else {
+            return Ok(None);
+        };
+        let mut update = CellUpdate {
+            content: [0.0; NQ],
+            leaving: [(false, [0.0; NQ]); 6],
+            n_leaving: 0,
+        };
+        let ijk = grid.ijk(c);
+        let nvar = grid.dim + 2;
+        let alpha = fluid_part(self.scratch.trial.solid_fraction[c]);
+        let covered_at_n = self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE;
+        let u0 = self.near.saved(k, nvar);
+        let acc = &mut update.content;
+        for q in 0..nvar {
+            acc[q] = alpha * u0[q];
+        }
+        for a in 0..grid.dim {
+            let Some((fl, fr)) = self.face_fluxes(a, c, dt, opening, cracking) else {
+                return Err(EmbeddedError::FluxNotKept { step, cell: ijk });
+            };
+            let sigma = dt / grid.dx[a];
+            let (wl, wr) = (fluid_part(faces[a][0]), fluid_part(faces[a][1]));
+            // (The sweeps counted the flux of a cell that was not covered at t^n.)
+            let counted = f64::from(u8::from(!covered_at_n));
+            let open = self.config.boundary[a].map(BoundaryKind::is_open);
+            if ijk[a] == 0 && open[0] {
+                let mut v = [0.0; NQ];
+                for q in 0..NQ {
+                    v[q] = (wl - counted) * fl[q] * sigma * volume;
+                }
+                update.leaving[update.n_leaving] = (false, v);
+                update.n_leaving += 1;
+            }
+            if ijk[a] + 1 == grid.cells[a] && open[1] {
+                let mut v = [0.0; NQ];
+                for q in 0..NQ {
+                    v[q] = (wr - counted) * fr[q] * sigma * volume;
+                }
+                update.leaving[update.n_leaving] = (true, v);
+                update.n_leaving += 1;
+            }
+            let dim = grid.dim;
+            acc[0] += sigma * (wl * fl[0] - wr * fr[0]);
+            for b in 0..dim {
+                acc[1 + b] += sigma * (wl * fl[1 + b] - wr * fr[1 + b]);
+            }
+            acc[dim + 1] += sigma * (wl * fl[4] - wr * fr[4]);
+        }
+        Ok(Some(update))
     }
 
     /// Solid faces flush against the domain boundary: `(cell, 2 axis + side, area)`, sorted.
@@ -470,6 +537,7 @@ impl Embedded {
     /// that the exchange balances exactly.
     fn solid_flux(
         &mut self,
+        solver: &FluidSolver,
         dt: f64,
         accepted: &SolidFrame,
         explicit: bool,
@@ -533,7 +601,8 @@ impl Embedded {
             }
             push_moment(&mut sum, np * dim, dim, p, r, f);
         }
-        add_loads(&mut sum, &mut self.state.last_loads, np * dim);
+        let last_loads = &mut self.state.last_loads;
+        solver.install(|| add_loads(&mut sum, last_loads, np * dim));
         self.scratch.odd = sum;
         exchanged
     }

@@ -82,6 +82,7 @@ mod loads;
 mod memory;
 mod mix;
 mod near_wall;
+mod pool_sum;
 mod predict;
 mod state;
 

@@ -1,8 +1,11 @@
 //! Step 1 of paper 003 §3.4: the split sweeps over the whole grid, with the ghost states of the
 //! covered cells, keeping `U^n`, `p̄` and the face fluxes of the cells near the wet surface.
 
-use super::cells::{full_state, offsets, shifted};
+use rayon::prelude::*;
+
+use super::cells::{cell_bits, full_state, mark_around, marked_cells};
 use super::hooks::{HookGeometry, NearView, block_wall_hooks};
+use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::{CellBox, face_index};
 use crate::fv::euler::NQ;
@@ -85,20 +88,21 @@ impl Embedded {
     /// Near cells, their faces, the ghost fills, and `U^n` (after the first sweep's ghosts).
     fn prepare(&mut self, solver: &mut FluidSolver) {
         self.collect_near_cells();
-        self.wall_hooks();
-        self.taps();
+        self.wall_hooks(solver);
+        self.taps(solver);
         self.near.hooks.pressure_cells.clone_from(&self.near.cells);
         self.save_states(solver);
     }
 
     /// The ghost fills, wall runs and vacuum cells of this rank's cells: from the whole grid's
     /// geometry on one rank, from the block's and a halo around it on a decomposed grid (the
-    /// same bits on the rank's cells; `hooks.rs`).
-    fn wall_hooks(&mut self) {
+    /// same bits on the rank's cells; `hooks.rs`). On the fluid's pool (the cells' walls are
+    /// summed in parallel, the same bits on any number of threads).
+    fn wall_hooks(&mut self, solver: &FluidSolver) {
         let (grid, ng) = (&self.config.grid, self.config.ng);
         let (geom, current) = (&self.state.geom, &self.state.current);
-        let mut odd = std::mem::take(&mut self.scratch.odd);
-        let hooks = match self.config.block {
+        let (block, near) = (self.config.block, &self.near);
+        let hooks = solver.install(|| match block {
             None => {
                 let view = HookGeometry {
                     grid,
@@ -107,14 +111,13 @@ impl Embedded {
                     subfaces: &geom.subfaces,
                 };
                 let near = NearView {
-                    cells: &self.near.cells,
-                    slot_of: &self.near.slot_of,
+                    cells: &near.cells,
+                    slot_of: &near.slot_of,
                 };
-                view.wall_hooks(&near, current, ng, CellBox::whole(grid), &mut odd)
+                view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
-            Some(block) => block_wall_hooks(grid, ng, current, block, &mut odd),
-        };
-        self.scratch.odd = odd;
+            Some(block) => block_wall_hooks(grid, ng, current, block),
+        });
         let h = &mut self.near.hooks;
         (h.ghosts, h.walls, h.vacuum) = (hooks.ghosts, hooks.walls, hooks.vacuum);
     }
@@ -127,64 +130,76 @@ impl Embedded {
             near.slot_of[c as usize] = 0;
         }
         near.cells.clear();
-        let r = NEAR_RADIUS as isize;
-        let span: Vec<[isize; 3]> = offsets(grid.dim, r);
+        // NOTE: marked in a bit set of the grid, a row of each neighbourhood at a time, and
+        // read out in order: the ascending list that sorting them gave (that sort was 1.2 % of
+        // the fluid node's time in `cube-mobile-walls` on 50³).
+        let mut marked = cell_bits(grid);
         for &c in &self.state.geom.cut_cells {
-            let ijk = grid.ijk(c as usize);
-            for d in std::iter::once(&[0isize; 3]).chain(&span) {
-                if let Some(n) = shifted(grid, ijk, *d) {
-                    let n = grid.index(n[0], n[1], n[2]);
-                    if near.slot_of[n] == 0 {
-                        near.slot_of[n] = 1;
-                        near.cells.push(n as u32);
-                    }
-                }
-            }
+            mark_around(&mut marked, grid, grid.ijk(c as usize), NEAR_RADIUS);
         }
-        near.cells.sort_unstable();
-        for (k, &c) in near.cells.iter().enumerate() {
-            near.slot_of[c as usize] = k as u32 + 1;
+        for c in marked_cells(&marked) {
+            near.slot_of[c] = near.cells.len() as u32 + 1;
+            near.cells.push(c as u32);
         }
     }
 
-    /// Taps: the faces of the near cells, per axis, grouped by pencil.
-    fn taps(&mut self) {
+    /// Taps: the faces of the near cells, per axis, grouped by pencil. The axes are their own
+    /// (their taps and face slots): they run in parallel on the fluid's pool.
+    fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
-        let near = &mut self.near;
-        for axis in 0..grid.dim {
-            let stride: usize = grid.cells[..axis].iter().product();
-            let n = grid.cells[axis];
-            let count = grid.n_cells() / n;
-            let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * near.cells.len());
-            for &c in &near.cells {
-                let c = c as usize;
-                let m = (c / stride) % n;
-                let p = c % stride + (c / (stride * n)) * stride;
-                keys.push((p as u32, m as u32));
-                keys.push((p as u32, m as u32 + 1));
-            }
-            keys.sort_unstable();
-            keys.dedup();
-            let tap = &mut near.hooks.taps[axis];
-            tap.clear(count);
-            for &(p, m) in &keys {
-                tap.pencil_offsets[p as usize + 1] += 1;
-                tap.positions.push(m);
-            }
-            for p in 0..count {
-                tap.pencil_offsets[p + 1] += tap.pencil_offsets[p];
-            }
-            let slots = &mut near.face_slots[axis];
-            slots.clear();
-            for (slot, &(p, m)) in keys.iter().enumerate() {
-                let p = p as usize;
-                let base = p % stride + (p / stride) * stride * n;
-                let mut ijk = grid.ijk(base);
-                ijk[axis] = m as usize;
-                slots.push((face_index(grid, axis, ijk) as u32, slot as u32));
-            }
-            slots.sort_unstable();
-        }
+        let NearCells {
+            cells,
+            face_slots,
+            hooks,
+            ..
+        } = &mut self.near;
+        let cells = &*cells;
+        let axes = (hooks.taps.par_iter_mut().zip(face_slots)).enumerate();
+        solver.install(|| {
+            axes.take(grid.dim).for_each(|(axis, (tap, slots))| {
+                let stride: usize = grid.cells[..axis].iter().product();
+                let n = grid.cells[axis];
+                let count = grid.n_cells() / n;
+                // NOTE: the faces `(pencil, position)` are marked in a bit set of `p (n + 1) + m`
+                // and read out in order: the ascending list without duplicates that sorting them
+                // gave (that sort was 1.3 % of the fluid node's time in `cube-mobile-walls`).
+                let mut marked = vec![0u64; (count * (n + 1)).div_ceil(64)];
+                for &c in cells {
+                    let c = c as usize;
+                    let m = (c / stride) % n;
+                    let p = c % stride + (c / (stride * n)) * stride;
+                    for f in [p * (n + 1) + m, p * (n + 1) + m + 1] {
+                        marked[f / 64] |= 1 << (f % 64);
+                    }
+                }
+                let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * cells.len());
+                for (w, &bits) in marked.iter().enumerate() {
+                    let mut bits = bits;
+                    while bits != 0 {
+                        let f = 64 * w + bits.trailing_zeros() as usize;
+                        keys.push(((f / (n + 1)) as u32, (f % (n + 1)) as u32));
+                        bits &= bits - 1;
+                    }
+                }
+                tap.clear(count);
+                for &(p, m) in &keys {
+                    tap.pencil_offsets[p as usize + 1] += 1;
+                    tap.positions.push(m);
+                }
+                for p in 0..count {
+                    tap.pencil_offsets[p + 1] += tap.pencil_offsets[p];
+                }
+                slots.clear();
+                for (slot, &(p, m)) in keys.iter().enumerate() {
+                    let p = p as usize;
+                    let base = p % stride + (p / stride) * stride * n;
+                    let mut ijk = grid.ijk(base);
+                    ijk[axis] = m as usize;
+                    slots.push((face_index(grid, axis, ijk) as u32, slot as u32));
+                }
+                slots.sort_unstable();
+            });
+        });
     }
 
     /// `U^n` of the near cells, with the ghosts of the first sweep in the covered ones (of a

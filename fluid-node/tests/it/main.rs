@@ -18,6 +18,7 @@ mod embedded_piston;
 mod embedded_rest;
 mod embedded_support;
 mod embedded_thin;
+mod embedded_threads;
 mod embedded_uniform;
 mod embedded_wall_hit;
 mod embedded_withdrawn;

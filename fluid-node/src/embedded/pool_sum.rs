@@ -1,0 +1,119 @@
+//! [`add_on_pool`]: [`OddSum::add_into`] with the slots' sums taken in parallel on the pool the
+//! call runs in, bit for bit the same.
+
+use protocol::sum::{OddSum, slot_sum};
+use rayon::prelude::*;
+
+/// Terms one task of [`add_on_pool`] sums at least (any split gives the same sums); below it
+/// the terms are summed on the calling thread.
+const TERMS_PER_TASK: usize = 4096;
+
+/// Adds every slot's sum of the terms of `sum` to `out[slot]` and forgets the terms, as
+/// [`OddSum::add_into`] does, bit for bit.
+///
+/// NOTE: the terms are counted into their slots (two passes), then the slots are summed in
+/// parallel on the pool the call runs in, each from its own terms alone ([`slot_sum`], the
+/// sum `add_into` takes), into its own `out[slot]`: the same bits on any number of threads.
+/// In `cube-mobile-walls` on 50³ the sums of the correct's contents and of the particles'
+/// loads were 3 % of the fluid node's time, on one thread while the other waited.
+pub(super) fn add_on_pool(sum: &mut OddSum, out: &mut [f64]) {
+    let terms = sum.terms();
+    let n = out.len();
+    if terms.len() < TERMS_PER_TASK || n == 0 {
+        sum.add_into(out);
+        return;
+    }
+    // Where each slot's terms start (and the end of the last), and the terms by slot.
+    let mut starts = vec![0u32; n + 1];
+    for t in terms {
+        starts[t.0 as usize + 1] += 1;
+    }
+    for s in 0..n {
+        starts[s + 1] += starts[s];
+    }
+    let mut next = starts.clone();
+    let mut by_slot = vec![0.0; terms.len()];
+    for t in terms {
+        let s = t.0 as usize;
+        by_slot[next[s] as usize] = t.1;
+        next[s] += 1;
+    }
+    let per_slot = terms.len().div_ceil(n);
+    out.par_iter_mut()
+        .enumerate()
+        .with_min_len((TERMS_PER_TASK / per_slot).max(1))
+        .for_each_init(Vec::new, |run, (s, o)| {
+            let terms = &by_slot[starts[s] as usize..starts[s + 1] as usize];
+            if !terms.is_empty() {
+                run.clear();
+                run.extend_from_slice(terms);
+                *o += slot_sum(run);
+            }
+        });
+    sum.clear();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::add_on_pool;
+    use protocol::sum::OddSum;
+
+    /// On pools of 1, 2 and 5 threads, over few slots of many terms (the particles' loads)
+    /// and many slots of few (the cells' contents), with zeros of both signs, equal
+    /// magnitudes of both signs and a NaN, into sums that start at +0, -0 and other values:
+    /// the bits of `OddSum::add_into`.
+    #[test]
+    fn the_sums_are_add_intos_on_any_number_of_threads() {
+        let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for (n_slots, n_terms) in [(36, 20_000), (30_000, 90_000), (50, 100)] {
+            let mut terms: Vec<(u32, f64)> = Vec::new();
+            for _ in 0..n_terms {
+                let r = next();
+                let slot = (r % n_slots as u64) as u32;
+                let v = match (r >> 20) % 9 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => 0.25,
+                    3 => -0.25,
+                    _ => {
+                        let sign = if r & (1 << 50) != 0 { 1.0 } else { -1.0 };
+                        sign * f64::from((r >> 24) as u32) * 1e-9
+                    }
+                };
+                terms.push((slot, v));
+            }
+            terms.push((1, f64::NAN));
+            let start: Vec<f64> = (0..n_slots)
+                .map(|i| [0.0, -0.0, i as f64 * 0.3][i % 3])
+                .collect();
+            let mut expected = start.clone();
+            let mut serial = OddSum::default();
+            serial.extend(terms.iter().copied());
+            serial.add_into(&mut expected);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            for threads in [1, 2, 5] {
+                let mut got = start.clone();
+                let mut sum = OddSum::default();
+                sum.extend(terms.iter().copied());
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("pool")
+                    .install(|| add_on_pool(&mut sum, &mut got));
+                assert_eq!(
+                    bits(&got),
+                    bits(&expected),
+                    "{n_slots} slots, {threads} threads"
+                );
+                assert!(sum.terms().is_empty());
+            }
+            assert!(expected[1].is_nan());
+        }
+    }
+}
