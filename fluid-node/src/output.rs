@@ -34,7 +34,7 @@ pub fn write_fluid_csv(
     table.write_record(&header)?;
     table.flush()?;
     drop(table);
-    write_fluid_csv_rows(w, grid, state, gamma, alpha, CSV_RUN_ROWS, CSV_BATCH_RUNS)
+    write_fluid_csv_rows(w, grid, state, gamma, alpha, RUN_CELLS, CSV_BATCH_RUNS)
 }
 
 /// The rows of [`write_fluid_csv`], formatted in runs of `run_rows` cells, `batch_runs` runs at
@@ -48,10 +48,9 @@ fn write_fluid_csv_rows(
     run_rows: usize,
     batch_runs: usize,
 ) -> std::io::Result<()> {
-    // NOTE: the rows are formatted in runs of `CSV_RUN_ROWS` cells, on the rayon pool the caller
-    // runs this on (the node: the fluid's own; from any other thread, on that thread alone), a
-    // batch of runs at a time, and written in cell order: the same bytes as one writer over every
-    // row. Formatting is most of a large output's time (a 64³ blast's final output took a quarter
+    // NOTE: the rows are formatted in runs of `RUN_CELLS` cells, in parallel on the rayon pool
+    // the caller runs this on (the node: the fluid's own), a batch of runs at a time, and written
+    // in cell order: the same bytes as one writer over every row. Formatting is most of a large output's time (a 64³ blast's final output took a quarter
     // of its whole run on one thread).
     let n = grid.n_cells();
     let batch = run_rows * batch_runs;
@@ -59,11 +58,7 @@ fn write_fluid_csv_rows(
         let runs: Vec<usize> = (start..n.min(start + batch)).step_by(run_rows).collect();
         let rows =
             |&lo: &usize| fluid_csv_rows(grid, state, gamma, alpha, lo..n.min(lo + run_rows));
-        let parts: Vec<std::io::Result<Vec<u8>>> = if rayon::current_thread_index().is_some() {
-            runs.par_iter().map(rows).collect()
-        } else {
-            runs.iter().map(rows).collect()
-        };
+        let parts: Vec<std::io::Result<Vec<u8>>> = runs.par_iter().map(rows).collect();
         for part in parts {
             w.write_all(&part?)?;
         }
@@ -71,8 +66,9 @@ fn write_fluid_csv_rows(
     w.flush()
 }
 
-/// Cells a run of CSV rows formats at once ([`write_fluid_csv`]).
-const CSV_RUN_ROWS: usize = 4096;
+/// Cells a parallel task of the writers takes: a run of CSV rows ([`write_fluid_csv`]) or of
+/// primitives ([`fluid_vti`]).
+const RUN_CELLS: usize = 4096;
 
 /// Runs formatted before they are written (bounds the memory: about 130 bytes a 3-D row).
 const CSV_BATCH_RUNS: usize = 32;
@@ -136,28 +132,20 @@ pub fn fluid_vti(
 ) -> Vec<u8> {
     let n = grid.n_cells();
     let (mut rho, mut p, mut velocity) = (vec![0.0; n], vec![0.0; n], vec![0.0; 3 * n]);
-    // In runs of cells, on the caller's rayon pool as the CSV (each cell's values are its own).
+    // In runs of cells, on the caller's rayon pool as the CSV rows (each cell's values are its own).
     let run = |k: usize, rho: &mut [f64], p: &mut [f64], velocity: &mut [f64]| {
-        let first = k * CSV_RUN_ROWS;
+        let first = k * RUN_CELLS;
         for (i, (r, pressure)) in rho.iter_mut().zip(p.iter_mut()).enumerate() {
             let (ri, v, pi) = state.primitive(first + i, gamma);
             (*r, *pressure) = (ri, pi);
             velocity[3 * i..3 * i + 3].copy_from_slice(&v);
         }
     };
-    if rayon::current_thread_index().is_some() {
-        (rho.par_chunks_mut(CSV_RUN_ROWS))
-            .zip(p.par_chunks_mut(CSV_RUN_ROWS))
-            .zip(velocity.par_chunks_mut(3 * CSV_RUN_ROWS))
-            .enumerate()
-            .for_each(|(k, ((rho, p), velocity))| run(k, rho, p, velocity));
-    } else {
-        (rho.chunks_mut(CSV_RUN_ROWS))
-            .zip(p.chunks_mut(CSV_RUN_ROWS))
-            .zip(velocity.chunks_mut(3 * CSV_RUN_ROWS))
-            .enumerate()
-            .for_each(|(k, ((rho, p), velocity))| run(k, rho, p, velocity));
-    }
+    (rho.par_chunks_mut(RUN_CELLS))
+        .zip(p.par_chunks_mut(RUN_CELLS))
+        .zip(velocity.par_chunks_mut(3 * RUN_CELLS))
+        .enumerate()
+        .for_each(|(k, ((rho, p), velocity))| run(k, rho, p, velocity));
     // vtkDataSetAttributes::HIDDENCELL: not drawn, not picked, left out by filters.
     const HIDDEN_CELL: u8 = 32;
     let ghost = alpha.map(|a| {
@@ -406,8 +394,11 @@ mod tests {
             };
             // Runs of 7 cells, 3 to a batch (1001 cells: 48 batches, the last one run of 0 and
             // a partial one), one run of everything, and the node's sizes.
-            for (run, batch) in [(7, 3), (1001, 1), (CSV_RUN_ROWS, CSV_BATCH_RUNS)] {
-                assert!(rows(run, batch) == expected, "off a pool, runs of {run}");
+            for (run, batch) in [(7, 3), (1001, 1), (RUN_CELLS, CSV_BATCH_RUNS)] {
+                assert!(
+                    rows(run, batch) == expected,
+                    "on the global pool, runs of {run}"
+                );
                 for threads in [1, 2, 5] {
                     let pool = rayon::ThreadPoolBuilder::new()
                         .num_threads(threads)

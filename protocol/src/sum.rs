@@ -113,7 +113,20 @@ impl OddSum {
 
     /// [`OddSum::add_into`] by counting the terms into their slots (`out.len()` of them).
     fn add_bucketed(&mut self, out: &mut [f64]) {
-        let n = out.len();
+        let (starts, by_slot) = self.by_slot(out.len());
+        for (s, o) in out.iter_mut().enumerate() {
+            let run = &mut by_slot[starts[s] as usize..starts[s + 1] as usize];
+            if !run.is_empty() {
+                // (One term too goes through the halves: `0 + -0` is `+0`.)
+                *o += slot_sum(run);
+            }
+        }
+    }
+
+    /// The terms counted into `n` slots (two passes, no sort): slot `s`'s values are
+    /// `values[starts[s]..starts[s + 1]]`, in the order they were pushed. The buffers are the
+    /// sum's own scratch, kept from call to call; the terms stay.
+    pub fn by_slot(&mut self, n: usize) -> (&[u32], &mut [f64]) {
         let starts = &mut self.starts;
         starts.clear();
         starts.resize(n + 1, 0);
@@ -123,24 +136,19 @@ impl OddSum {
         for s in 0..n {
             starts[s + 1] += starts[s];
         }
-        let by_slot = &mut self.by_slot;
-        by_slot.clear();
-        by_slot.resize(self.terms.len(), 0.0);
-        // (Each slot's next free place: its start, moved on; `starts[s]` ends as `s + 1`'s.)
+        let values = &mut self.by_slot;
+        values.clear();
+        values.resize(self.terms.len(), 0.0);
+        // Each slot's next free place is its start, moved on as it fills; then each start is
+        // the next slot's, and moving them back one slot restores them.
         for t in &self.terms {
             let s = t.0 as usize;
-            by_slot[starts[s] as usize] = t.1;
+            values[starts[s] as usize] = t.1;
             starts[s] += 1;
         }
-        let mut begin = 0;
-        for (s, &end) in starts[..n].iter().enumerate() {
-            let run = &mut by_slot[begin..end as usize];
-            begin = end as usize;
-            if !run.is_empty() {
-                // (One term too goes through the halves: `0 + -0` is `+0`.)
-                out[s] += slot_sum(run);
-            }
-        }
+        starts.copy_within(..n, 1);
+        starts[0] = 0;
+        (starts, values)
     }
 
     /// Heap bytes held (the terms' buffer and the bucketing's scratch).

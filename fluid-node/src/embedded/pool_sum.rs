@@ -11,34 +11,20 @@ const TERMS_PER_TASK: usize = 4096;
 /// Adds every slot's sum of the terms of `sum` to `out[slot]` and forgets the terms, as
 /// [`OddSum::add_into`] does, bit for bit.
 ///
-/// NOTE: the terms are counted into their slots (two passes), then the slots are summed in
+/// NOTE: the terms are counted into their slots ([`OddSum::by_slot`]), then the slots are summed in
 /// parallel on the pool the call runs in, each from its own terms alone ([`slot_sum`], the
 /// sum `add_into` takes), into its own `out[slot]`: the same bits on any number of threads.
 /// In `cube-mobile-walls` on 50³ the sums of the correct's contents and of the particles'
 /// loads were 3 % of the fluid node's time, on one thread while the other waited.
 pub(super) fn add_on_pool(sum: &mut OddSum, out: &mut [f64]) {
-    let terms = sum.terms();
-    let n = out.len();
-    if terms.len() < TERMS_PER_TASK || n == 0 {
+    let (n_terms, n) = (sum.terms().len(), out.len());
+    if n_terms < TERMS_PER_TASK || n == 0 {
         sum.add_into(out);
         return;
     }
-    // Where each slot's terms start (and the end of the last), and the terms by slot.
-    let mut starts = vec![0u32; n + 1];
-    for t in terms {
-        starts[t.0 as usize + 1] += 1;
-    }
-    for s in 0..n {
-        starts[s + 1] += starts[s];
-    }
-    let mut next = starts.clone();
-    let mut by_slot = vec![0.0; terms.len()];
-    for t in terms {
-        let s = t.0 as usize;
-        by_slot[next[s] as usize] = t.1;
-        next[s] += 1;
-    }
-    let per_slot = terms.len().div_ceil(n);
+    let per_slot = n_terms.div_ceil(n);
+    let (starts, by_slot) = sum.by_slot(n);
+    let by_slot = &*by_slot;
     out.par_iter_mut()
         .enumerate()
         .with_min_len((TERMS_PER_TASK / per_slot).max(1))
