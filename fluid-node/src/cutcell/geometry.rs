@@ -315,8 +315,7 @@ pub(crate) struct Clipped<'a> {
 }
 
 /// Clips the elements of `elements` that `keep` accepts (given their vertices), in element
-/// order, into `out`; a
-/// piece gets a sub-face where `sub` gives its extended cell a linear index. With a `window`
+/// order, into `out`; a piece gets a sub-face where `sub` gives its extended cell a linear index. With a `window`
 /// (first and last extended slab per axis), 3-D elements give only their pieces in it
 /// ([`clip_polygon_in`]; 2-D segments are clipped whole). Returns the number of elements skipped
 /// (an index out of range or a non-finite coordinate).

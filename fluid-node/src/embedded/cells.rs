@@ -290,7 +290,7 @@ pub(super) fn mark_around(marked: &mut [u64], grid: &Grid, ijk: [usize; 3], r: u
     }
 }
 
-/// The cells marked in `marked` (see [`cell_bits`]), ascending.
+/// The cells marked in `marked` (see [`cell_bits`]), ascending: the set bits of any bit set.
 pub(super) fn marked_cells(marked: &[u64]) -> impl Iterator<Item = usize> + '_ {
     marked.iter().enumerate().flat_map(|(w, &bits)| {
         let mut bits = bits;

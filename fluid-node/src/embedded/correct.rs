@@ -51,10 +51,11 @@ pub struct CorrectReport {
 const CELLS_PER_TASK: usize = 256;
 
 /// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
-/// sides change in the outflow, `(added, amount)` in the order one thread adds them.
+/// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
+/// adding `−v` is subtracting `v`, bit for bit).
 struct CellUpdate {
     content: [f64; NQ],
-    leaving: [(bool, [f64; NQ]); 6],
+    leaving: [[f64; NQ]; 6],
     n_leaving: usize,
 }
 
@@ -279,13 +280,9 @@ impl Embedded {
             let u = update?;
             self.scratch.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
-            for &(gone, v) in &u.leaving[..u.n_leaving] {
+            for v in &u.leaving[..u.n_leaving] {
                 for q in 0..NQ {
-                    if gone {
-                        leaving[q] += v[q];
-                    } else {
-                        leaving[q] -= v[q];
-                    }
+                    leaving[q] += v[q];
                 }
             }
             self.scratch.content[k] = u.content;
@@ -313,7 +310,7 @@ impl Embedded {
         };
         let mut update = CellUpdate {
             content: [0.0; NQ],
-            leaving: [(false, [0.0; NQ]); 6],
+            leaving: [[0.0; NQ]; 6],
             n_leaving: 0,
         };
         let ijk = grid.ijk(c);
@@ -337,9 +334,9 @@ impl Embedded {
             if ijk[a] == 0 && open[0] {
                 let mut v = [0.0; NQ];
                 for q in 0..NQ {
-                    v[q] = (wl - counted) * fl[q] * sigma * volume;
+                    v[q] = -((wl - counted) * fl[q] * sigma * volume);
                 }
-                update.leaving[update.n_leaving] = (false, v);
+                update.leaving[update.n_leaving] = v;
                 update.n_leaving += 1;
             }
             if ijk[a] + 1 == grid.cells[a] && open[1] {
@@ -347,7 +344,7 @@ impl Embedded {
                 for q in 0..NQ {
                     v[q] = (wr - counted) * fr[q] * sigma * volume;
                 }
-                update.leaving[update.n_leaving] = (true, v);
+                update.leaving[update.n_leaving] = v;
                 update.n_leaving += 1;
             }
             let dim = grid.dim;

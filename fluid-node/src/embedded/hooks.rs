@@ -270,8 +270,7 @@ impl HookGeometry<'_> {
                 self.near_wall(current, &subfaces[bounds[r]..bounds[r + 1]], sum)
             })
             .collect();
-        let mut walls: Vec<NearWall> = Vec::with_capacity(near.cells.len());
-        walls.par_extend(rayon::iter::repeat_n(NearWall::default(), near.cells.len()));
+        let mut walls = vec![NearWall::default(); near.cells.len()];
         let mut closed = vec![false; near.cells.len()];
         for (r, (wall, shut)) in summed.into_iter().enumerate() {
             let k = slot(subfaces[bounds[r]].cell);

@@ -59,15 +59,11 @@ impl Embedded {
                 // correct computed (`compute` is pure): it is taken as it is where the trial
                 // surface is `F^n`'s, bit for bit. Computed again, it was 2 % of the fluid
                 // node's time in `cube-mobile-walls` on 50^3, on one thread.
-                let current = self.state.current.surface();
-                let reuse = same_surface(&trial.surface(), &current);
-                if !reuse {
-                    let geom = &mut self.scratch.trial;
-                    solver.install(|| compute(grid, &trial.surface(), geom));
-                }
-                let geom = if reuse {
+                let geom = if same_surface(&trial.surface(), &self.state.current.surface()) {
                     &self.state.geom
                 } else {
+                    let geom = &mut self.scratch.trial;
+                    solver.install(|| compute(grid, &trial.surface(), geom));
                     &self.scratch.trial
                 };
                 let lambda = |c: usize| geom.solid_fraction[c];

@@ -172,15 +172,9 @@ impl Embedded {
                         marked[f / 64] |= 1 << (f % 64);
                     }
                 }
-                let mut keys: Vec<(u32, u32)> = Vec::with_capacity(2 * cells.len());
-                for (w, &bits) in marked.iter().enumerate() {
-                    let mut bits = bits;
-                    while bits != 0 {
-                        let f = 64 * w + bits.trailing_zeros() as usize;
-                        keys.push(((f / (n + 1)) as u32, (f % (n + 1)) as u32));
-                        bits &= bits - 1;
-                    }
-                }
+                let keys: Vec<(u32, u32)> = marked_cells(&marked)
+                    .map(|f| ((f / (n + 1)) as u32, (f % (n + 1)) as u32))
+                    .collect();
                 tap.clear(count);
                 for &(p, m) in &keys {
                     tap.pencil_offsets[p as usize + 1] += 1;
