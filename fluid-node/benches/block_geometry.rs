@@ -27,7 +27,6 @@ use fluid_node::cutcell::{
     CellBox, CutGeometry, Surface, compute, compute_block, compute_block_cells,
 };
 use fluid_node::embedded::{SolidFrame, hook_halo, wall_hooks};
-use fluid_node::fv::slab::{coords_of, share};
 use fluid_node::grid::Grid;
 
 /// The halo of the embedded part at OSMP 5 (ng = 3): `NEAR_RADIUS` (2) + the ghost depth
@@ -74,7 +73,7 @@ fn run(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
     for k in [1, 2, 4] {
         let dims = protocol::decomp::choose(&grid.cells[..3], k, 6).expect("decomposition");
         for r in 0..k {
-            let block = rank_block(grid, dims, r);
+            let block = CellBox::of_rank(grid, dims, r);
             // The loads' trial geometry (cells only, halo 1), then the embedded part's.
             for (halo, cells) in [(1, true), (HALO, false)] {
                 let geometry = |b| {
@@ -147,7 +146,7 @@ fn run_hooks(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize)
     for k in [1, 2, 4] {
         let dims = protocol::decomp::choose(&grid.cells[..3], k, 6).expect("decomposition");
         for r in 0..k {
-            let block = rank_block(grid, dims, r);
+            let block = CellBox::of_rank(grid, dims, r);
             let h = wall_hooks(grid, ng, &frame, Some(block));
             let t = timed(reps, || {
                 std::hint::black_box(wall_hooks(grid, ng, &frame, Some(block)));
@@ -195,15 +194,4 @@ fn main() {
     let sphere = cutcell_support::sphere_mesh([0.5013, 0.4987, 0.5021], 0.3, n / 2, n);
     run(&format!("sphere r = 0.3, {n}^3"), &grid, &sphere, reps);
     run_hooks(&format!("sphere r = 0.3, {n}^3"), &grid, &sphere, reps);
-}
-
-/// The cells of rank `r` of the process grid `dims` (ranks x fastest, `Slab::block_of_rank`).
-fn rank_block(grid: &Grid, dims: [usize; 3], r: usize) -> CellBox {
-    let coords = coords_of(dims, r);
-    let mut block = CellBox::whole(grid);
-    for a in 0..3 {
-        let (first, own) = share(grid.cells[a], dims[a], coords[a]);
-        (block.lo[a], block.hi[a]) = (first, first + own);
-    }
-    block
 }

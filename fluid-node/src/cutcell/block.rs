@@ -57,6 +57,18 @@ impl CellBox {
         }
     }
 
+    /// The cells of rank `r` of the process grid `dims` (ranks x fastest, as
+    /// `Slab::block_of_rank` cuts them).
+    pub fn of_rank(grid: &Grid, dims: [usize; 3], r: usize) -> CellBox {
+        let coords = crate::fv::slab::coords_of(dims, r);
+        let mut block = CellBox::whole(grid);
+        for a in 0..3 {
+            let (first, own) = crate::fv::slab::share(grid.cells[a], dims[a], coords[a]);
+            (block.lo[a], block.hi[a]) = (first, first + own);
+        }
+        block
+    }
+
     /// Grown by `h` cells on each side of the active axes, within the grid.
     pub fn grown(&self, grid: &Grid, h: usize) -> CellBox {
         let mut b = *self;

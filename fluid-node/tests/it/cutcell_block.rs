@@ -9,7 +9,6 @@ use fluid_node::cutcell::{
     BlockGeometry, CellBox, CutGeometry, compute, compute_block, compute_block_cells,
 };
 use fluid_node::embedded::SolidFrame;
-use fluid_node::fv::slab::{coords_of, share};
 use fluid_node::grid::Grid;
 
 use crate::embedded_support::translated;
@@ -114,7 +113,7 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
         for dims in decomps {
             let ranks: usize = dims.iter().product();
             for r in 0..ranks {
-                let block = rank_block(grid, *dims, r);
+                let block = CellBox::of_rank(grid, *dims, r);
                 for halo in HALOS {
                     let b = compute_block(grid, &surface, block, halo);
                     let what = format!("{name}, position {k}, {dims:?} rank {r}, halo {halo}");
@@ -172,15 +171,4 @@ fn block_geometry_3d_is_the_whole_grids_on_every_process_grid() {
     // The bodies span 7 of the 24 cells along z and 8 of 16 along y: only the blocks of the
     // narrower halos miss some of them (103 of 460 blocks).
     assert!(tally.fewer > tally.blocks / 5, "blocks clip fewer elements");
-}
-
-/// The cells of rank `r` of the process grid `dims` (ranks x fastest, `Slab::block_of_rank`).
-pub(crate) fn rank_block(grid: &Grid, dims: [usize; 3], r: usize) -> CellBox {
-    let coords = coords_of(dims, r);
-    let mut block = CellBox::whole(grid);
-    for a in 0..3 {
-        let (first, own) = share(grid.cells[a], dims[a], coords[a]);
-        (block.lo[a], block.hi[a]) = (first, first + own);
-    }
-    block
 }

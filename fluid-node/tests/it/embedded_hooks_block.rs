@@ -11,7 +11,6 @@ use fluid_node::cutcell::CellBox;
 use fluid_node::embedded::{SolidFrame, WallHooks, hook_halo, wall_hooks};
 use fluid_node::grid::Grid;
 
-use crate::cutcell_block::rank_block;
 use crate::embedded_support::{polygon_2d, translated};
 use crate::fv_ranks::{bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
 
@@ -39,7 +38,7 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
             for dims in decomps {
                 let ranks: usize = dims.iter().product();
                 for r in 0..ranks {
-                    let block = rank_block(grid, *dims, r);
+                    let block = CellBox::of_rank(grid, *dims, r);
                     let what = format!("{name}, position {k}, ng {ng}, {dims:?} rank {r}");
                     let expected = whole.restricted(grid, ng, block);
                     let got = wall_hooks(grid, ng, &frame, Some(block));
@@ -173,7 +172,7 @@ fn the_hooks_are_the_same_on_any_number_of_threads() {
         (&grid2, solid2, [2, 2, 1]),
     ];
     for (grid, solid, dims) in cases {
-        for block in [None, Some(rank_block(grid, dims, 1))] {
+        for block in [None, Some(CellBox::of_rank(grid, dims, 1))] {
             let on = |threads: usize| {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)
