@@ -7,6 +7,13 @@
 //! rigidly with their particle, follow the slots. The vertex and element counts never change
 //! during a run; fracture changes connectivity and wet flags only, and bumps `revision`.
 //!
+//! Which vertices are carried: with fracture on, all of them (so that a crack, which moves
+//! elements onto other slots, changes no message shape). Without fracture the connectivity is
+//! that of the start for the whole run, and only the vertices the elements use are carried,
+//! renumbered in their order ([`WetTopology::kept`]): in `clamped-beam-2d` 132 of the 2 912
+//! slots, the rest being the corners of the particles inside the beam, which no element
+//! references and which were half of every `SolidState` the record holds (issue 39 item 4).
+//!
 //! Elements: 3-D: for a face with loop `a_0 … a_k`, the triangles `(centroid, a_i, a_{i+1})`,
 //! normal outward by the right-hand rule. 2-D: each polygon edge `(a, b)` in counter-clockwise
 //! order, outward normal `(dy, −dx)`.
@@ -59,7 +66,18 @@ pub struct WetTopology {
     /// 3-D, per face: the face across an unbroken link whose centroid this face's centroid
     /// vertex shares ([`NO_PARTNER`]: a boundary face or a broken link).
     pub centroid_partner: Vec<u32>,
+    /// Whether the internal faces are carried (fracture on); then every vertex is carried.
+    pub carry_internal: bool,
+    /// The vertices carried, as indices of the whole numbering (slots, then the 3-D face
+    /// centroids), ascending; empty with fracture on (see the module docs).
+    pub kept: Vec<u32>,
+    /// Index of each vertex of the whole numbering among the carried ones ([`NOT_CARRIED`]
+    /// for the others); empty with fracture on: all vertices carried, as they are numbered.
+    pub renumber: Vec<u32>,
 }
+
+/// [`WetTopology::renumber`] of a vertex no element uses.
+pub const NOT_CARRIED: u32 = u32::MAX;
 
 /// [`WetTopology::centroid_partner`] of a face that shares its centroid with none.
 pub const NO_PARTNER: u32 = u32::MAX;
@@ -89,7 +107,41 @@ pub fn build_elements(model: &Model, carry_internal: bool) -> WetTopology {
     }
     topo.slot_rep = (0..n_slots).collect();
     topo.centroid_partner = vec![NO_PARTNER; model.faces.len()];
+    topo.carry_internal = carry_internal;
+    carried_vertices(model, &mut topo);
     topo
+}
+
+/// [`WetTopology::kept`] and [`WetTopology::renumber`] after the slots' grouping: without
+/// fracture, the representative slots and (3-D) face centroids the elements use.
+fn carried_vertices(model: &Model, topo: &mut WetTopology) {
+    topo.kept.clear();
+    topo.renumber.clear();
+    if topo.carry_internal {
+        return;
+    }
+    let n_slots = model.slots.len();
+    let n_vertices = if model.dim == 3 {
+        n_slots + model.faces.len()
+    } else {
+        n_slots
+    };
+    let mut used = vec![false; n_vertices];
+    for slots in &topo.element_slots {
+        for &s in &slots[..model.dim] {
+            let v = if (s as usize) < n_slots {
+                topo.slot_rep[s as usize]
+            } else {
+                s
+            };
+            used[v as usize] = true;
+        }
+    }
+    topo.renumber = vec![NOT_CARRIED; n_vertices];
+    for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        topo.renumber[v] = topo.kept.len() as u32;
+        topo.kept.push(v as u32);
+    }
 }
 
 fn find(parent: &mut [u32], mut a: u32) -> u32 {
@@ -139,6 +191,7 @@ pub fn group_slots(model: &Model, broken: &[bool], topo: &mut WetTopology) {
         let r = find(&mut parent, s);
         topo.slot_rep[s as usize] = r;
     }
+    carried_vertices(model, topo);
     topo.centroid_partner.clear();
     topo.centroid_partner.resize(model.faces.len(), NO_PARTNER);
     if model.dim == 3 {
@@ -174,11 +227,12 @@ pub fn write_connectivity(
     for (e, slots) in topo.element_slots.iter().enumerate() {
         let face = &model.faces[topo.element_face[e] as usize];
         let map = |s: u32| {
-            if s < n_slots {
+            let v = if s < n_slots {
                 topo.slot_rep[s as usize]
             } else {
                 s
-            }
+            };
+            topo.renumber.get(v as usize).copied().unwrap_or(v)
         };
         out.elements.extend(slots[..dim].iter().map(|&s| map(s)));
         out.element_particle.push(face.particle);
@@ -239,6 +293,14 @@ pub fn write_geometry(
             };
             out.vertices[(n_slots + f) * 3..(n_slots + f + 1) * 3].copy_from_slice(c.as_slice());
         }
+    }
+    if !topo.renumber.is_empty() {
+        // Ascending, so each carried vertex moves down or stays: in place, front to back.
+        for (i, &v) in topo.kept.iter().enumerate() {
+            let v = v as usize;
+            out.vertices.copy_within(v * dim..(v + 1) * dim, i * dim);
+        }
+        out.vertices.truncate(topo.kept.len() * dim);
     }
     let n_el = out.element_particle.len();
     let vert = |i: u32| {

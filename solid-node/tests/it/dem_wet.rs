@@ -332,3 +332,83 @@ fn particles_turning_together_keep_their_long_faces_parallel_a_negative_stiffnes
         "torque {torque:e}, expected {expected:e}"
     );
 }
+
+/// The coordinates of element `e`'s vertices, as bits.
+fn element_points(wet: &WetSurfaceData, e: usize) -> Vec<u64> {
+    let dim = wet.dim;
+    (wet.elements[e * dim..(e + 1) * dim].iter())
+        .flat_map(|&v| &wet.vertices[v as usize * dim..(v as usize + 1) * dim])
+        .map(|x| x.to_bits())
+        .collect()
+}
+
+/// Without fracture only the vertices the elements use are carried (issue 39 item 4), and the
+/// elements are where the whole numbering puts them: with fracture on (every slot carried, the
+/// internal faces too) the wet elements, in order, have the same particles and the same vertex
+/// coordinates, to the bit; with it, the vertex count is the slots' (3-D: and the faces').
+#[test]
+fn without_fracture_only_the_vertices_the_elements_use_are_carried() {
+    let shapes = [
+        (
+            Shape::Box {
+                center: vec![0.1, 0.2],
+                size: vec![0.3, 0.2],
+            },
+            vec![3, 2],
+            2,
+        ),
+        (
+            Shape::Box {
+                center: vec![0.1, 0.2, 0.3],
+                size: vec![0.3, 0.2, 0.1],
+            },
+            vec![3, 2, 2],
+            3,
+        ),
+        (
+            Shape::Ring {
+                center: vec![1.0, 2.0],
+                inner_radius: 0.9,
+                outer_radius: 1.0,
+            },
+            vec![24],
+            2,
+        ),
+    ];
+    for (shape, divisions, dim) in shapes {
+        let compact = build(
+            &shape_config(shape.clone(), divisions.clone(), false),
+            dim,
+            1,
+        );
+        let whole = build(&shape_config(shape, divisions, true), dim, 1);
+        let (c, w) = (compact.wet_surface(), whole.wet_surface());
+        let model = whole.model();
+        let n_whole = model.slots.len() + if dim == 3 { model.faces.len() } else { 0 };
+        assert_eq!(
+            w.vertices.len(),
+            n_whole * dim,
+            "{dim}-D: fracture on carries all"
+        );
+        let mut used: Vec<u32> = c.elements.clone();
+        used.sort_unstable();
+        used.dedup();
+        let n_compact = c.vertices.len() / dim;
+        assert_eq!(
+            used.len(),
+            n_compact,
+            "{dim}-D: a carried vertex no element uses"
+        );
+        assert!(n_compact < n_whole, "{dim}-D: {n_compact} of {n_whole}");
+        let wet: Vec<usize> = (0..w.n_elements()).filter(|&e| w.wet[e]).collect();
+        assert_eq!(wet.len(), c.n_elements());
+        for (k, &e) in wet.iter().enumerate() {
+            assert_eq!(c.element_particle[k], w.element_particle[e]);
+            assert_eq!(
+                element_points(c, k),
+                element_points(w, e),
+                "{dim}-D element {k}"
+            );
+        }
+    }
+}
