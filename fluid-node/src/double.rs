@@ -224,6 +224,7 @@ impl FluidModel for PressureDouble {
             dim: state.dim,
             force: Vec::new(),
             torque: Vec::new(),
+            particles: state.particles.clone(),
         };
         integrate_pressure(
             state,
@@ -282,6 +283,7 @@ mod tests {
                 element_particle: vec![0; 4],
                 wet: vec![true; 4],
             },
+            particles: Vec::new(),
         }
     }
 
@@ -348,6 +350,7 @@ mod tests {
                 element_particle: vec![0; 12],
                 wet: vec![true; 12],
             },
+            particles: Vec::new(),
         };
         let (mut f, mut t) = (Vec::new(), Vec::new());
         integrate_pressure(&state, |_, _| 3.0, &mut f, &mut t);

@@ -54,7 +54,7 @@ pub enum Error {
     Embedded(#[from] EmbeddedError),
     /// A solid state whose arrays do not fit together.
     #[error(
-        "solid state of step {step} is malformed: dim {dim} (surface {surface_dim}), {positions} positions, {velocities} velocities, {angular_velocities} angular velocities, {vertex_values} vertex values, {element_indices} element indices for {elements} elements, {wet_flags} wet flags"
+        "solid state of step {step} is malformed: dim {dim} (surface {surface_dim}), {positions} positions, {velocities} velocities, {angular_velocities} angular velocities, {vertex_values} vertex values, {element_indices} element indices for {elements} elements, {wet_flags} wet flags, {particle_ids} particle numbers (none, or one per particle)"
     )]
     MalformedSolid {
         /// Coupling step.
@@ -77,6 +77,8 @@ pub enum Error {
         elements: usize,
         /// Wet flags.
         wet_flags: usize,
+        /// The solid's numbers of the particles (`SolidState::particles`).
+        particle_ids: usize,
     },
     /// An element of a solid state belongs to a particle that does not exist.
     #[error(

@@ -19,7 +19,7 @@ use protocol::wire::{
 };
 
 use crate::Error;
-use crate::embedded::{COVERED_TOLERANCE, Embedded, InterfaceBudget, SolidFrame};
+use crate::embedded::{COVERED_TOLERANCE, Embedded, EmbeddedError, InterfaceBudget, SolidFrame};
 use crate::fv::FluidSolver;
 use crate::fv::comm::{Comm, Serial};
 use crate::model::FluidModel;
@@ -43,6 +43,10 @@ pub struct RealFluid {
     embedded: Option<Embedded>,
     /// Budget restored from a checkpoint before the surface arrived.
     pending_budget: Option<InterfaceBudget>,
+    /// The solid's numbers of the frame's particles (`SolidState::particles` of the last
+    /// accepted state: the coupler sends only the particles the elements belong to); empty:
+    /// the frame's own numbers. For what the outputs and the errors name.
+    particle_ids: Vec<u32>,
     /// The `.vti` files written so far (`fluid.pvd`).
     vtk_series: Series,
 }
@@ -108,6 +112,7 @@ impl RealFluid {
                     .is_some_and(|k| k != SolidSubsteps::Fixed(1)),
             embedded: None,
             pending_budget: None,
+            particle_ids: Vec::new(),
             vtk_series: Series::default(),
         })
     }
@@ -272,12 +277,17 @@ impl NodeModel for RealFluid {
                 let mut w = std::io::BufWriter::new(std::fs::File::create(
                     out.join(format!("surface_{k}.csv")),
                 )?);
-                crate::output::write_surface_csv(&mut w, e.surface())?;
+                crate::output::write_surface_csv(&mut w, e.surface(), &self.particle_ids)?;
                 w.flush()?;
                 let mut w = std::io::BufWriter::new(std::fs::File::create(
                     out.join(format!("loads_{k}.csv")),
                 )?);
-                crate::output::write_loads_csv(&mut w, grid.dim, e.last_loads())?;
+                crate::output::write_loads_csv(
+                    &mut w,
+                    grid.dim,
+                    e.last_loads(),
+                    &self.particle_ids,
+                )?;
                 w.flush()?;
             }
         }
@@ -379,10 +389,12 @@ impl FluidModel for RealFluid {
             return Ok(());
         }
         let frame = solid_frame(state)?;
+        self.particle_ids.clone_from(&state.particles);
+        let named = |e| named_particles(e, state);
         match &mut self.embedded {
-            Some(e) => e.set_surface(frame)?,
+            Some(e) => e.set_surface(frame).map_err(named)?,
             None => {
-                let mut e = Embedded::new(&self.solver, frame)?;
+                let mut e = Embedded::new(&self.solver, frame).map_err(named)?;
                 e.set_fracture(self.fracture);
                 e.set_start_levers(self.start_levers);
                 self.embedded = Some(e);
@@ -412,12 +424,13 @@ impl FluidModel for RealFluid {
         let embedded = self.embedded.as_mut().ok_or(Error::NoSurface { step })?;
         let loads = embedded
             .loads(&self.solver, &frame)
-            .map_err(|e| e.at_step(step))?;
+            .map_err(|e| named_particles(e.at_step(step), state))?;
         Ok(InterfaceLoads {
             stamp: plan.stamp,
             dim: state.dim,
             force: loads.force,
             torque: loads.torque,
+            particles: state.particles.clone(),
         })
     }
 
@@ -428,13 +441,24 @@ impl FluidModel for RealFluid {
             let solver = &mut self.solver;
             let embedded = self.embedded.as_mut().ok_or(Error::NoSurface { step })?;
             let explicit = plan.scheme == protocol::wire::Scheme::Explicit;
-            embedded.correct(solver, plan.dt, frame, step, explicit)?;
+            (embedded.correct(solver, plan.dt, frame, step, explicit))
+                .map_err(|e| named_particles(e, state))?;
+            self.particle_ids.clone_from(&state.particles);
             return Ok(());
         }
         // The solver checks the time step (the one CFL check, `FluidSolver::advance`).
         self.solver.advance(plan.dt).check(step)?;
         Ok(())
     }
+}
+
+/// `e` naming the solid's number of its particle rather than the frame's (see
+/// [`SolidState::particles`]).
+fn named_particles(mut e: EmbeddedError, state: &SolidState) -> EmbeddedError {
+    if let EmbeddedError::OutsideDomain { particle, .. } = &mut e {
+        *particle = state.particle_id(*particle as usize);
+    }
+    e
 }
 
 /// Copies the parts of a wire [`SolidState`] the fluid uses, checking their lengths.
@@ -451,6 +475,7 @@ fn solid_frame(s: &SolidState) -> Result<SolidFrame, Error> {
         || !surface.vertices.len().is_multiple_of(dim)
         || surface.elements.len() != ne * dim
         || surface.wet.len() != ne
+        || !(s.particles.is_empty() || s.particles.len() == n)
     {
         return Err(Error::MalformedSolid {
             step,
@@ -463,6 +488,7 @@ fn solid_frame(s: &SolidState) -> Result<SolidFrame, Error> {
             element_indices: surface.elements.len(),
             elements: ne,
             wet_flags: surface.wet.len(),
+            particle_ids: s.particles.len(),
         });
     }
     if let Some(&p) = surface.element_particle.iter().find(|&&p| p as usize >= n) {

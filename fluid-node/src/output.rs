@@ -239,7 +239,12 @@ pub fn write_fluid_vtk(
 
 /// Writes the wet surface as the fluid used it, one row per element: `element,particle,wet`
 /// then the coordinates of its vertices (`x0,y0,x1,y1` in 2-D, three vertices in 3-D) \[m\].
-pub fn write_surface_csv(w: &mut impl Write, surface: &SolidFrame) -> std::io::Result<()> {
+/// `particle` is the solid's number: `ids[p]` for the frame's particle `p` (`ids` empty: `p`).
+pub fn write_surface_csv(
+    w: &mut impl Write,
+    surface: &SolidFrame,
+    ids: &[u32],
+) -> std::io::Result<()> {
     let d = surface.dim;
     let axes = ["x", "y", "z"];
     let mut header = vec!["element".to_string(), "particle".into(), "wet".into()];
@@ -252,7 +257,7 @@ pub fn write_surface_csv(w: &mut impl Write, surface: &SolidFrame) -> std::io::R
     table.write_record(&header)?;
     for (e, nodes) in surface.elements.chunks_exact(d).enumerate() {
         table.write_field(e.to_string())?;
-        table.write_field(surface.element_particle[e].to_string())?;
+        table.write_field(particle_id(ids, surface.element_particle[e] as usize).to_string())?;
         table.write_field(u8::from(surface.wet[e]).to_string())?;
         for &v in nodes {
             for x in &surface.vertices[v as usize * d..(v as usize + 1) * d] {
@@ -264,9 +269,21 @@ pub fn write_surface_csv(w: &mut impl Write, surface: &SolidFrame) -> std::io::R
     table.flush()
 }
 
+/// The solid's number of the frame's particle `p` (see [`write_surface_csv`]).
+fn particle_id(ids: &[u32], p: usize) -> u32 {
+    ids.get(p).copied().unwrap_or(p as u32)
+}
+
 /// Writes the fluid loads of the last step per particle: `particle,fx,fy[,fz],m` (2-D, torque
-/// about z) or `...,mx,my,mz` (3-D) [N, N m; 2-D per unit depth].
-pub fn write_loads_csv(w: &mut impl Write, dim: usize, loads: &Loads) -> std::io::Result<()> {
+/// about z) or `...,mx,my,mz` (3-D) [N, N m; 2-D per unit depth], for the particles the fluid
+/// was sent (those the surface's elements belong to), by the solid's numbers (`ids` as in
+/// [`write_surface_csv`]).
+pub fn write_loads_csv(
+    w: &mut impl Write,
+    dim: usize,
+    loads: &Loads,
+    ids: &[u32],
+) -> std::io::Result<()> {
     let header = if dim == 2 {
         &["particle", "fx", "fy", "m"][..]
     } else {
@@ -276,7 +293,7 @@ pub fn write_loads_csv(w: &mut impl Write, dim: usize, loads: &Loads) -> std::io
     table.write_record(header)?;
     let nr = if dim == 2 { 1 } else { 3 };
     for (p, f) in loads.force.chunks_exact(dim).enumerate() {
-        table.write_field(p.to_string())?;
+        table.write_field(particle_id(ids, p).to_string())?;
         let moments = &loads.torque[p * nr..(p + 1) * nr];
         table.write_record(f.iter().chain(moments).map(|x| format!("{x:.12e}")))?;
     }

@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 5;
+pub const PROTOCOL_VERSION: u32 = 6;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -177,6 +177,10 @@ pub struct InterfaceLoads {
     pub force: Vec<f64>,
     /// Torque on each particle about its centre of mass [N m], flattened (`n_rot(dim)` each).
     pub torque: Vec<f64>,
+    /// The solid's numbers of the particles the arrays hold, ascending, when they hold only
+    /// some: those of the [`SolidState`] the loads were computed on ([`SolidState::particles`];
+    /// the others have none); empty: every particle, in order.
+    pub particles: Vec<u32>,
 }
 
 /// The wet surface as the solid sends it (DESIGN §3): 3-D triangles, 2-D segments.
@@ -241,9 +245,20 @@ pub struct SolidState {
     pub diameter: Vec<f64>,
     /// Wet surface at the end of the step `F^{n+1}`.
     pub surface: WetSurface,
+    /// The solid's numbers of the particles the arrays above describe, ascending, when they
+    /// describe only some (`surface.element_particle` then counts among these); empty: every
+    /// particle, in order. The solid sends all of them; the coupler sends the fluid only those
+    /// the elements belong to (issue 39 item 4: in `clamped-beam-2d` 124 of 728, the rest
+    /// inside the beam), and spreads the fluid's loads back onto all of them for the solid.
+    pub particles: Vec<u32>,
 }
 
 impl SolidState {
+    /// The solid's number of particle `i` of the arrays (see [`SolidState::particles`]).
+    pub fn particle_id(&self, i: usize) -> u32 {
+        self.particles.get(i).copied().unwrap_or(i as u32)
+    }
+
     /// Number of particles.
     pub fn n_particles(&self) -> usize {
         if self.dim == 0 {

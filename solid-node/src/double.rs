@@ -124,6 +124,7 @@ impl PrescribedDouble {
             angular_velocity: vec![0.0; n_rot],
             diameter: vec![2.0 * self.half.iter().map(|h| h * h).sum::<f64>().sqrt()],
             surface: self.surface(x),
+            particles: Vec::new(),
         }
     }
 
@@ -242,6 +243,8 @@ impl SolidModel for PrescribedDouble {
     ) -> Result<SolidState, StepError> {
         let dim = self.dim;
         let force: Vec<f64> = match loads {
+            // Loads of some particles without the first: none on it.
+            Some(l) if l.particles.first().is_some_and(|&p| p != 0) => vec![0.0; dim],
             Some(l) if l.force.len() >= dim => l.force[..dim].to_vec(),
             Some(l) => {
                 return Err(StepError::DoubleLoadsSize {

@@ -54,6 +54,14 @@ pub enum StepError {
         /// Torque values the solid takes (1 or 3 per particle).
         n_torque_expected: usize,
     },
+    /// Loads of some particles that do not fit them or the solid.
+    #[error("step {step}: loads of some particles: {what}")]
+    LoadsOf {
+        /// Coupling step.
+        step: u64,
+        /// What does not fit.
+        what: String,
+    },
     /// `run.solid_substeps = "auto"` would need more sub-steps than allowed.
     #[error(
         "step {step}: dt {dt:?} s needs {needed} solid sub-steps of at most {bound:?} s (half \

@@ -35,6 +35,8 @@ pub struct RealSolid {
     last_broken_substeps: Vec<u32>,
     zero_force: Vec<f64>,
     zero_torque: Vec<f64>,
+    /// Loads of only some particles spread onto all of them (`InterfaceLoads::particles`).
+    spread: (Vec<f64>, Vec<f64>),
     /// The `.vtp` files written so far: `particles.pvd`, `solid.pvd`, `wet.pvd`.
     vtk_series: [Series; 3],
     /// `run.solid_substeps` (`None`: one step per coupling step, bounded by the solid's).
@@ -114,6 +116,7 @@ impl RealSolid {
             last_broken_substeps: Vec::new(),
             zero_force: vec![0.0; n * dim],
             zero_torque: vec![0.0; n * n_rot],
+            spread: (vec![0.0; n * dim], vec![0.0; n * n_rot]),
             vtk_series: Default::default(),
             substeps: scene.run.solid_substeps,
         })
@@ -346,7 +349,7 @@ impl SolidModel for RealSolid {
         loads: Option<&InterfaceLoads>,
     ) -> Result<SolidState, StepError> {
         let (force, torque) = match loads {
-            Some(l) => {
+            Some(l) if l.particles.is_empty() => {
                 if l.force.len() != self.zero_force.len()
                     || l.torque.len() != self.zero_torque.len()
                 {
@@ -359,6 +362,13 @@ impl SolidModel for RealSolid {
                     });
                 }
                 (l.force.as_slice(), l.torque.as_slice())
+            }
+            Some(l) => {
+                spread_loads(l, &mut self.spread).map_err(|what| StepError::LoadsOf {
+                    step: plan.stamp.step,
+                    what,
+                })?;
+                (self.spread.0.as_slice(), self.spread.1.as_slice())
             }
             None => (self.zero_force.as_slice(), self.zero_torque.as_slice()),
         };
@@ -373,6 +383,7 @@ impl SolidModel for RealSolid {
             angular_velocity: trial.omega_half.clone(),
             diameter,
             surface: Self::surface(&trial.wet),
+            particles: Vec::new(),
         })
     }
 
@@ -408,6 +419,7 @@ impl SolidModel for RealSolid {
             angular_velocity: Vec::new(),
             diameter: self.diameters(),
             surface: Self::surface(self.solid.wet_surface()),
+            particles: Vec::new(),
         };
         for p in 0..n {
             let id = ParticleId(p as u32);
@@ -426,5 +438,93 @@ impl SolidModel for RealSolid {
             }
         }
         s
+    }
+}
+
+/// Loads of some particles (`loads.particles`, as the fluid computes them on the particles its
+/// surface's elements belong to) into `(force, torque)` of every particle, zero for the others:
+/// the values the solid took when the loads came whole. An error says what does not fit.
+fn spread_loads(
+    loads: &InterfaceLoads,
+    (force, torque): &mut (Vec<f64>, Vec<f64>),
+) -> Result<(), String> {
+    let k = loads.particles.len();
+    let dim = loads.dim as usize;
+    let rot = protocol::wire::n_rot(loads.dim);
+    let n = force.len() / dim.max(1);
+    if loads.force.len() != k * dim || loads.torque.len() != k * rot || torque.len() != n * rot {
+        return Err(format!(
+            "{} force and {} torque values in {dim}-D for {k} particles",
+            loads.force.len(),
+            loads.torque.len()
+        ));
+    }
+    if let Some(w) = loads.particles.windows(2).find(|w| w[0] >= w[1]) {
+        return Err(format!(
+            "particle numbers not ascending: {} then {}",
+            w[0], w[1]
+        ));
+    }
+    if let Some(&p) = loads.particles.last().filter(|&&p| p as usize >= n) {
+        return Err(format!("particle {p}, the solid has {n}"));
+    }
+    force.fill(0.0);
+    torque.fill(0.0);
+    for (i, &p) in loads.particles.iter().enumerate() {
+        let p = p as usize;
+        force[p * dim..(p + 1) * dim].copy_from_slice(&loads.force[i * dim..(i + 1) * dim]);
+        torque[p * rot..(p + 1) * rot].copy_from_slice(&loads.torque[i * rot..(i + 1) * rot]);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod spread_tests {
+    use protocol::wire::{InterfaceLoads, Stamp};
+
+    use super::spread_loads;
+
+    fn loads(particles: Vec<u32>, force: Vec<f64>, torque: Vec<f64>) -> InterfaceLoads {
+        InterfaceLoads {
+            stamp: Stamp::step(1),
+            dim: 2,
+            force,
+            torque,
+            particles,
+        }
+    }
+
+    #[test]
+    fn loads_of_some_particles_land_on_them_and_the_rest_get_none() {
+        // Four particles in 2-D; the buffers hold last call's values, which must not survive.
+        let mut spread = (vec![9.0; 8], vec![9.0; 4]);
+        let l = loads(vec![1, 3], vec![1.5, -2.0, 0.25, 1e-300], vec![-0.0, 7.0]);
+        spread_loads(&l, &mut spread).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(&spread.0),
+            bits(&[0.0, 0.0, 1.5, -2.0, 0.0, 0.0, 0.25, 1e-300])
+        );
+        assert_eq!(bits(&spread.1), bits(&[0.0, -0.0, 0.0, 7.0]));
+    }
+
+    #[test]
+    fn loads_that_do_not_fit_are_refused_with_the_reason() {
+        let mut spread = (vec![0.0; 8], vec![0.0; 4]);
+        let cases = [
+            (loads(vec![1, 3], vec![1.0; 3], vec![0.0; 2]), "3 force"),
+            (
+                loads(vec![3, 1], vec![1.0; 4], vec![0.0; 2]),
+                "not ascending",
+            ),
+            (
+                loads(vec![1, 4], vec![1.0; 4], vec![0.0; 2]),
+                "particle 4, the solid has 4",
+            ),
+        ];
+        for (l, why) in cases {
+            let err = spread_loads(&l, &mut spread).unwrap_err();
+            assert!(err.contains(why), "{err}");
+        }
     }
 }

@@ -41,6 +41,7 @@ fn trial_state(n_triangles: usize) -> SolidState {
             element_particle: (0..n_triangles as u32).map(|t| t / 6).collect(),
             wet: vec![true; n_triangles],
         },
+        particles: Vec::new(),
     }
 }
 
@@ -69,6 +70,7 @@ fn iteration_round_trips(
                     dim: 3,
                     force: vec![1.0; 3 * n_particles],
                     torque: vec![0.1; 3 * n_particles],
+                    particles: Vec::new(),
                 });
                 fluid
                     .send(NodeKind::Coupler, &codec::encode(NodeKind::Fluid, &loads))

@@ -8,6 +8,7 @@ use crate::dt::Proposal;
 use crate::scheme::action::Action;
 use crate::scheme::coupler::{Coupler, Phase};
 use crate::scheme::error::CouplerError;
+use crate::scheme::fluid_view;
 
 impl Coupler {
     pub(super) fn handle(
@@ -68,7 +69,7 @@ impl Coupler {
                 }
                 actions.push(Action::Send(
                     NodeKind::Fluid,
-                    Message::SolidState(state.clone()),
+                    Message::SolidState(fluid_view::for_fluid(&state)),
                 ));
                 self.acceleration.set_initial(state);
             }

@@ -26,6 +26,7 @@ mod config;
 mod coupler;
 mod criterion;
 mod error;
+mod fluid_view;
 mod handle;
 mod restore;
 mod step;

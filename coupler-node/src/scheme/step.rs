@@ -13,6 +13,7 @@ use crate::scheme::action::{Action, Finish, StepReport};
 use crate::scheme::coupler::{Coupler, Phase, stale};
 use crate::scheme::criterion::criterion_22;
 use crate::scheme::error::CouplerError;
+use crate::scheme::fluid_view;
 
 /// The end of solid sub-step `j` (1 to `k`) of the step from `t` of `dt` that ends at `end`:
 /// `t + j (dt/k)`, and `end` itself for the last (`links_broken.csv`; at K = 1 every link
@@ -155,7 +156,7 @@ impl Coupler {
             if let (NodeKind::Fluid, Some((state, true))) = (node, &first) {
                 actions.push(Action::Send(
                     NodeKind::Fluid,
-                    Message::SolidState(state.clone()),
+                    Message::SolidState(fluid_view::for_fluid(state)),
                 ));
             }
         }
@@ -234,7 +235,7 @@ impl Coupler {
         // path, the solid only waits for them.
         actions.push(Action::Send(
             NodeKind::Fluid,
-            Message::SolidState(next_input.clone()),
+            Message::SolidState(fluid_view::for_fluid(&next_input)),
         ));
         actions.push(Action::Send(
             NodeKind::Fluid,

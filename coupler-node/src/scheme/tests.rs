@@ -103,6 +103,7 @@ fn state(stamp: Stamp, x: f64) -> SolidState {
             element_particle: vec![0],
             wet: vec![true],
         },
+        particles: Vec::new(),
     }
 }
 
@@ -299,6 +300,7 @@ fn loads(stamp: Stamp, f: f64) -> Message {
         dim: 2,
         force: vec![f, 0.0],
         torque: vec![0.0],
+        particles: Vec::new(),
     })
 }
 

@@ -34,6 +34,7 @@ fn loads(step: u64, iteration: u32, n: usize) -> Message {
         dim: 3,
         force: (0..3 * n).map(|i| i as f64 * 0.5 + step as f64).collect(),
         torque: (0..3 * n).map(|i| -(i as f64)).collect(),
+        particles: Vec::new(),
     })
 }
 
@@ -54,6 +55,7 @@ fn solid_state(step: u64, iteration: u32) -> Message {
             element_particle: vec![0],
             wet: vec![true],
         },
+        particles: Vec::new(),
     })
 }
 

@@ -14,6 +14,7 @@ mod embedded_boundary;
 mod embedded_crack;
 mod embedded_hooks_block;
 mod embedded_memory;
+mod embedded_particles;
 mod embedded_piston;
 mod embedded_rest;
 mod embedded_support;

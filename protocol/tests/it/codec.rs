@@ -53,6 +53,7 @@ fn every_message() -> Vec<Message> {
             dim: 3,
             force: vec![1.0, -2.5, 3.25, 1e-300, -0.0, 6.0],
             torque: vec![0.5, 0.25, -0.125, 0.0, 1.0, 2.0],
+            particles: Vec::new(),
         }),
         Message::SolidState(SolidState {
             stamp,
@@ -63,6 +64,7 @@ fn every_message() -> Vec<Message> {
             angular_velocity: vec![0.7],
             diameter: vec![0.05],
             surface: surface(),
+            particles: Vec::new(),
         }),
         Message::FixedPointDecision(FixedPointDecision {
             stamp,
