@@ -122,7 +122,10 @@ fn the_real_fluid_and_solid_over_the_bus_are_deterministic_for_any_thread_count(
     owners.dedup();
     let loaded = cosim_tests::csv_column(&a.join("loads_1.csv"), "particle");
     assert_eq!(loaded, owners, "{loads}");
-    assert!(loaded.len() < 16, "the inner particles own no element: {loads}");
+    assert!(
+        loaded.len() < 16,
+        "the inner particles own no element: {loads}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 
