@@ -17,7 +17,10 @@ use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
-use crate::cutcell::{Surface, compute, face_index, subface_swept_volumes};
+use crate::cutcell::{
+    SubFace, SubfaceSwept, SubfaceSweptEntry, Surface, compute, face_index, subface_swept_volumes,
+    subface_swept_volumes_of,
+};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -82,7 +85,7 @@ impl Embedded {
         step: u64,
         explicit: bool,
     ) -> Result<CorrectReport, EmbeddedError> {
-        solver.install(|| self.sweep(&accepted, step))?;
+        self.sweep(solver, &accepted, step)?;
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();
@@ -119,8 +122,19 @@ impl Embedded {
     }
 
     /// The geometry of `F^{n+1}` and the prisms its sub-faces sweep back to `F^n`, checked
-    /// against identity (3).
-    fn sweep(&mut self, accepted: &SolidFrame, step: u64) -> Result<(), EmbeddedError> {
+    /// against identity (3). On the fluid's pool.
+    ///
+    /// Collective on a decomposed grid: each rank clips the prisms of the sub-faces of its own
+    /// cells only (`subface_swept_volumes_of`), and the entries of every rank are gathered on
+    /// every rank in sub-face order ([`gather_swept`]), so every rank holds the entries of one
+    /// rank. The geometry itself is still the whole grid's: it becomes `F^n`'s, which the next
+    /// predict's near cells, the totals and the outputs read on the whole grid.
+    fn sweep(
+        &mut self,
+        solver: &FluidSolver,
+        accepted: &SolidFrame,
+        step: u64,
+    ) -> Result<(), EmbeddedError> {
         let grid = &self.config.grid;
         let dim = grid.dim;
         let current = &self.state.current;
@@ -144,14 +158,21 @@ impl Embedded {
         outside_domain(grid, &self.config.boundary, &accepted.surface())
             .map_err(|e| e.at_step(step))?;
         let scratch = &mut self.scratch;
-        compute(grid, &accepted.surface(), &mut scratch.trial);
-        subface_swept_volumes(
-            grid,
-            &before,
-            &accepted.surface(),
-            &scratch.trial,
-            &mut scratch.swept,
-        );
+        let block = self.config.block;
+        solver.install(|| {
+            compute(grid, &accepted.surface(), &mut scratch.trial);
+            let (after, geom) = (&accepted.surface(), &scratch.trial);
+            match block {
+                None => subface_swept_volumes(grid, &before, after, geom, &mut scratch.swept),
+                Some(block) => {
+                    let mine = |s: &SubFace| block.contains(grid.ijk(s.cell as usize));
+                    subface_swept_volumes_of(grid, &before, after, geom, mine, &mut scratch.swept);
+                }
+            }
+        });
+        if block.is_some() {
+            gather_swept(solver, &mut scratch.swept);
+        }
         if scratch.swept.n_skipped_subfaces > 0 {
             // The swept amounts would miss volume: mass would not be conserved.
             return Err(EmbeddedError::NoSweptPrism {
@@ -159,14 +180,16 @@ impl Embedded {
                 count: scratch.swept.n_skipped_subfaces,
             });
         }
-        sweep_beyond(
-            grid,
-            &before,
-            &accepted.surface(),
-            &mut scratch.beyond_geom,
-            &mut scratch.beyond_swept,
-            &mut scratch.beyond,
-        );
+        solver.install(|| {
+            sweep_beyond(
+                grid,
+                &before,
+                &accepted.surface(),
+                &mut scratch.beyond_geom,
+                &mut scratch.beyond_swept,
+                &mut scratch.beyond,
+            )
+        });
         self.check_swept(step)
     }
 
@@ -239,6 +262,11 @@ impl Embedded {
     /// (eq. 12–13); marks those cells [`CellKind::Updated`]. Returns what those weights change
     /// in what left through the open sides (see [`FluidSolver::add_outflow`]).
     ///
+    /// Collective on a decomposed grid: each rank updates its own near cells, and every rank
+    /// receives every rank's updates ([`gather_updates`]), so every rank holds the contents,
+    /// kinds, count and outflow of one rank (the mixing still reads the near cells of the whole
+    /// grid).
+    ///
     /// NOTE: the sweeps count the whole flux through a domain face as leaving; a body at rest
     /// against an outflow side (its face flush with it, gas streaming out past it) lost 1.3e-4
     /// of the mass in the ledger at its first step, the correct applying that flux times the
@@ -264,18 +292,29 @@ impl Embedded {
         // NOTE: each cell's update reads only its own kind and the fluxes kept by the predict,
         // so the cells are updated in parallel on the fluid's pool; what leaves through open
         // sides is then added up cell by cell in the cells' order, as one thread did: the
-        // same bits on any number of threads.
+        // same bits on any number of threads. On a decomposed grid each rank updates its own
+        // near cells, and the updates of every rank are gathered on every rank in the cells'
+        // order (`gather_updates`): the same list, so the same bits, as one rank's.
         let this = &*self;
-        let updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
+        let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
+        let mine = |k: &usize| block.is_none_or(|b| b.contains(grid.ijk(cells[*k] as usize)));
+        let mut updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
             (0..n_near)
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
+                .filter(mine)
                 .filter_map(|k| {
                     let update = this.cell_update(k, dt, step, &flush, opening, cracking);
                     update.transpose().map(|u| (k, u))
                 })
                 .collect()
         });
+        if block.is_some() {
+            updates = gather_updates(solver, updates, |k| EmbeddedError::FluxNotKept {
+                step,
+                cell: grid.ijk(cells[k] as usize),
+            });
+        }
         for (k, update) in updates {
             let u = update?;
             self.scratch.kind[k] = CellKind::Updated;
@@ -699,4 +738,106 @@ impl Embedded {
         }
         Ok(())
     }
+}
+
+/// Every rank's prism entries (the sub-faces of its own cells, `subface_swept_volumes_of`) on
+/// every rank (collective), in sub-face order, with the skipped sub-faces and the pieces summed
+/// over the ranks: the entries and the count of one rank's `subface_swept_volumes`. Each
+/// sub-face is one rank's, and a rank's entries come by sub-face, so a stable sort by sub-face of
+/// the ranks' entries in rank order restores the one-rank order. Traffic: 16 bytes per entry.
+fn gather_swept(solver: &FluidSolver, swept: &mut SubfaceSwept) {
+    let mut bytes = Vec::with_capacity(16 + 16 * swept.entries.len());
+    bytes.extend((swept.n_skipped_subfaces as u64).to_le_bytes());
+    bytes.extend((swept.n_pieces as u64).to_le_bytes());
+    for e in &swept.entries {
+        bytes.extend(e.subface.to_le_bytes());
+        bytes.extend(e.cell.to_le_bytes());
+        bytes.extend(e.volume.to_bits().to_le_bytes());
+    }
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8"));
+    swept.entries.clear();
+    (swept.n_skipped_subfaces, swept.n_pieces) = (0, 0);
+    for part in solver.comm().all_gather(&bytes) {
+        swept.n_skipped_subfaces += u64_at(&part, 0) as usize;
+        swept.n_pieces += u64_at(&part, 8) as usize;
+        swept
+            .entries
+            .extend(part[16..].chunks_exact(16).map(|t| SubfaceSweptEntry {
+                subface: u32_at(t, 0),
+                cell: u32_at(t, 4),
+                volume: f64::from_bits(u64_at(t, 8)),
+            }));
+    }
+    swept.entries.sort_by_key(|e| e.subface);
+}
+
+/// Every rank's updates of its own near cells ([`Embedded::fluid_fluxes`]) on every rank
+/// (collective), by near slot: the list one rank makes. A failed update (the only failure of
+/// `cell_update` is [`EmbeddedError::FluxNotKept`]) travels as its slot and is made again by
+/// `flux_not_kept`. Traffic per updated cell: 8 bytes and `NQ` values, plus `NQ` per open
+/// domain side it touches.
+fn gather_updates(
+    solver: &FluidSolver,
+    mine: Vec<(usize, Result<CellUpdate, EmbeddedError>)>,
+    flux_not_kept: impl Fn(usize) -> EmbeddedError,
+) -> Vec<(usize, Result<CellUpdate, EmbeddedError>)> {
+    const FAILED: u32 = u32::MAX;
+    let mut bytes = Vec::with_capacity(mine.len() * (8 + 8 * NQ));
+    let mut put = |values: &[f64; NQ]| {
+        for v in values {
+            bytes.extend(v.to_bits().to_le_bytes());
+        }
+    };
+    let mut heads = Vec::with_capacity(mine.len());
+    for (k, update) in &mine {
+        match update {
+            Ok(u) => {
+                heads.push((*k as u32, u.n_leaving as u32));
+                put(&u.content);
+                for v in &u.leaving[..u.n_leaving] {
+                    put(v);
+                }
+            }
+            Err(_) => heads.push((*k as u32, FAILED)),
+        }
+    }
+    let mut head_bytes = Vec::with_capacity(8 + 8 * heads.len());
+    head_bytes.extend((heads.len() as u64).to_le_bytes());
+    for (k, n) in heads {
+        head_bytes.extend(k.to_le_bytes());
+        head_bytes.extend(n.to_le_bytes());
+    }
+    head_bytes.append(&mut bytes);
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let f64_at = |b: &[u8], at: usize| {
+        f64::from_bits(u64::from_le_bytes(b[at..at + 8].try_into().expect("8")))
+    };
+    let values =
+        |b: &[u8], at: usize| -> [f64; NQ] { std::array::from_fn(|q| f64_at(b, at + 8 * q)) };
+    let mut all = Vec::new();
+    for part in solver.comm().all_gather(&head_bytes) {
+        let n = u64::from_le_bytes(part[..8].try_into().expect("8")) as usize;
+        let mut at = 8 + 8 * n;
+        for i in 0..n {
+            let (k, n_leaving) = (u32_at(&part, 8 + 8 * i) as usize, u32_at(&part, 12 + 8 * i));
+            if n_leaving == FAILED {
+                all.push((k, Err(flux_not_kept(k))));
+                continue;
+            }
+            let mut u = CellUpdate {
+                content: values(&part, at),
+                leaving: [[0.0; NQ]; 6],
+                n_leaving: n_leaving as usize,
+            };
+            at += 8 * NQ;
+            for v in &mut u.leaving[..u.n_leaving] {
+                *v = values(&part, at);
+                at += 8 * NQ;
+            }
+            all.push((k, Ok(u)));
+        }
+    }
+    all.sort_unstable_by_key(|u| u.0);
+    all
 }
