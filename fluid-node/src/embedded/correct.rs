@@ -102,6 +102,9 @@ impl Embedded {
         }
         self.scratch.odd_content = gained;
         swept?;
+        if self.config.block.is_some() {
+            self.gather_contents(solver);
+        }
         let mixed = self.mix(solver, &mut report)?;
         report.mixed_cells = mixed.cells;
         report.work_received = exchanged.work;
@@ -263,9 +266,9 @@ impl Embedded {
     /// in what left through the open sides (see [`FluidSolver::add_outflow`]).
     ///
     /// Collective on a decomposed grid: each rank updates its own near cells, and every rank
-    /// receives every rank's updates ([`gather_updates`]), so every rank holds the contents,
-    /// kinds, count and outflow of one rank (the mixing still reads the near cells of the whole
-    /// grid).
+    /// receives every rank's updates but their contents ([`gather_updates`]), so every rank
+    /// holds the kinds, count and outflow of one rank; the contents come with the swept amounts
+    /// and the solid flux ([`Embedded::gather_contents`]).
     ///
     /// NOTE: the sweeps count the whole flux through a domain face as leaving; a body at rest
     /// against an outflow side (its face flush with it, gas streaming out past it) lost 1.3e-4
@@ -294,15 +297,16 @@ impl Embedded {
         // sides is then added up cell by cell in the cells' order, as one thread did: the
         // same bits on any number of threads. On a decomposed grid each rank updates its own
         // near cells, and the updates of every rank are gathered on every rank in the cells'
-        // order (`gather_updates`): the same list, so the same bits, as one rank's.
+        // order (`gather_updates`): the same list, so the same bits, as one rank's, but the
+        // contents of other ranks' cells, which nothing reads before `gather_contents` puts
+        // them in.
         let this = &*self;
         let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
-        let mine = |k: &usize| block.is_none_or(|b| b.contains(grid.ijk(cells[*k] as usize)));
         let mut updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
             (0..n_near)
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
-                .filter(mine)
+                .filter(|&k| this.own_slot(k))
                 .filter_map(|k| {
                     let update = this.cell_update(k, dt, step, &flush, opening, cracking);
                     update.transpose().map(|u| (k, u))
@@ -566,7 +570,10 @@ impl Embedded {
         Some((fl, fr))
     }
 
-    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`.
+    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`. On a
+    /// decomposed grid `gained` takes the terms of this rank's near cells only (each slot's
+    /// terms are all there, so its sum is one rank's: [`OddSum`]), while the work, the impulse
+    /// and `last_loads` are summed over every sub-face as one rank sums them.
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
     /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
@@ -612,6 +619,7 @@ impl Embedded {
                 continue;
             }
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
+            let own = self.own_slot(k);
             // The neighbour a face takes `p̄` from is near: one of the two holds F^n's wall.
             let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom.solid_fraction, s)]
                 as usize
@@ -626,10 +634,14 @@ impl Embedded {
             let w = accepted.rigid_velocity(p, r);
             let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
             for a in 0..dim {
-                gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
+                if own {
+                    gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
+                }
                 exchanged.impulse[a] += dt * pi[a];
             }
-            gained.push(k * NQ + dim + 1, dt * power / volume);
+            if own {
+                gained.push(k * NQ + dim + 1, dt * power / volume);
+            }
             exchanged.work += dt * power;
             let f = [-pi[0], -pi[1], -pi[2]];
             for a in 0..dim {
@@ -644,7 +656,9 @@ impl Embedded {
     }
 
     /// Swept amounts (paper 000 eq. 12) into `gained`: the prism of every sub-face of F^{n+1},
-    /// wet or not (Λ counts every element), gives its cell the content it sweeps at t^n.
+    /// wet or not (Λ counts every element), gives its cell the content it sweeps at t^n. On a
+    /// decomposed grid only the terms of this rank's near cells are pushed (each rank holds
+    /// every entry, so every term of its cells, and the checks for every cell).
     ///
     /// NOTE: a sub-face in a cell that held no fluid at t^n (inside two overlapping bodies at
     /// both times, or, where cracks may open, covered at t^n) has nothing to pay for its prism
@@ -686,8 +700,10 @@ impl Embedded {
                 } else {
                     k
                 };
-                for q in 0..nvar {
-                    gained.push(to * NQ + q, f * near.saved[src + q]);
+                if self.own_slot(to) {
+                    for q in 0..nvar {
+                        gained.push(to * NQ + q, f * near.saved[src + q]);
+                    }
                 }
                 entry += 1;
             }
@@ -697,11 +713,44 @@ impl Embedded {
         for &(cell, v) in &self.scratch.beyond {
             let kp = near.slot_of[cell as usize] as usize - 1;
             let f = v / volume * source_scale[kp];
-            for q in 0..nvar {
-                gained.push(kp * NQ + q, f * near.saved[kp * nvar + q]);
+            if self.own_slot(kp) {
+                for q in 0..nvar {
+                    gained.push(kp * NQ + q, f * near.saved[kp * nvar + q]);
+                }
             }
         }
         Ok(())
+    }
+
+    /// Whether near slot `k` is a cell of this rank (every slot on one rank).
+    fn own_slot(&self, k: usize) -> bool {
+        let grid = &self.config.grid;
+        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near.cells[k] as usize)))
+    }
+
+    /// The contents of every rank's updated near cells on every rank (collective): each rank
+    /// sends those of its own, complete with the swept amounts and the solid flux of every
+    /// sub-face (each rank pushed the terms of its own cells), and puts the others' in place.
+    /// Only updated cells have contents: the solid flux and the swept amounts go to updated
+    /// cells only (the sub-faces' cells and those of prisms beyond the domain are marked
+    /// updated, and a piece goes to another cell only if that one is updated), and the mixing
+    /// reads the contents of updated cells only. Traffic: `dim + 2` values per updated cell.
+    fn gather_contents(&mut self, solver: &FluidSolver) {
+        let nvar = self.config.grid.dim + 2;
+        let updated: Vec<usize> = (0..self.near.cells.len())
+            .filter(|&k| self.scratch.kind[k] == CellKind::Updated)
+            .collect();
+        let cells: Vec<u32> = updated.iter().map(|&k| self.near.cells[k]).collect();
+        let mut mine = Vec::new();
+        for &k in &updated {
+            if self.own_slot(k) {
+                mine.extend_from_slice(&self.scratch.content[k][..nvar]);
+            }
+        }
+        let all = solver.gather_owned(&cells, mine);
+        for (i, &k) in updated.iter().enumerate() {
+            self.scratch.content[k][..nvar].copy_from_slice(&all[i * nvar..(i + 1) * nvar]);
+        }
     }
 
     /// Stops on a cell the correct left uncovered with a state that is not physical.
@@ -773,10 +822,11 @@ fn gather_swept(solver: &FluidSolver, swept: &mut SubfaceSwept) {
 }
 
 /// Every rank's updates of its own near cells ([`Embedded::fluid_fluxes`]) on every rank
-/// (collective), by near slot: the list one rank makes. A failed update (the only failure of
+/// (collective), by near slot: the list one rank makes, the contents of other ranks' cells
+/// left zero (see [`Embedded::gather_contents`]); this rank's own updates are moved in whole. A failed update (the only failure of
 /// `cell_update` is [`EmbeddedError::FluxNotKept`]) travels as its slot and is made again by
-/// `flux_not_kept`. Traffic per updated cell: 8 bytes and `NQ` values, plus `NQ` per open
-/// domain side it touches.
+/// `flux_not_kept`. Traffic per updated cell: 8 bytes, plus `NQ` values per open domain side
+/// it touches.
 fn gather_updates(
     solver: &FluidSolver,
     mine: Vec<(usize, Result<CellUpdate, EmbeddedError>)>,
@@ -794,7 +844,6 @@ fn gather_updates(
         match update {
             Ok(u) => {
                 heads.push((*k as u32, u.n_leaving as u32));
-                put(&u.content);
                 for v in &u.leaving[..u.n_leaving] {
                     put(v);
                 }
@@ -815,29 +864,34 @@ fn gather_updates(
     };
     let values =
         |b: &[u8], at: usize| -> [f64; NQ] { std::array::from_fn(|q| f64_at(b, at + 8 * q)) };
+    let rank = solver.slab().rank;
     let mut all = Vec::new();
-    for part in solver.comm().all_gather(&head_bytes) {
+    for (r, part) in solver.comm().all_gather(&head_bytes).iter().enumerate() {
+        if r == rank {
+            continue;
+        }
         let n = u64::from_le_bytes(part[..8].try_into().expect("8")) as usize;
         let mut at = 8 + 8 * n;
         for i in 0..n {
-            let (k, n_leaving) = (u32_at(&part, 8 + 8 * i) as usize, u32_at(&part, 12 + 8 * i));
+            let (k, n_leaving) = (u32_at(part, 8 + 8 * i) as usize, u32_at(part, 12 + 8 * i));
             if n_leaving == FAILED {
                 all.push((k, Err(flux_not_kept(k))));
                 continue;
             }
             let mut u = CellUpdate {
-                content: values(&part, at),
+                content: [0.0; NQ],
                 leaving: [[0.0; NQ]; 6],
                 n_leaving: n_leaving as usize,
             };
-            at += 8 * NQ;
             for v in &mut u.leaving[..u.n_leaving] {
-                *v = values(&part, at);
+                *v = values(part, at);
                 at += 8 * NQ;
             }
             all.push((k, Ok(u)));
         }
     }
+    // (This rank's own updates keep their contents.)
+    all.extend(mine);
     all.sort_unstable_by_key(|u| u.0);
     all
 }
