@@ -132,7 +132,9 @@ impl Embedded {
     /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
     /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
     /// group's members) are gathered first, and every rank computes every group; the solver
-    /// keeps the writes of its own cells.
+    /// keeps the writes of its own cells. Only the sources' walks to their roots are shared out:
+    /// each rank walks from the sources in its own cells, and the pairs are gathered
+    /// ([`gather_roots`]).
     pub(super) fn mix(
         &mut self,
         solver: &mut FluidSolver,
@@ -160,9 +162,20 @@ impl Embedded {
         let kind = &mut self.scratch.kind;
         // NOTE: each source's walk to its root reads only what the mixing reads (none of it
         // changes while groups form), so the walks run in parallel on the fluid's pool and are
-        // collected in the sources' order: the same groups on any number of threads.
-        let mut groups: Vec<(usize, usize)> =
-            solver.install(|| sources.par_iter().map(|&k| (m.root(k), k)).collect());
+        // collected in the sources' order: the same groups on any number of threads. On a
+        // decomposed grid each rank walks from its own sources (what the walks read is the same
+        // on every rank: the geometry, the wall normals and the sources, which every rank takes
+        // from every updated cell's content), and the pairs of every rank are gathered
+        // (`gather_roots`): the same sorted list as one rank's.
+        let mut groups: Vec<(usize, usize)> = solver.install(|| {
+            (sources.par_iter())
+                .filter(|&&k| m.own(k))
+                .map(|&k| (m.root(k), k))
+                .collect()
+        });
+        if self.config.block.is_some() {
+            groups = gather_roots(solver, &groups);
+        }
         groups.sort_unstable();
         let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
@@ -318,6 +331,12 @@ impl Embedded {
 impl Mixing<'_> {
     fn alpha(&self, c: usize) -> f64 {
         fluid_part(self.new_lambda[c])
+    }
+
+    /// Whether near slot `k` is a cell of this rank (every slot on one rank).
+    fn own(&self, k: usize) -> bool {
+        let grid = self.grid;
+        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near[k] as usize)))
     }
 
     /// Large enough to take others in, and holding fluid at t^n.
@@ -794,4 +813,24 @@ impl Mixing<'_> {
         }
         false
     }
+}
+
+/// Every rank's `(root, source slot)` pairs on every rank (collective), in rank order: each
+/// rank walked from its own sources, so together they are the pairs one rank makes, in another
+/// order (the caller sorts them). Traffic: 8 bytes per source.
+fn gather_roots(solver: &FluidSolver, mine: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    let mut bytes = Vec::with_capacity(8 * mine.len());
+    for &(root, k) in mine {
+        bytes.extend((root as u32).to_le_bytes());
+        bytes.extend((k as u32).to_le_bytes());
+    }
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let mut all = Vec::new();
+    for part in solver.comm().all_gather(&bytes) {
+        all.extend(
+            part.chunks_exact(8)
+                .map(|p| (u32_at(p, 0) as usize, u32_at(p, 4) as usize)),
+        );
+    }
+    all
 }
