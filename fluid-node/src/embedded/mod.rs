@@ -26,8 +26,9 @@
 //! of its own block, and the terms of all are added as one rank adds them, `loads.rs`), the
 //! ghost fills, wall runs and vacuum cells the sweeps write into its cells (derived from the
 //! geometry of its block and a halo, `hooks.rs`, with the `U^n` of its near cells), and the
-//! correct's prisms and cell updates (each rank those of its own cells, all gathered on every
-//! rank in the one-rank order, `correct.rs`); the solver
+//! correct's prisms, cell updates, swept amounts and solid flux, and the mixing sources' walks
+//! to their roots (each rank those of its own cells, all gathered on every rank in the one-rank
+//! order, `correct.rs`, `mix.rs`); the solver
 //! applies and gathers the sweeps' hooks per block, and the states of near cells come from
 //! their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of one
 //! rank (the fluid-node tests `fv_ranks` and `embedded_hooks_block`, docs/mpi.md).
