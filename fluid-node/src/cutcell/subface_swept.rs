@@ -152,7 +152,7 @@ pub fn subface_swept_volumes(
 /// decomposed grid, issue 40): the entries of those sub-faces, with their bits and in their order,
 /// and the count of those skipped; the others have no entries and are not counted. The
 /// preimages are lifted from the elements of the kept sub-faces only (each element clipped again
-/// from the first of its sub-faces' vertices, [`lift_preimages_of`]), so the cost is that of the
+/// from the first of its sub-faces' vertices, `lift_preimages_of`), so the cost is that of the
 /// kept sub-faces' prisms and of their elements' second clip.
 ///
 /// The entries of a partition of the sub-faces, put together in sub-face order (a stable sort by
