@@ -18,7 +18,9 @@ use crate::fv::euler::NQ;
 use crate::grid::Grid;
 
 use super::CorrectReport;
+use super::gather::gather_roots;
 
+mod predicted;
 mod widen;
 
 /// What [`Embedded::mix`] wrote.
@@ -60,48 +62,6 @@ struct Predicted {
     reads: Vec<u32>,
     values: Vec<f64>,
     nvar: usize,
-}
-
-impl Predicted {
-    /// Reads the cells of `cells` not read yet (collective: every rank computes every group in
-    /// the same order, so every rank asks for the same cells).
-    fn extend(&mut self, solver: &mut FluidSolver, cells: &[usize]) {
-        let mut missing: Vec<u32> = cells
-            .iter()
-            .map(|&c| c as u32)
-            .filter(|c| self.reads.binary_search(c).is_err())
-            .collect();
-        if missing.is_empty() {
-            return;
-        }
-        missing.sort_unstable();
-        missing.dedup();
-        let read = solver.cells_at(&missing);
-        let nvar = self.nvar;
-        let (mut reads, mut values) = (Vec::new(), Vec::new());
-        let (mut i, mut j) = (0, 0);
-        while i < self.reads.len() || j < missing.len() {
-            if j == missing.len() || (i < self.reads.len() && self.reads[i] < missing[j]) {
-                reads.push(self.reads[i]);
-                values.extend_from_slice(&self.values[i * nvar..(i + 1) * nvar]);
-                i += 1;
-            } else {
-                reads.push(missing[j]);
-                values.extend_from_slice(&read[j * nvar..(j + 1) * nvar]);
-                j += 1;
-            }
-        }
-        self.reads = reads;
-        self.values = values;
-    }
-
-    fn u(&self, c: usize, q: usize) -> f64 {
-        let k = self
-            .reads
-            .binary_search(&(c as u32))
-            .expect("a mixing group reads only cells of its read set");
-        self.values[k * self.nvar + q]
-    }
 }
 
 /// The groups: `(root, source slot)` by root, the roots, and the roots of merged groups that
@@ -813,24 +773,4 @@ impl Mixing<'_> {
         }
         false
     }
-}
-
-/// Every rank's `(root, source slot)` pairs on every rank (collective), in rank order: each
-/// rank walked from its own sources, so together they are the pairs one rank makes, in another
-/// order (the caller sorts them). Traffic: 8 bytes per source.
-fn gather_roots(solver: &FluidSolver, mine: &[(usize, usize)]) -> Vec<(usize, usize)> {
-    let mut bytes = Vec::with_capacity(8 * mine.len());
-    for &(root, k) in mine {
-        bytes.extend((root as u32).to_le_bytes());
-        bytes.extend((k as u32).to_le_bytes());
-    }
-    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
-    let mut all = Vec::new();
-    for part in solver.comm().all_gather(&bytes) {
-        all.extend(
-            part.chunks_exact(8)
-                .map(|p| (u32_at(p, 0) as usize, u32_at(p, 4) as usize)),
-        );
-    }
-    all
 }

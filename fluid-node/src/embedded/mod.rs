@@ -68,6 +68,7 @@
 //! states), `hooks` (the ghost fills, wall runs and vacuum cells of a rank's cells), `predict`
 //! (step 1), `loads` (step 2), `levers` (the loads' lever arms), `crack`
 //! (cells a crack opens), `correct` (eq. 12 and the solid flux), `mix` (small-cell mixing),
+//! `gather` (the all-gathers of what each rank does for its own cells in those two),
 //! `beyond` (elements beyond the domain), `memory` (heap bytes by part) and `error`.
 
 // Index loops over the axes read like the formulas they implement.
@@ -79,6 +80,7 @@ mod correct;
 mod crack;
 mod error;
 mod frame;
+mod gather;
 mod hooks;
 mod levers;
 mod loads;
