@@ -1,8 +1,10 @@
-//! The embedded part's predict per rank (issue 40 item 1, step 2): `Embedded::predict` on K = 1,
-//! 2, 4 thread ranks (`fluid_node::ranks::threads`, one rayon thread each, cut as
-//! `protocol::decomp::choose` cuts the grid), each rank timing its own predicts (a rank's time
-//! includes its waits for the others at the collectives, and with more ranks than cores, for a
-//! core).
+//! The embedded part's predict and correct per rank (issue 40 item 1, steps 2 and 4):
+//! `Embedded::predict` and `Embedded::correct` on K = 1, 2, 4 thread ranks
+//! (`fluid_node::ranks::threads`, one rayon thread each, cut as `protocol::decomp::choose` cuts
+//! the grid), each rank timing its own predicts and corrects (a rank's time includes its waits
+//! for the others at the collectives, and with more ranks than cores, for a core), and counting
+//! the sub-faces of `F^{n+1}` in its own cells (whose prisms it clips) and its near cells (whose
+//! updates it makes), the work of the correct that is shared out by rank.
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
@@ -83,8 +85,19 @@ fn moved(frame: &SolidFrame, dt: f64) -> SolidFrame {
     next
 }
 
-/// Each rank's predict times \[s\] over `steps` coupled steps on `ranks` thread ranks.
-fn predict_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<Vec<f64>> {
+/// What one rank measured over the steps.
+struct RankTimes {
+    /// Predict and correct times \[s\], one per step.
+    predict: Vec<f64>,
+    correct: Vec<f64>,
+    /// Sub-faces of the accepted surface in the rank's cells, after the last step.
+    subfaces: usize,
+    /// Cells of the rank's block.
+    cells: usize,
+}
+
+/// Each rank's predict and correct times over `steps` coupled steps on `ranks` thread ranks.
+fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<RankTimes> {
     let handles: Vec<_> = ThreadRanks::new(ranks)
         .into_iter()
         .map(|comm| {
@@ -94,16 +107,27 @@ fn predict_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> V
                     .expect("solver");
                 let mut e = Embedded::new(&s, boxes()).expect("embedded");
                 e.set_fracture(true);
-                let mut times = Vec::new();
+                let mut times = RankTimes {
+                    predict: Vec::new(),
+                    correct: Vec::new(),
+                    subfaces: 0,
+                    cells: 0,
+                };
                 for n in 0..steps {
                     let dt = s.max_dt().min(0.5 * e.one_cell_dt());
                     let t = Instant::now();
                     let report = e.predict(&mut s, dt);
-                    times.push(t.elapsed().as_secs_f64());
+                    times.predict.push(t.elapsed().as_secs_f64());
                     assert!(report.ok(), "step {n}: {:?}", report.troubles);
                     let next = moved(e.surface(), dt);
+                    let t = Instant::now();
                     e.correct(&mut s, dt, next, n, false).expect("correct");
+                    times.correct.push(t.elapsed().as_secs_f64());
                 }
+                let slab = s.slab();
+                let own = |c: u32| slab.to_local(c as usize).is_some();
+                times.subfaces = e.geometry().subfaces.iter().filter(|f| own(f.cell)).count();
+                times.cells = slab.local.n_cells();
                 times
             })
         })
@@ -135,16 +159,19 @@ fn main() {
         state.set_primitive(c, 1.2, [0.0; 3], 1e5, 1.4);
     }
     println!(
-        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict per rank, ms (median of the steps after the first)"
+        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict and correct per rank, ms (median of the steps after the first); sub-faces of F^(n+1) in the rank's cells"
     );
-    println!("| K | rank 0 | rank 1 | rank 2 | rank 3 |");
-    println!("| --- | --- | --- | --- | --- |");
+    println!("| K | part | rank 0 | rank 1 | rank 2 | rank 3 |");
+    println!("| --- | --- | --- | --- | --- | --- |");
     for k in [1, 2, 4] {
-        let times = predict_times(&grid, &state, k, steps);
-        let cells: Vec<String> = times
-            .iter()
-            .map(|t| format!("{:.2}", 1e3 * median(&t[1..])))
-            .collect();
-        println!("| {k} | {} |", cells.join(" | "));
+        let times = rank_times(&grid, &state, k, steps);
+        let row = |f: &dyn Fn(&RankTimes) -> String| -> String {
+            times.iter().map(f).collect::<Vec<_>>().join(" | ")
+        };
+        let ms = |t: &[f64]| format!("{:.2}", 1e3 * median(&t[1..]));
+        println!("| {k} | predict | {} |", row(&|t| ms(&t.predict)));
+        println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
+        println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
+        println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
     }
 }

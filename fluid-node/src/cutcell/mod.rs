@@ -87,6 +87,8 @@ pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };
-pub use subface_swept::{SubfaceSwept, SubfaceSweptEntry, subface_swept_volumes};
+pub use subface_swept::{
+    SubfaceSwept, SubfaceSweptEntry, subface_swept_volumes, subface_swept_volumes_of,
+};
 pub use surface::Surface;
 pub use swept::{SweptEntry, SweptVolumes, swept_volumes};

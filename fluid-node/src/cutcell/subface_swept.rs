@@ -28,7 +28,7 @@
 use rayon::prelude::*;
 
 use crate::cutcell::clip::{Polygon, clip_polygon, clip_segment};
-use crate::cutcell::geometry::{CutGeometry, domain_cell};
+use crate::cutcell::geometry::{CutGeometry, SubFace, domain_cell};
 use crate::cutcell::measure::triangle_normal;
 use crate::cutcell::prism::{PrismScratch, prism_volumes};
 use crate::cutcell::surface::Surface;
@@ -144,9 +144,52 @@ pub fn subface_swept_volumes(
     out: &mut SubfaceSwept,
 ) {
     crate::cutcell::swept::check_pair(grid, before, after);
+    out.n_pieces = lift_preimages(grid, before, after, after_geometry, &mut out.preimages);
+    clip_prisms(grid, before, after, after_geometry, |_| true, out);
+}
+
+/// [`subface_swept_volumes`] of the sub-faces `keep` accepts only (a rank's share of a
+/// decomposed grid, issue 40): the entries of those sub-faces, with their bits and in their order,
+/// and the count of those skipped; the others have no entries and are not counted. The
+/// preimages are lifted from the elements of the kept sub-faces only (each element clipped again
+/// from the first of its sub-faces' vertices, `lift_preimages_of`), so the cost is that of the
+/// kept sub-faces' prisms and of their elements' second clip.
+///
+/// The entries of a partition of the sub-faces, put together in sub-face order (a stable sort by
+/// sub-face), are those of [`subface_swept_volumes`] for a geometry computed from `after`
+/// (fluid-node test `cutcell_block::the_prisms_of_a_partition_of_the_subfaces_are_the_whole_surfaces`).
+pub fn subface_swept_volumes_of(
+    grid: &Grid,
+    before: &Surface,
+    after: &Surface,
+    after_geometry: &CutGeometry,
+    keep: impl Fn(&SubFace) -> bool + Sync,
+    out: &mut SubfaceSwept,
+) {
+    crate::cutcell::swept::check_pair(grid, before, after);
+    out.n_pieces = lift_preimages_of(
+        grid,
+        before,
+        after,
+        after_geometry,
+        &keep,
+        &mut out.preimages,
+    );
+    clip_prisms(grid, before, after, after_geometry, keep, out);
+}
+
+/// The prisms of the sub-faces `keep` accepts, from the preimages in `out` (see
+/// [`subface_swept_volumes`]); adds the pieces clipped to `out.n_pieces`.
+fn clip_prisms(
+    grid: &Grid,
+    before: &Surface,
+    after: &Surface,
+    after_geometry: &CutGeometry,
+    keep: impl Fn(&SubFace) -> bool + Sync,
+    out: &mut SubfaceSwept,
+) {
     out.entries.clear();
     out.n_skipped_subfaces = 0;
-    out.n_pieces = lift_preimages(grid, before, after, after_geometry, &mut out.preimages);
     let n_elements = after.n_elements();
     let subfaces = &after_geometry.subfaces;
     let n_chunks = subfaces.len().div_ceil(CHUNK);
@@ -163,6 +206,9 @@ pub fn subface_swept_volumes(
             chunk.n_pieces = 0;
             chunk.n_skipped = 0;
             for (k, subface) in run.iter().enumerate() {
+                if !keep(subface) {
+                    continue;
+                }
                 let s = c * CHUNK + k;
                 let first = subface.first_vertex as usize;
                 let range = first..first + subface.n_vertices as usize;
@@ -211,6 +257,85 @@ pub fn subface_swept_volumes(
         out.n_pieces += chunk.n_pieces;
         out.n_skipped_subfaces += chunk.n_skipped;
     }
+}
+
+/// [`lift_preimages`] for the vertices of the sub-faces `keep` accepts (NaN elsewhere): only
+/// their elements are clipped again, each from the first vertex of its own sub-faces.
+///
+/// NOTE: `compute` stores the vertices of an element's domain pieces one after the other, in
+/// the elements' order, and every domain piece is a sub-face; so an element's vertices start at
+/// the least `first_vertex` of its sub-faces, and clipping it again from there stores the same
+/// preimages at the same places as the walk over every element (for a geometry computed from
+/// `after`; for another one the walk's cursor drifts from the first element that differs, this
+/// one's from no element, and either skips the sub-faces whose vertices do not match).
+fn lift_preimages_of(
+    grid: &Grid,
+    before: &Surface,
+    after: &Surface,
+    geometry: &CutGeometry,
+    keep: &(impl Fn(&SubFace) -> bool + Sync),
+    preimages: &mut Vec<[f64; 3]>,
+) -> usize {
+    let stored = &geometry.subface_vertices;
+    preimages.clear();
+    preimages.resize(stored.len(), [f64::NAN; 3]);
+    // The elements of the kept sub-faces, and the first vertex of each (`u32::MAX`: not
+    // clipped).
+    let mut wanted = vec![false; after.n_elements()];
+    for s in &geometry.subfaces {
+        if keep(s)
+            && let Some(w) = wanted.get_mut(s.element as usize)
+        {
+            *w = true;
+        }
+    }
+    let mut start = vec![u32::MAX; after.n_elements()];
+    for s in &geometry.subfaces {
+        let e = s.element as usize;
+        if wanted.get(e) == Some(&true) {
+            start[e] = start[e].min(s.first_vertex);
+        }
+    }
+    let mut n_pieces = 0;
+    for (e, &first) in start.iter().enumerate() {
+        if first == u32::MAX {
+            continue;
+        }
+        let Some(t1) = after.element(e) else {
+            continue;
+        };
+        let mut cursor = first as usize;
+        let mut store = |x: &[f64; 6]| {
+            if let Some(v) = stored.get(cursor)
+                && v[..] == x[..3]
+            {
+                preimages[cursor] = [x[3], x[4], x[5]];
+            }
+            cursor += 1;
+        };
+        let t0 = before.element(e).unwrap_or([[f64::NAN; 3]; 3]);
+        let lift = |k: usize| [t1[k][0], t1[k][1], t1[k][2], t0[k][0], t0[k][1], t0[k][2]];
+        if grid.dim == 3 {
+            let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
+            clip_polygon(grid, &poly, &mut |cell, piece| {
+                n_pieces += 1;
+                if domain_cell(grid, cell).is_some() {
+                    for x in piece.vertices() {
+                        store(x);
+                    }
+                }
+            });
+        } else {
+            clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
+                n_pieces += 1;
+                if domain_cell(grid, cell).is_some() {
+                    store(&a);
+                    store(&b);
+                }
+            });
+        }
+    }
+    n_pieces
 }
 
 /// Fills `preimages` (aligned with `geometry.subface_vertices`) by clipping every element of

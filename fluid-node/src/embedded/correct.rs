@@ -13,11 +13,14 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
+use super::gather::{CellUpdate, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
-use crate::cutcell::{Surface, compute, face_index, subface_swept_volumes};
+use crate::cutcell::{
+    SubFace, Surface, compute, face_index, subface_swept_volumes, subface_swept_volumes_of,
+};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -50,15 +53,6 @@ pub struct CorrectReport {
 /// same bits).
 const CELLS_PER_TASK: usize = 256;
 
-/// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
-/// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
-/// adding `−v` is subtracting `v`, bit for bit).
-struct CellUpdate {
-    content: [f64; NQ],
-    leaving: [[f64; NQ]; 6],
-    n_leaving: usize,
-}
-
 /// What the solid flux gave the fluid in one step.
 struct Exchanged {
     /// Work \[J\].
@@ -82,7 +76,7 @@ impl Embedded {
         step: u64,
         explicit: bool,
     ) -> Result<CorrectReport, EmbeddedError> {
-        solver.install(|| self.sweep(&accepted, step))?;
+        self.sweep(solver, &accepted, step)?;
         let opening = self.opening_cells(&accepted);
         let (swept_mass, source_scale) = self.displaced();
         let mut report = CorrectReport::default();
@@ -99,6 +93,9 @@ impl Embedded {
         }
         self.scratch.odd_content = gained;
         swept?;
+        if self.config.block.is_some() {
+            self.gather_contents(solver);
+        }
         let mixed = self.mix(solver, &mut report)?;
         report.mixed_cells = mixed.cells;
         report.work_received = exchanged.work;
@@ -119,8 +116,19 @@ impl Embedded {
     }
 
     /// The geometry of `F^{n+1}` and the prisms its sub-faces sweep back to `F^n`, checked
-    /// against identity (3).
-    fn sweep(&mut self, accepted: &SolidFrame, step: u64) -> Result<(), EmbeddedError> {
+    /// against identity (3). On the fluid's pool.
+    ///
+    /// Collective on a decomposed grid: each rank clips the prisms of the sub-faces of its own
+    /// cells only (`subface_swept_volumes_of`), and the entries of every rank are gathered on
+    /// every rank in sub-face order ([`gather_swept`]), so every rank holds the entries of one
+    /// rank. The geometry itself is still the whole grid's: it becomes `F^n`'s, which the next
+    /// predict's near cells, the totals and the outputs read on the whole grid.
+    fn sweep(
+        &mut self,
+        solver: &FluidSolver,
+        accepted: &SolidFrame,
+        step: u64,
+    ) -> Result<(), EmbeddedError> {
         let grid = &self.config.grid;
         let dim = grid.dim;
         let current = &self.state.current;
@@ -144,14 +152,21 @@ impl Embedded {
         outside_domain(grid, &self.config.boundary, &accepted.surface())
             .map_err(|e| e.at_step(step))?;
         let scratch = &mut self.scratch;
-        compute(grid, &accepted.surface(), &mut scratch.trial);
-        subface_swept_volumes(
-            grid,
-            &before,
-            &accepted.surface(),
-            &scratch.trial,
-            &mut scratch.swept,
-        );
+        let block = self.config.block;
+        solver.install(|| {
+            compute(grid, &accepted.surface(), &mut scratch.trial);
+            let (after, geom) = (&accepted.surface(), &scratch.trial);
+            match block {
+                None => subface_swept_volumes(grid, &before, after, geom, &mut scratch.swept),
+                Some(block) => {
+                    let mine = |s: &SubFace| block.contains(grid.ijk(s.cell as usize));
+                    subface_swept_volumes_of(grid, &before, after, geom, mine, &mut scratch.swept);
+                }
+            }
+        });
+        if block.is_some() {
+            gather_swept(solver, &mut scratch.swept);
+        }
         if scratch.swept.n_skipped_subfaces > 0 {
             // The swept amounts would miss volume: mass would not be conserved.
             return Err(EmbeddedError::NoSweptPrism {
@@ -159,14 +174,16 @@ impl Embedded {
                 count: scratch.swept.n_skipped_subfaces,
             });
         }
-        sweep_beyond(
-            grid,
-            &before,
-            &accepted.surface(),
-            &mut scratch.beyond_geom,
-            &mut scratch.beyond_swept,
-            &mut scratch.beyond,
-        );
+        solver.install(|| {
+            sweep_beyond(
+                grid,
+                &before,
+                &accepted.surface(),
+                &mut scratch.beyond_geom,
+                &mut scratch.beyond_swept,
+                &mut scratch.beyond,
+            )
+        });
         self.check_swept(step)
     }
 
@@ -239,6 +256,11 @@ impl Embedded {
     /// (eq. 12–13); marks those cells [`CellKind::Updated`]. Returns what those weights change
     /// in what left through the open sides (see [`FluidSolver::add_outflow`]).
     ///
+    /// Collective on a decomposed grid: each rank updates its own near cells, and every rank
+    /// receives every rank's updates but their contents ([`gather_updates`]), so every rank
+    /// holds the kinds, count and outflow of one rank; the contents come with the swept amounts
+    /// and the solid flux ([`Embedded::gather_contents`]).
+    ///
     /// NOTE: the sweeps count the whole flux through a domain face as leaving; a body at rest
     /// against an outflow side (its face flush with it, gas streaming out past it) lost 1.3e-4
     /// of the mass in the ledger at its first step, the correct applying that flux times the
@@ -264,18 +286,30 @@ impl Embedded {
         // NOTE: each cell's update reads only its own kind and the fluxes kept by the predict,
         // so the cells are updated in parallel on the fluid's pool; what leaves through open
         // sides is then added up cell by cell in the cells' order, as one thread did: the
-        // same bits on any number of threads.
+        // same bits on any number of threads. On a decomposed grid each rank updates its own
+        // near cells, and the updates of every rank are gathered on every rank in the cells'
+        // order (`gather_updates`): the same list, so the same bits, as one rank's, but the
+        // contents of other ranks' cells, which nothing reads before `gather_contents` puts
+        // them in.
         let this = &*self;
-        let updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
+        let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
+        let mut updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
             (0..n_near)
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
+                .filter(|&k| this.own_slot(k))
                 .filter_map(|k| {
                     let update = this.cell_update(k, dt, step, &flush, opening, cracking);
                     update.transpose().map(|u| (k, u))
                 })
                 .collect()
         });
+        if block.is_some() {
+            updates = gather_updates(solver, updates, |k| EmbeddedError::FluxNotKept {
+                step,
+                cell: grid.ijk(cells[k] as usize),
+            });
+        }
         for (k, update) in updates {
             let u = update?;
             self.scratch.kind[k] = CellKind::Updated;
@@ -527,7 +561,10 @@ impl Embedded {
         Some((fl, fr))
     }
 
-    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`.
+    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`. On a
+    /// decomposed grid `gained` takes the terms of this rank's near cells only (each slot's
+    /// terms are all there, so its sum is one rank's: [`OddSum`]), while the work, the impulse
+    /// and `last_loads` are summed over every sub-face as one rank sums them.
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
     /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
@@ -573,6 +610,7 @@ impl Embedded {
                 continue;
             }
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
+            let own = self.own_slot(k);
             // The neighbour a face takes `p̄` from is near: one of the two holds F^n's wall.
             let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom.solid_fraction, s)]
                 as usize
@@ -587,10 +625,14 @@ impl Embedded {
             let w = accepted.rigid_velocity(p, r);
             let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
             for a in 0..dim {
-                gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
+                if own {
+                    gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
+                }
                 exchanged.impulse[a] += dt * pi[a];
             }
-            gained.push(k * NQ + dim + 1, dt * power / volume);
+            if own {
+                gained.push(k * NQ + dim + 1, dt * power / volume);
+            }
             exchanged.work += dt * power;
             let f = [-pi[0], -pi[1], -pi[2]];
             for a in 0..dim {
@@ -605,7 +647,9 @@ impl Embedded {
     }
 
     /// Swept amounts (paper 000 eq. 12) into `gained`: the prism of every sub-face of F^{n+1},
-    /// wet or not (Λ counts every element), gives its cell the content it sweeps at t^n.
+    /// wet or not (Λ counts every element), gives its cell the content it sweeps at t^n. On a
+    /// decomposed grid only the terms of this rank's near cells are pushed (each rank holds
+    /// every entry, so every term of its cells, and the checks for every cell).
     ///
     /// NOTE: a sub-face in a cell that held no fluid at t^n (inside two overlapping bodies at
     /// both times, or, where cracks may open, covered at t^n) has nothing to pay for its prism
@@ -647,8 +691,10 @@ impl Embedded {
                 } else {
                     k
                 };
-                for q in 0..nvar {
-                    gained.push(to * NQ + q, f * near.saved[src + q]);
+                if self.own_slot(to) {
+                    for q in 0..nvar {
+                        gained.push(to * NQ + q, f * near.saved[src + q]);
+                    }
                 }
                 entry += 1;
             }
@@ -658,8 +704,10 @@ impl Embedded {
         for &(cell, v) in &self.scratch.beyond {
             let kp = near.slot_of[cell as usize] as usize - 1;
             let f = v / volume * source_scale[kp];
-            for q in 0..nvar {
-                gained.push(kp * NQ + q, f * near.saved[kp * nvar + q]);
+            if self.own_slot(kp) {
+                for q in 0..nvar {
+                    gained.push(kp * NQ + q, f * near.saved[kp * nvar + q]);
+                }
             }
         }
         Ok(())

@@ -18,7 +18,9 @@ use crate::fv::euler::NQ;
 use crate::grid::Grid;
 
 use super::CorrectReport;
+use super::gather::gather_roots;
 
+mod predicted;
 mod widen;
 
 /// What [`Embedded::mix`] wrote.
@@ -62,48 +64,6 @@ struct Predicted {
     nvar: usize,
 }
 
-impl Predicted {
-    /// Reads the cells of `cells` not read yet (collective: every rank computes every group in
-    /// the same order, so every rank asks for the same cells).
-    fn extend(&mut self, solver: &mut FluidSolver, cells: &[usize]) {
-        let mut missing: Vec<u32> = cells
-            .iter()
-            .map(|&c| c as u32)
-            .filter(|c| self.reads.binary_search(c).is_err())
-            .collect();
-        if missing.is_empty() {
-            return;
-        }
-        missing.sort_unstable();
-        missing.dedup();
-        let read = solver.cells_at(&missing);
-        let nvar = self.nvar;
-        let (mut reads, mut values) = (Vec::new(), Vec::new());
-        let (mut i, mut j) = (0, 0);
-        while i < self.reads.len() || j < missing.len() {
-            if j == missing.len() || (i < self.reads.len() && self.reads[i] < missing[j]) {
-                reads.push(self.reads[i]);
-                values.extend_from_slice(&self.values[i * nvar..(i + 1) * nvar]);
-                i += 1;
-            } else {
-                reads.push(missing[j]);
-                values.extend_from_slice(&read[j * nvar..(j + 1) * nvar]);
-                j += 1;
-            }
-        }
-        self.reads = reads;
-        self.values = values;
-    }
-
-    fn u(&self, c: usize, q: usize) -> f64 {
-        let k = self
-            .reads
-            .binary_search(&(c as u32))
-            .expect("a mixing group reads only cells of its read set");
-        self.values[k * self.nvar + q]
-    }
-}
-
 /// The groups: `(root, source slot)` by root, the roots, and the roots of merged groups that
 /// joined another group as members, `(new root, old root)`, with their parts.
 struct Groups {
@@ -132,7 +92,9 @@ impl Embedded {
     /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
     /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
     /// group's members) are gathered first, and every rank computes every group; the solver
-    /// keeps the writes of its own cells.
+    /// keeps the writes of its own cells. Only the sources' walks to their roots are shared out:
+    /// each rank walks from the sources in its own cells, and the pairs are gathered
+    /// ([`gather_roots`]).
     pub(super) fn mix(
         &mut self,
         solver: &mut FluidSolver,
@@ -160,9 +122,20 @@ impl Embedded {
         let kind = &mut self.scratch.kind;
         // NOTE: each source's walk to its root reads only what the mixing reads (none of it
         // changes while groups form), so the walks run in parallel on the fluid's pool and are
-        // collected in the sources' order: the same groups on any number of threads.
-        let mut groups: Vec<(usize, usize)> =
-            solver.install(|| sources.par_iter().map(|&k| (m.root(k), k)).collect());
+        // collected in the sources' order: the same groups on any number of threads. On a
+        // decomposed grid each rank walks from its own sources (what the walks read is the same
+        // on every rank: the geometry, the wall normals and the sources, which every rank takes
+        // from every updated cell's content), and the pairs of every rank are gathered
+        // (`gather_roots`): the same sorted list as one rank's.
+        let mut groups: Vec<(usize, usize)> = solver.install(|| {
+            (sources.par_iter())
+                .filter(|&&k| m.own(k))
+                .map(|&k| (m.root(k), k))
+                .collect()
+        });
+        if self.config.block.is_some() {
+            groups = gather_roots(solver, &groups);
+        }
         groups.sort_unstable();
         let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
@@ -318,6 +291,12 @@ impl Embedded {
 impl Mixing<'_> {
     fn alpha(&self, c: usize) -> f64 {
         fluid_part(self.new_lambda[c])
+    }
+
+    /// Whether near slot `k` is a cell of this rank (every slot on one rank).
+    fn own(&self, k: usize) -> bool {
+        let grid = self.grid;
+        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near[k] as usize)))
     }
 
     /// Large enough to take others in, and holding fluid at t^n.

@@ -23,9 +23,12 @@
 //!
 //! On a grid decomposed over ranks ([`crate::fv::Slab`], a block) every rank holds the whole
 //! surface and runs all of this on the whole grid but the loads (each rank takes the sub-faces
-//! of its own block, and the terms of all are added as one rank adds them, `loads.rs`) and the
+//! of its own block, and the terms of all are added as one rank adds them, `loads.rs`), the
 //! ghost fills, wall runs and vacuum cells the sweeps write into its cells (derived from the
-//! geometry of its block and a halo, `hooks.rs`, with the `U^n` of its near cells); the solver
+//! geometry of its block and a halo, `hooks.rs`, with the `U^n` of its near cells), and the
+//! correct's prisms, cell updates, swept amounts and solid flux, and the mixing sources' walks
+//! to their roots (each rank those of its own cells, all gathered on every rank in the one-rank
+//! order, `correct.rs`, `mix.rs`); the solver
 //! applies and gathers the sweeps' hooks per block, and the states of near cells come from
 //! their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of one
 //! rank (the fluid-node tests `fv_ranks` and `embedded_hooks_block`, docs/mpi.md).
@@ -65,6 +68,7 @@
 //! states), `hooks` (the ghost fills, wall runs and vacuum cells of a rank's cells), `predict`
 //! (step 1), `loads` (step 2), `levers` (the loads' lever arms), `crack`
 //! (cells a crack opens), `correct` (eq. 12 and the solid flux), `mix` (small-cell mixing),
+//! `gather` (the all-gathers of what each rank does for its own cells in those two),
 //! `beyond` (elements beyond the domain), `memory` (heap bytes by part) and `error`.
 
 // Index loops over the axes read like the formulas they implement.
@@ -76,6 +80,7 @@ mod correct;
 mod crack;
 mod error;
 mod frame;
+mod gather;
 mod hooks;
 mod levers;
 mod loads;

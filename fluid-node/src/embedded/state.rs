@@ -52,8 +52,10 @@ pub(super) struct Config {
     /// `beyond::outside_domain`; the gas it pushes out of the open ones leaves).
     pub(super) boundary: [[BoundaryKind; 2]; 3],
     /// This rank's block on a grid decomposed over several ranks (`None` on one rank): the
-    /// loads take the sub-faces of its cells only, and the sweeps' ghost fills, wall runs and
-    /// vacuum cells are those of its cells (issue 40 item 1, `loads.rs`, `hooks.rs`).
+    /// loads take the sub-faces of its cells only, the sweeps' ghost fills, wall runs and
+    /// vacuum cells are those of its cells, and the correct clips the prisms of its cells'
+    /// sub-faces and updates its near cells (issue 40 item 1, `loads.rs`, `hooks.rs`,
+    /// `correct.rs`).
     pub(super) block: Option<CellBox>,
 }
 
@@ -143,8 +145,9 @@ impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
         // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16; the loads and the
-        // sweeps' ghost fills, wall runs and vacuum cells are taken by block, issue 40): the
+        // geometry and the correct on the whole grid (replicated, issue 16; the loads, the
+        // sweeps' ghost fills, wall runs and vacuum cells, and the correct's prisms and cell
+        // updates are taken by block, issue 40): the
         // cut-cell data are surface-sized, and the same inputs give every rank the bits of one
         // rank. Only the states of cells near the surface cross ranks (`FluidSolver::cells_at`).
         let grid = solver.global_grid().clone();

@@ -3,10 +3,13 @@
 //! the sub-faces on every cell of the window, λ along every axis on the block's own faces, for
 //! the moving bodies of the `fv_ranks` tests at several positions, on their process grids, with
 //! halos from none (a block's own cells only) to the embedded part's; and the same for Λ, λ
-//! along x and the sub-faces of `compute_block_cells` (the loads' geometry).
+//! along x and the sub-faces of `compute_block_cells` (the loads' geometry). Step 4: the prisms
+//! of the sub-faces of each block's cells (`cutcell::subface_swept_volumes_of`), put together in
+//! sub-face order, are the whole surface's.
 
 use fluid_node::cutcell::{
-    BlockGeometry, CellBox, CutGeometry, compute, compute_block, compute_block_cells,
+    BlockGeometry, CellBox, CutGeometry, SubfaceSwept, SubfaceSweptEntry, compute, compute_block,
+    compute_block_cells, subface_swept_volumes, subface_swept_volumes_of,
 };
 use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
@@ -171,4 +174,102 @@ fn block_geometry_3d_is_the_whole_grids_on_every_process_grid() {
     // The bodies span 7 of the 24 cells along z and 8 of 16 along y: only the blocks of the
     // narrower halos miss some of them (103 of 460 blocks).
     assert!(tally.fewer > tally.blocks / 5, "blocks clip fewer elements");
+}
+
+/// `frame` moved by `dt` along the bodies' velocity and deformed: each vertex pushed by up to 0.3
+/// of a cell of `dx` along each axis, differently for each vertex (so that the prisms' bottoms
+/// are no translates of their tops).
+fn deformed(frame: &SolidFrame, dt: f64, dx: f64) -> SolidFrame {
+    let mut next = translated(frame, dt);
+    for (k, x) in next.vertices.iter_mut().enumerate() {
+        *x += 0.3 * dx * (1.7 * k as f64).sin();
+    }
+    next
+}
+
+/// Entries as bits, to compare.
+fn entry_bits(entries: &[SubfaceSweptEntry]) -> Vec<(u32, u32, u64)> {
+    entries
+        .iter()
+        .map(|e| (e.subface, e.cell, e.volume.to_bits()))
+        .collect()
+}
+
+/// On every block of every process grid in `decomps`, over 3 moves of `dt` (deformed): the
+/// prisms of the block's sub-faces are the whole surface's prisms of those sub-faces, and those of
+/// all the blocks, put together as the correct gathers them (in rank order, then a stable sort
+/// by sub-face), are the whole surface's, bit for bit. Returns (blocks that clipped fewer
+/// pieces than the whole surface, blocks).
+fn check_prisms(
+    name: &str,
+    grid: &Grid,
+    solid: &SolidFrame,
+    dt: f64,
+    decomps: &[[usize; 3]],
+) -> (usize, usize) {
+    let dx = grid.dx[0];
+    let (mut fewer, mut blocks) = (0, 0);
+    for k in 0..3 {
+        let before = translated(solid, k as f64 * dt);
+        let after = deformed(&before, dt, dx);
+        let mut geom = CutGeometry::new();
+        compute(grid, &after.surface(), &mut geom);
+        let mut whole = SubfaceSwept::new();
+        subface_swept_volumes(grid, &before.surface(), &after.surface(), &geom, &mut whole);
+        assert!(!whole.entries.is_empty(), "{name}: entries");
+        assert_eq!(whole.n_skipped_subfaces, 0, "{name}: skipped");
+        for dims in decomps {
+            let ranks: usize = dims.iter().product();
+            let mut gathered: Vec<SubfaceSweptEntry> = Vec::new();
+            for r in 0..ranks {
+                let what = format!("{name}, move {k}, {dims:?} rank {r}");
+                let block = CellBox::of_rank(grid, *dims, r);
+                let mine =
+                    |s: &fluid_node::cutcell::SubFace| block.contains(grid.ijk(s.cell as usize));
+                let mut part = SubfaceSwept::new();
+                subface_swept_volumes_of(
+                    grid,
+                    &before.surface(),
+                    &after.surface(),
+                    &geom,
+                    mine,
+                    &mut part,
+                );
+                assert_eq!(part.n_skipped_subfaces, 0, "{what}: skipped");
+                let expected: Vec<SubfaceSweptEntry> = (whole.entries.iter())
+                    .filter(|e| mine(&geom.subfaces[e.subface as usize]))
+                    .copied()
+                    .collect();
+                assert_eq!(
+                    entry_bits(&part.entries),
+                    entry_bits(&expected),
+                    "{what}: entries"
+                );
+                fewer += usize::from(part.n_pieces < whole.n_pieces);
+                blocks += 1;
+                gathered.extend_from_slice(&part.entries);
+            }
+            gathered.sort_by_key(|e| e.subface);
+            assert_eq!(
+                entry_bits(&gathered),
+                entry_bits(&whole.entries),
+                "{name}, move {k}, {dims:?}: gathered entries"
+            );
+        }
+    }
+    eprintln!("{name}: {blocks} blocks, {fewer} clipped fewer pieces than the whole surface");
+    (fewer, blocks)
+}
+
+#[test]
+fn the_prisms_of_a_partition_of_the_subfaces_are_the_whole_surfaces() {
+    let (grid, _) = blast(&[40, 48]);
+    let solid = bodies(&[moving_bodies_2d(), seam_plate_2d()]);
+    let decomps = [[1, 2, 1], [2, 2, 1], [3, 1, 1], [2, 4, 1]];
+    let (fewer, blocks) = check_prisms("2-D", &grid, &solid, 0.006, &decomps);
+    assert_eq!(fewer, blocks, "2-D: every block clips fewer pieces");
+    let (grid, _) = blast(&[16, 16, 24]);
+    let decomps = [[1, 1, 2], [1, 2, 2], [1, 1, 3], [1, 2, 4]];
+    let (fewer, blocks) = check_prisms("3-D", &grid, &moving_bodies_3d(), 0.012, &decomps);
+    assert_eq!(fewer, blocks, "3-D: every block clips fewer pieces");
 }

@@ -644,3 +644,50 @@ fn a_trial_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
         }
     }
 }
+
+/// Issue 40 item 1, step 4: an accepted surface moved 4 cells in one step sweeps prisms beyond
+/// the near cells; each rank clips the prisms of its own cells' sub-faces only, and the entries
+/// are gathered in sub-face order, so every rank refuses the correct naming the cell one rank
+/// names (the first piece beyond, in the sub-faces' order), on slabs and on blocks.
+#[test]
+fn an_accepted_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
+    let (grid, state) = blast(&[40, 48]);
+    let solid = moving_bodies_2d();
+    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
+    let refusals = |dims: [usize; 3]| -> Vec<String> {
+        let ranks = dims.iter().product();
+        let handles: Vec<_> = ThreadRanks::new(ranks)
+            .into_iter()
+            .map(|comm| {
+                let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+                let solid = solid.clone();
+                std::thread::spawn(move || {
+                    let dims = (ranks > 1).then_some(dims);
+                    let mut s =
+                        FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
+                            .expect("solver");
+                    let mut e = Embedded::new(&s, solid).expect("embedded");
+                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+                    assert!(e.predict(&mut s, dt).ok());
+                    // 1/30 s moves the tilted block (2.5 m/s along y) 4 cells of 1/48 m.
+                    let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
+                    e.correct(&mut s, dt, far, 7, false)
+                        .expect_err("beyond the near cells")
+                        .to_string()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("rank thread"))
+            .collect()
+    };
+    let one = refusals([1, 1, 1]);
+    assert!(one[0].contains("step 7"), "{}", one[0]);
+    assert!(one[0].contains("prism"), "{}", one[0]);
+    for dims in [[1, 2, 1], [2, 2, 1], [2, 4, 1]] {
+        for (r, refusal) in refusals(dims).iter().enumerate() {
+            assert_eq!(refusal, &one[0], "{dims:?} rank {r}");
+        }
+    }
+}

@@ -1,0 +1,181 @@
+//! The all-gathers that give every rank one rank's results of the parts of the correct and the
+//! mixing that each rank does for its own cells (issue 40 item 1, steps 4 and 5; docs/mpi.md):
+//! the prism entries, the cell updates, the updated cells' contents and the mixing sources'
+//! roots. Each keeps the one-rank order, so what reads them computes one rank's bits.
+
+use super::cells::CellKind;
+use super::{Embedded, EmbeddedError};
+use crate::cutcell::{SubfaceSwept, SubfaceSweptEntry};
+use crate::fv::FluidSolver;
+use crate::fv::euler::NQ;
+
+/// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
+/// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
+/// adding `−v` is subtracting `v`, bit for bit).
+pub(super) struct CellUpdate {
+    /// `(1 − Λ^{n+1}) U^n` plus the weighted fluid fluxes.
+    pub(super) content: [f64; NQ],
+    /// What leaves through each open domain side the cell touches, the first `n_leaving`.
+    pub(super) leaving: [[f64; NQ]; 6],
+    pub(super) n_leaving: usize,
+}
+
+impl Embedded {
+    /// Whether near slot `k` is a cell of this rank (every slot on one rank).
+    pub(super) fn own_slot(&self, k: usize) -> bool {
+        let grid = &self.config.grid;
+        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near.cells[k] as usize)))
+    }
+
+    /// The contents of every rank's updated near cells on every rank (collective): each rank
+    /// sends those of its own, complete with the swept amounts and the solid flux of every
+    /// sub-face (each rank pushed the terms of its own cells), and puts the others' in place.
+    /// Only updated cells have contents: the solid flux and the swept amounts go to updated
+    /// cells only (the sub-faces' cells and those of prisms beyond the domain are marked
+    /// updated, and a piece goes to another cell only if that one is updated), and the mixing
+    /// reads the contents of updated cells only. Traffic: `dim + 2` values per updated cell.
+    pub(super) fn gather_contents(&mut self, solver: &FluidSolver) {
+        let nvar = self.config.grid.dim + 2;
+        let updated: Vec<usize> = (0..self.near.cells.len())
+            .filter(|&k| self.scratch.kind[k] == CellKind::Updated)
+            .collect();
+        let cells: Vec<u32> = updated.iter().map(|&k| self.near.cells[k]).collect();
+        let mut mine = Vec::new();
+        for &k in &updated {
+            if self.own_slot(k) {
+                mine.extend_from_slice(&self.scratch.content[k][..nvar]);
+            }
+        }
+        let all = solver.gather_owned(&cells, mine);
+        for (i, &k) in updated.iter().enumerate() {
+            self.scratch.content[k][..nvar].copy_from_slice(&all[i * nvar..(i + 1) * nvar]);
+        }
+    }
+}
+
+/// Every rank's prism entries (the sub-faces of its own cells, `subface_swept_volumes_of`) on
+/// every rank (collective), in sub-face order, with the skipped sub-faces and the pieces summed
+/// over the ranks: the entries and the count of one rank's `subface_swept_volumes`. Each
+/// sub-face is one rank's, and a rank's entries come by sub-face, so a stable sort by sub-face of
+/// the ranks' entries in rank order restores the one-rank order. Traffic: 16 bytes per entry.
+pub(super) fn gather_swept(solver: &FluidSolver, swept: &mut SubfaceSwept) {
+    let mut bytes = Vec::with_capacity(16 + 16 * swept.entries.len());
+    bytes.extend((swept.n_skipped_subfaces as u64).to_le_bytes());
+    bytes.extend((swept.n_pieces as u64).to_le_bytes());
+    for e in &swept.entries {
+        bytes.extend(e.subface.to_le_bytes());
+        bytes.extend(e.cell.to_le_bytes());
+        bytes.extend(e.volume.to_bits().to_le_bytes());
+    }
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8"));
+    swept.entries.clear();
+    (swept.n_skipped_subfaces, swept.n_pieces) = (0, 0);
+    for part in solver.comm().all_gather(&bytes) {
+        swept.n_skipped_subfaces += u64_at(&part, 0) as usize;
+        swept.n_pieces += u64_at(&part, 8) as usize;
+        swept
+            .entries
+            .extend(part[16..].chunks_exact(16).map(|t| SubfaceSweptEntry {
+                subface: u32_at(t, 0),
+                cell: u32_at(t, 4),
+                volume: f64::from_bits(u64_at(t, 8)),
+            }));
+    }
+    swept.entries.sort_by_key(|e| e.subface);
+}
+
+/// Every rank's updates of its own near cells ([`Embedded::fluid_fluxes`]) on every rank
+/// (collective), by near slot: the list one rank makes, the contents of other ranks' cells
+/// left zero (see [`Embedded::gather_contents`]); this rank's own updates are moved in whole. A failed update (the only failure of
+/// `cell_update` is [`EmbeddedError::FluxNotKept`]) travels as its slot and is made again by
+/// `flux_not_kept`. Traffic per updated cell: 8 bytes, plus `NQ` values per open domain side
+/// it touches.
+pub(super) fn gather_updates(
+    solver: &FluidSolver,
+    mine: Vec<(usize, Result<CellUpdate, EmbeddedError>)>,
+    flux_not_kept: impl Fn(usize) -> EmbeddedError,
+) -> Vec<(usize, Result<CellUpdate, EmbeddedError>)> {
+    const FAILED: u32 = u32::MAX;
+    let mut bytes = Vec::with_capacity(mine.len() * (8 + 8 * NQ));
+    let mut put = |values: &[f64; NQ]| {
+        for v in values {
+            bytes.extend(v.to_bits().to_le_bytes());
+        }
+    };
+    let mut heads = Vec::with_capacity(mine.len());
+    for (k, update) in &mine {
+        match update {
+            Ok(u) => {
+                heads.push((*k as u32, u.n_leaving as u32));
+                for v in &u.leaving[..u.n_leaving] {
+                    put(v);
+                }
+            }
+            Err(_) => heads.push((*k as u32, FAILED)),
+        }
+    }
+    let mut head_bytes = Vec::with_capacity(8 + 8 * heads.len());
+    head_bytes.extend((heads.len() as u64).to_le_bytes());
+    for (k, n) in heads {
+        head_bytes.extend(k.to_le_bytes());
+        head_bytes.extend(n.to_le_bytes());
+    }
+    head_bytes.append(&mut bytes);
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let f64_at = |b: &[u8], at: usize| {
+        f64::from_bits(u64::from_le_bytes(b[at..at + 8].try_into().expect("8")))
+    };
+    let values =
+        |b: &[u8], at: usize| -> [f64; NQ] { std::array::from_fn(|q| f64_at(b, at + 8 * q)) };
+    let rank = solver.slab().rank;
+    let mut all = Vec::new();
+    for (r, part) in solver.comm().all_gather(&head_bytes).iter().enumerate() {
+        if r == rank {
+            continue;
+        }
+        let n = u64::from_le_bytes(part[..8].try_into().expect("8")) as usize;
+        let mut at = 8 + 8 * n;
+        for i in 0..n {
+            let (k, n_leaving) = (u32_at(part, 8 + 8 * i) as usize, u32_at(part, 12 + 8 * i));
+            if n_leaving == FAILED {
+                all.push((k, Err(flux_not_kept(k))));
+                continue;
+            }
+            let mut u = CellUpdate {
+                content: [0.0; NQ],
+                leaving: [[0.0; NQ]; 6],
+                n_leaving: n_leaving as usize,
+            };
+            for v in &mut u.leaving[..u.n_leaving] {
+                *v = values(part, at);
+                at += 8 * NQ;
+            }
+            all.push((k, Ok(u)));
+        }
+    }
+    // (This rank's own updates keep their contents.)
+    all.extend(mine);
+    all.sort_unstable_by_key(|u| u.0);
+    all
+}
+
+/// Every rank's `(root, source slot)` pairs on every rank (collective), in rank order: each
+/// rank walked from its own sources, so together they are the pairs one rank makes, in another
+/// order (the caller sorts them). Traffic: 8 bytes per source.
+pub(super) fn gather_roots(solver: &FluidSolver, mine: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    let mut bytes = Vec::with_capacity(8 * mine.len());
+    for &(root, k) in mine {
+        bytes.extend((root as u32).to_le_bytes());
+        bytes.extend((k as u32).to_le_bytes());
+    }
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let mut all = Vec::new();
+    for part in solver.comm().all_gather(&bytes) {
+        all.extend(
+            part.chunks_exact(8)
+                .map(|p| (u32_at(p, 0) as usize, u32_at(p, 4) as usize)),
+        );
+    }
+    all
+}
