@@ -4,7 +4,8 @@
 //! the grid), each rank timing its own predicts and corrects (a rank's time includes its waits
 //! for the others at the collectives, and with more ranks than cores, for a core), and counting
 //! the sub-faces of `F^{n+1}` in its own cells (whose prisms it clips) and its near cells (whose
-//! updates it makes), the work of the correct that is shared out by rank.
+//! updates it makes), the work of the correct that is shared out by rank, and the heap bytes
+//! its `Embedded` holds after the last step, by part (`Embedded::memory`).
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
@@ -94,6 +95,8 @@ struct RankTimes {
     subfaces: usize,
     /// Cells of the rank's block.
     cells: usize,
+    /// Heap bytes its `Embedded` holds after the last step, by part.
+    memory: fluid_node::embedded::EmbeddedMemory,
 }
 
 /// Each rank's predict and correct times over `steps` coupled steps on `ranks` thread ranks.
@@ -112,6 +115,7 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                     correct: Vec::new(),
                     subfaces: 0,
                     cells: 0,
+                    memory: Default::default(),
                 };
                 for n in 0..steps {
                     let dt = s.max_dt().min(0.5 * e.one_cell_dt());
@@ -128,6 +132,7 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                 let own = |c: u32| slab.to_local(c as usize).is_some();
                 times.subfaces = e.geometry().subfaces.iter().filter(|f| own(f.cell)).count();
                 times.cells = slab.local.n_cells();
+                times.memory = e.memory();
                 times
             })
         })
@@ -173,5 +178,14 @@ fn main() {
         println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
         println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
         println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
+        let mb = |b: usize| format!("{:.1}", b as f64 / 1e6);
+        let part = |name: &str, f: &dyn Fn(&RankTimes) -> usize| {
+            println!("| {k} | {name}, MB | {} |", row(&|t| mb(f(t))));
+        };
+        part("dense geometry", &|t| t.memory.dense_geometry);
+        part("near cells' slots", &|t| t.memory.slot_of);
+        part("near surface", &|t| t.memory.near_surface);
+        part("sparse geometry", &|t| t.memory.sparse_geometry);
+        part("embedded, total", &|t| t.memory.total());
     }
 }
