@@ -173,7 +173,11 @@ pub struct RecordEstimate {
 ///
 /// NOTE: measured on `clamped-beam-2d` at 200 x 100 cells (728 particles): 935 kB per step at
 /// 3.94 trials per step, 163 B per particle and trial for a state and its loads, of which the
-/// loads are 24 B; 3-D from the same count of a cuboid's 8 vertices and 12 triangles.
+/// loads are 24 B; 3-D from the same count of a cuboid's 8 vertices and 12 triangles. That was
+/// every particle and every particle corner both ways, what a body with fracture still sends.
+/// Without fracture only the vertices the elements use are carried, and the fluid gets and
+/// loads only the particles that own an element (issue 39 item 4): the beam's record then
+/// takes 292 kB a step, so for such a scene the estimate is an upper bound (3.4 times).
 const STATE_BYTES_PER_PARTICLE: [u64; 2] = [140, 560];
 
 /// Bytes of the loads per particle in a frame (force and torque), 2-D and 3-D.
