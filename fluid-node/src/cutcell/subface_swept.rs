@@ -301,39 +301,59 @@ fn lift_preimages_of(
         if first == u32::MAX {
             continue;
         }
-        let Some(t1) = after.element(e) else {
-            continue;
-        };
         let mut cursor = first as usize;
-        let mut store = |x: &[f64; 6]| {
-            if let Some(v) = stored.get(cursor)
-                && v[..] == x[..3]
-            {
-                preimages[cursor] = [x[3], x[4], x[5]];
-            }
+        n_pieces += clip_lifted(grid, before, after, e, &mut |x| {
+            put_preimage(stored, preimages, cursor, x);
             cursor += 1;
-        };
-        let t0 = before.element(e).unwrap_or([[f64::NAN; 3]; 3]);
-        let lift = |k: usize| [t1[k][0], t1[k][1], t1[k][2], t0[k][0], t0[k][1], t0[k][2]];
-        if grid.dim == 3 {
-            let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
-            clip_polygon(grid, &poly, &mut |cell, piece| {
-                n_pieces += 1;
-                if domain_cell(grid, cell).is_some() {
-                    for x in piece.vertices() {
-                        store(x);
-                    }
+        });
+    }
+    n_pieces
+}
+
+/// The preimage of lifted vertex `x` (its position after, then before) at `at`, where the
+/// stored vertex there is its position after (else left NaN: the walk has drifted).
+fn put_preimage(stored: &[[f64; 3]], preimages: &mut [[f64; 3]], at: usize, x: &[f64; 6]) {
+    if let Some(v) = stored.get(at)
+        && v[..] == x[..3]
+    {
+        preimages[at] = [x[3], x[4], x[5]];
+    }
+}
+
+/// Clips element `e` of `after` again (none when `compute` skips it), each vertex carrying its
+/// position in `before` (NaN where `before` has none), and hands the vertices of its pieces in
+/// the domain to `store` in the order `compute` stores them. Returns the pieces clipped.
+fn clip_lifted(
+    grid: &Grid,
+    before: &Surface,
+    after: &Surface,
+    e: usize,
+    store: &mut impl FnMut(&[f64; 6]),
+) -> usize {
+    let Some(t1) = after.element(e) else {
+        return 0;
+    };
+    let t0 = before.element(e).unwrap_or([[f64::NAN; 3]; 3]);
+    let lift = |k: usize| [t1[k][0], t1[k][1], t1[k][2], t0[k][0], t0[k][1], t0[k][2]];
+    let mut n_pieces = 0;
+    if grid.dim == 3 {
+        let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
+        clip_polygon(grid, &poly, &mut |cell, piece| {
+            n_pieces += 1;
+            if domain_cell(grid, cell).is_some() {
+                for x in piece.vertices() {
+                    store(x);
                 }
-            });
-        } else {
-            clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
-                n_pieces += 1;
-                if domain_cell(grid, cell).is_some() {
-                    store(&a);
-                    store(&b);
-                }
-            });
-        }
+            }
+        });
+    } else {
+        clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
+            n_pieces += 1;
+            if domain_cell(grid, cell).is_some() {
+                store(&a);
+                store(&b);
+            }
+        });
     }
     n_pieces
 }
@@ -354,40 +374,13 @@ fn lift_preimages(
     let mut cursor = 0;
     let mut n_pieces = 0;
     let mut store = |x: &[f64; 6]| {
-        if let Some(v) = stored.get(cursor)
-            && v[..] == x[..3]
-        {
-            preimages[cursor] = [x[3], x[4], x[5]];
-        }
+        put_preimage(stored, preimages, cursor, x);
         cursor += 1;
     };
     for e in 0..after.n_elements() {
         // NOTE: the same elements as `compute` skips, in the same order, so `cursor` follows
         // `subface_vertices`.
-        let Some(t1) = after.element(e) else {
-            continue;
-        };
-        let t0 = before.element(e).unwrap_or([[f64::NAN; 3]; 3]);
-        let lift = |k: usize| [t1[k][0], t1[k][1], t1[k][2], t0[k][0], t0[k][1], t0[k][2]];
-        if grid.dim == 3 {
-            let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
-            clip_polygon(grid, &poly, &mut |cell, piece| {
-                n_pieces += 1;
-                if domain_cell(grid, cell).is_some() {
-                    for x in piece.vertices() {
-                        store(x);
-                    }
-                }
-            });
-        } else {
-            clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
-                n_pieces += 1;
-                if domain_cell(grid, cell).is_some() {
-                    store(&a);
-                    store(&b);
-                }
-            });
-        }
+        n_pieces += clip_lifted(grid, before, after, e, &mut store);
     }
     n_pieces
 }

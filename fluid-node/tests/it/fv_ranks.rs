@@ -599,47 +599,56 @@ pub(crate) fn moving_bodies_3d() -> SolidFrame {
     bodies(&[block, plate])
 }
 
+/// What `refuse` says on each rank of the process grid `dims` (slabs and blocks of the 2-D
+/// blast with the moving bodies), given the solver and embedded part after one predict, its
+/// step and the surface moved 4 cells in 1/30 s (the tilted block, 2.5 m/s along y, cells of
+/// 1/48 m): the refusals of a surface beyond the near cells.
+fn refusals(
+    dims: [usize; 3],
+    refuse: fn(&mut Embedded, &mut FluidSolver, f64, SolidFrame) -> String,
+) -> Vec<String> {
+    let (grid, state) = blast(&[40, 48]);
+    let solid = moving_bodies_2d();
+    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
+    let ranks = dims.iter().product();
+    let handles: Vec<_> = ThreadRanks::new(ranks)
+        .into_iter()
+        .map(|comm| {
+            let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+            let solid = solid.clone();
+            std::thread::spawn(move || {
+                let dims = (ranks > 1).then_some(dims);
+                let mut s =
+                    FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
+                        .expect("solver");
+                let mut e = Embedded::new(&s, solid).expect("embedded");
+                let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+                assert!(e.predict(&mut s, dt).ok());
+                let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
+                refuse(&mut e, &mut s, dt, far)
+            })
+        })
+        .collect();
+    handles
+        .into_iter()
+        .map(|h| h.join().expect("rank thread"))
+        .collect()
+}
+
 /// Issue 40 item 1, step 3: each rank takes the loads' terms of its own block's sub-faces, so
 /// a trial surface that reaches beyond the near cells (moved 4 cells: the sub-face whose `p̄`
 /// is missing lies in one rank's block) must be refused on every rank as one rank refuses it,
 /// naming the same cell.
 #[test]
 fn a_trial_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
-    let (grid, state) = blast(&[40, 48]);
-    let solid = moving_bodies_2d();
-    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
-    let refusals = |dims: [usize; 3]| -> Vec<String> {
-        let ranks = dims.iter().product();
-        let handles: Vec<_> = ThreadRanks::new(ranks)
-            .into_iter()
-            .map(|comm| {
-                let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-                let solid = solid.clone();
-                std::thread::spawn(move || {
-                    let dims = (ranks > 1).then_some(dims);
-                    let mut s =
-                        FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
-                            .expect("solver");
-                    let mut e = Embedded::new(&s, solid).expect("embedded");
-                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
-                    assert!(e.predict(&mut s, dt).ok());
-                    // 1/30 s moves the tilted block (2.5 m/s along y) 4 cells of 1/48 m.
-                    let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
-                    e.loads(&s, &far)
-                        .expect_err("beyond the near cells")
-                        .to_string()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("rank thread"))
-            .collect()
+    let refuse = |e: &mut Embedded, s: &mut FluidSolver, _dt: f64, far: SolidFrame| {
+        let err = e.loads(s, &far).expect_err("beyond the near cells");
+        err.to_string()
     };
-    let one = refusals([1, 1, 1]);
+    let one = refusals([1, 1, 1], refuse);
     assert!(one[0].contains("the trial wet surface"), "{}", one[0]);
     for dims in [[1, 2, 1], [2, 2, 1], [2, 4, 1]] {
-        for (r, refusal) in refusals(dims).iter().enumerate() {
+        for (r, refusal) in refusals(dims, refuse).iter().enumerate() {
             assert_eq!(refusal, &one[0], "{dims:?} rank {r}");
         }
     }
@@ -651,42 +660,17 @@ fn a_trial_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
 /// names (the first piece beyond, in the sub-faces' order), on slabs and on blocks.
 #[test]
 fn an_accepted_surface_beyond_the_near_cells_is_refused_on_every_rank_as_on_one() {
-    let (grid, state) = blast(&[40, 48]);
-    let solid = moving_bodies_2d();
-    let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
-    let refusals = |dims: [usize; 3]| -> Vec<String> {
-        let ranks = dims.iter().product();
-        let handles: Vec<_> = ThreadRanks::new(ranks)
-            .into_iter()
-            .map(|comm| {
-                let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-                let solid = solid.clone();
-                std::thread::spawn(move || {
-                    let dims = (ranks > 1).then_some(dims);
-                    let mut s =
-                        FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
-                            .expect("solver");
-                    let mut e = Embedded::new(&s, solid).expect("embedded");
-                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
-                    assert!(e.predict(&mut s, dt).ok());
-                    // 1/30 s moves the tilted block (2.5 m/s along y) 4 cells of 1/48 m.
-                    let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
-                    e.correct(&mut s, dt, far, 7, false)
-                        .expect_err("beyond the near cells")
-                        .to_string()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("rank thread"))
-            .collect()
+    let refuse = |e: &mut Embedded, s: &mut FluidSolver, dt: f64, far: SolidFrame| {
+        let err = e
+            .correct(s, dt, far, 7, false)
+            .expect_err("beyond the near cells");
+        err.to_string()
     };
-    let one = refusals([1, 1, 1]);
+    let one = refusals([1, 1, 1], refuse);
     assert!(one[0].contains("step 7"), "{}", one[0]);
     assert!(one[0].contains("prism"), "{}", one[0]);
     for dims in [[1, 2, 1], [2, 2, 1], [2, 4, 1]] {
-        for (r, refusal) in refusals(dims).iter().enumerate() {
+        for (r, refusal) in refusals(dims, refuse).iter().enumerate() {
             assert_eq!(refusal, &one[0], "{dims:?} rank {r}");
         }
     }
