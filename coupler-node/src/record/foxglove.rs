@@ -25,7 +25,7 @@
 use std::path::Path;
 
 use protocol::vtk::Values;
-use protocol::vtk::read::{Array, VtkFile, parse};
+use protocol::vtk::read::{Array, VtkFile, parse_some};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -350,7 +350,9 @@ pub enum ViewError {
     },
 }
 
-fn read_vtk(dir: &Path, name: &str) -> Result<VtkFile, ViewError> {
+/// `dir/name` with the arrays of `wanted` (section, name) decoded, the others skipped
+/// ([`parse_some`]).
+fn read_vtk(dir: &Path, name: &str, wanted: &[(&str, &str)]) -> Result<VtkFile, ViewError> {
     let path = dir.join(name);
     let bytes = match std::fs::read(&path) {
         Ok(bytes) => bytes,
@@ -364,9 +366,11 @@ fn read_vtk(dir: &Path, name: &str) -> Result<VtkFile, ViewError> {
             });
         }
     };
-    parse(&bytes).map_err(|e| ViewError::Bad {
-        file: path.display().to_string(),
-        reason: e.to_string(),
+    parse_some(&bytes, |section, array| wanted.contains(&(section, array))).map_err(|e| {
+        ViewError::Bad {
+            file: path.display().to_string(),
+            reason: e.to_string(),
+        }
     })
 }
 
@@ -394,7 +398,12 @@ fn triple(file: &VtkFile, key: &str, name: &str) -> Result<[f64; 3], ViewError> 
 /// The grid message of output `k`'s `fluid_k.vti` in `dir` at simulated time `t` \[s\].
 pub fn fluid_grid(dir: &Path, k: u32, t: f64) -> Result<Grid, ViewError> {
     let name = format!("fluid_{k}.vti");
-    let file = read_vtk(dir, &name)?;
+    let wanted = [
+        ("CellData", "rho"),
+        ("CellData", "p"),
+        ("CellData", "vtkGhostType"),
+    ];
+    let file = read_vtk(dir, &name, &wanted)?;
     grid_of(&file, &name, t)
 }
 
@@ -526,11 +535,26 @@ pub fn solid_scene(
     broken: &[[u32; 2]],
 ) -> Result<SceneUpdate, ViewError> {
     let faces_name = format!("solid_{k}.vtp");
-    let faces = read_vtk(dir, &faces_name)?;
+    let faces = read_vtk(
+        dir,
+        &faces_name,
+        &[
+            ("Points", "Points"),
+            ("Polys", "connectivity"),
+            ("Polys", "offsets"),
+            ("Lines", "connectivity"),
+            ("Lines", "offsets"),
+            ("CellData", "sigma_n"),
+        ],
+    )?;
     let centres = if broken.is_empty() {
         None
     } else {
-        Some(read_vtk(dir, &format!("particles_{k}.vtp"))?)
+        Some(read_vtk(
+            dir,
+            &format!("particles_{k}.vtp"),
+            &[("Points", "Points")],
+        )?)
     };
     scene_of(&faces, &faces_name, centres.as_ref(), t, broken)
 }

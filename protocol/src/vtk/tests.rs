@@ -239,3 +239,36 @@ fn damaged_files_are_refused_with_the_reason() {
         "{err}"
     );
 }
+
+/// `parse_some` decodes the arrays asked for, bit for bit as `parse` does, and skips the others
+/// without inflating them: damage in a skipped array goes unseen, in a wanted one it is refused.
+#[test]
+fn parse_some_decodes_only_the_arrays_asked_for() {
+    let bytes = image_data(&image([10, 25, 20]), "");
+    let whole = read::parse(&bytes).expect("parses");
+    let some = read::parse_some(&bytes, |section, name| {
+        section == "CellData" && (name == "rho" || name == "flag")
+    })
+    .expect("parses");
+    assert_eq!((&some.dataset, &some.piece), (&whole.dataset, &whole.piece));
+    let names: Vec<&str> = some.arrays.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["rho", "flag"]);
+    assert_eq!(some.arrays[0], *whole.array("CellData", "rho").unwrap());
+    assert_eq!(some.arrays[1], *whole.array("CellData", "flag").unwrap());
+    // Damage the velocity's blocks (the second array): skipped, it is not read.
+    let data_at = bytes.len() - appended(&bytes).len();
+    let velocity_at: usize = String::from_utf8_lossy(&bytes[..data_at])
+        .split("Name=\"velocity\"")
+        .nth(1)
+        .and_then(|rest| rest.split("offset=\"").nth(1))
+        .and_then(|rest| rest.split('"').next())
+        .expect("the velocity's offset")
+        .parse()
+        .expect("a number");
+    let mut damaged = bytes.clone();
+    damaged[data_at + velocity_at + 100] ^= 0xff;
+    let err = read::parse(&damaged).expect_err("damaged velocity");
+    assert!(err.to_string().contains("DataArray \"velocity\""), "{err}");
+    let some_again = read::parse_some(&damaged, |_, name| name == "rho").expect("velocity skipped");
+    assert_eq!(some_again.arrays, some.arrays[..1]);
+}
