@@ -59,7 +59,7 @@
 //! writes the real data end, summary and footer over the provisional end. In a run the
 //! recorder works on a thread of its own ([`Background`]): the coupler copies each message into
 //! the open step and hands the step over whole at its end; the thread builds, compresses (zstd
-//! level -1 by default) and writes the chunk. The record may fall behind the run by up to
+//! level -5 by default) and writes the chunk. The record may fall behind the run by up to
 //! [`MAX_LAG_STEPS`] steps and [`MAX_LAG_BYTES`] bytes (then the coupler waits for it), so a
 //! killed run loses at most the steps still in flight; with `run.record_max_bytes` it keeps up
 //! step by step.

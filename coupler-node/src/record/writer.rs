@@ -26,12 +26,14 @@ use crate::record::foxglove::{
     scene_update_schema,
 };
 
-/// zstd's level for `record_compression = "zstd"`: `-1` (zstd's `--fast=1`). On the record of
-/// `clamped-beam-2d` (315 MB raw, in 1 MiB blocks, `zstd -b`): level 3 (the library's default)
-/// 5.41 times smaller at 306 MB/s, level 1 5.35 at 517 MB/s, level -1 5.18 at 758 MB/s, level -3
-/// 4.91 at 835 MB/s: -1 costs 2.5 times less CPU than the default for 4 % more bytes (issue 39
-/// item 4).
-pub(crate) const ZSTD_LEVEL: i32 = -1;
+/// zstd's level for `record_compression = "zstd"`: `-5` (zstd's `--fast=5`). On the record of
+/// `clamped-beam-2d` since the smaller messages (99.2 MB raw, in 4 MiB blocks, `zstd -b`):
+/// level -1 3.22 times smaller at 1.56 GB/s, -3 3.05 at 1.76 GB/s, -5 2.87 at 2.09 GB/s, -10
+/// 2.72 at 2.30 GB/s (lz4 1.89 at 1.62 GB/s); in the run the record's thread took 0.154 s of
+/// CPU at -5 against 0.176 s at -1, for a record of 34 MB against 30 (issue 39 item 4: the
+/// record's CPU lands on the run's wall time when the run fills the cores). Level 3, the
+/// library's default, was 2.5 times slower than -1 on the larger messages of before.
+pub(crate) const ZSTD_LEVEL: i32 = -5;
 
 /// Largest uncompressed chunk [`Recorder`] holds in memory before it writes it (4 MiB).
 const CHUNK_SIZE: u64 = 4 << 20;

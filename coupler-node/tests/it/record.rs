@@ -472,8 +472,9 @@ fn issue_15_each_record_compression_reads_back_the_same_messages() {
             "{compression:?}"
         );
     }
-    // Uncompressed frames of f64 values are the largest file, but not by much: they hardly
-    // compress.
+    // Uncompressed frames are the largest file. (Which of lz4 and zstd at `--fast=5` is smaller
+    // depends on the data: on these frames lz4, 30 009 bytes against 31 035 and 47 375
+    // uncompressed; on the record of `clamped-beam-2d` zstd, 34 MB against 53 and 99.)
     let size = |c| record_run_compressed(3, RecordLevel::Exchange, c).0.len();
     let (none, lz4, zstd) = (
         size(RecordCompression::None),
@@ -481,7 +482,7 @@ fn issue_15_each_record_compression_reads_back_the_same_messages() {
         size(RecordCompression::Zstd),
     );
     assert!(
-        none > lz4 && lz4 > zstd,
+        none > lz4 && none > zstd,
         "none {none}, lz4 {lz4}, zstd {zstd}"
     );
 }

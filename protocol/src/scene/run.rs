@@ -240,9 +240,10 @@ pub enum RecordLevel {
 /// `run.record_compression`: how the chunks of `exchange.mcap` are compressed. Any value gives
 /// the same messages back; it only trades file size against the coupler's time.
 ///
-/// NOTE: `"zstd"` (the default, level -1, on the record's own thread) makes the record of
-/// `clamped-beam-2d` 6.0 times smaller (315 MB to 52 MB); `"lz4"` 2.0 times; `"none"` writes
-/// fastest, 1.5–2 GiB/s into a file (docs/performance.md, "Recording").
+/// NOTE: `"zstd"` (the default, level -5, on the record's own thread) makes the record of
+/// `clamped-beam-2d` 2.9 times smaller than `"none"` (99 MB to 34 MB; 297 MB before the
+/// smaller messages of issue 39); `"lz4"` 1.9 times; `"none"` writes fastest, 1.5–2 GiB/s
+/// into a file (docs/performance.md, "Recording").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RecordCompression {
@@ -250,7 +251,7 @@ pub enum RecordCompression {
     None,
     /// LZ4 frames (MCAP compression `"lz4"`).
     Lz4,
-    /// Zstandard, level -1 (`--fast=1`), on the record's own thread (MCAP compression `"zstd"`).
+    /// Zstandard, level -5 (`--fast=5`), on the record's own thread (MCAP compression `"zstd"`).
     #[default]
     Zstd,
 }
