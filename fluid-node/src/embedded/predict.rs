@@ -152,8 +152,14 @@ impl Embedded {
 
     /// Taps: the faces of the near cells, per axis, grouped by pencil. The axes are their own
     /// (their taps and face slots): they run in parallel on the fluid's pool.
+    ///
+    /// On a decomposed grid, those a rank's sweeps compute or its correct reads (issue 40 item
+    /// 1): the faces of its own near cells, and along a cut axis the faces on its block's low
+    /// side of the near cells below it (the block below reads them; the solver sends them,
+    /// `FluidSolver::predict`). A face's flux does not depend on which faces are kept.
     fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
+        let block = self.config.block;
         let NearCells {
             cells,
             face_slots,
@@ -175,7 +181,24 @@ impl Embedded {
                     let c = c as usize;
                     let m = (c / stride) % n;
                     let p = c % stride + (c / (stride * n)) * stride;
-                    for f in [p * (n + 1) + m, p * (n + 1) + m + 1] {
+                    let faces = match block {
+                        None => m..m + 2,
+                        Some(b) => {
+                            let ijk = grid.ijk(c);
+                            let across =
+                                (0..3).all(|a| a == axis || b.lo[a] <= ijk[a] && ijk[a] < b.hi[a]);
+                            if !across {
+                                continue;
+                            } else if b.lo[axis] <= m && m < b.hi[axis] {
+                                m..m + 2
+                            } else if m + 1 == b.lo[axis] {
+                                m + 1..m + 2
+                            } else {
+                                continue;
+                            }
+                        }
+                    };
+                    for f in faces.map(|m| p * (n + 1) + m) {
                         marked[f / 64] |= 1 << (f % 64);
                     }
                 }

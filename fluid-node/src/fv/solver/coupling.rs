@@ -149,14 +149,17 @@ impl FluidSolver {
 
     /// After the sweeps of `order`: the kept fluxes of this rank's faces into `hooks.taps`, and
     /// on several ranks those of the faces on each block's low side along a cut axis, which
-    /// are the high faces of the cells of the block below it there, on every rank (collective).
-    /// So each rank holds the kept fluxes of every face of its own cells, as one rank computes
-    /// them (a face belongs to the rank of the cell above it, the last face to the last block).
+    /// are the high faces of the cells of the block below it there, on every rank (collective),
+    /// each put where the receiver keeps that face (its taps may be its own: every rank's taps
+    /// name the faces of the whole grid, but need not be the same). So each rank holds the kept
+    /// fluxes of every face of its own cells that it keeps and that the block above keeps too,
+    /// as one rank computes them (a face belongs to the rank of the cell above it, the last face
+    /// to the last block).
     ///
     /// NOTE: every rank used to receive every kept flux and pressure (all of the near cells'
     /// faces, 44 bytes each); what reads them, the correct's update of a rank's own near cells
     /// (`embedded`), reads the faces of its own cells only, and `p̄` is taken by rank there
-    /// (issue 40 item 1). Traffic now: the kept faces on the blocks' low sides, 44 bytes each.
+    /// (issue 40 item 1). Traffic now: the kept faces on the blocks' low sides, 52 bytes each.
     pub(super) fn gather_hook_outputs(&mut self, hooks: &mut SplitHooks, order: &[usize]) {
         for &axis in order {
             let tap = &mut hooks.taps[axis];
@@ -170,31 +173,48 @@ impl FluidSolver {
         if self.slab.ranks == 1 {
             return;
         }
+        // (axis, global pencil, position along it, flux) of each kept face on the low sides.
         let mut bytes = Vec::new();
         for &axis in order {
             let first = self.slab.offset[axis];
             if first == 0 {
                 continue;
             }
-            let tap = &hooks.taps[axis];
-            for &slot in &self.local.slots[axis] {
-                if tap.positions[slot as usize] as usize == first {
-                    bytes.extend((axis as u32).to_le_bytes());
-                    bytes.extend(slot.to_le_bytes());
-                    for v in tap.flux[slot as usize] {
-                        bytes.extend(v.to_bits().to_le_bytes());
+            let (tap, local) = (&hooks.taps[axis], &self.local.taps[axis]);
+            let slots = &self.local.slots[axis];
+            for p in 0..local.pencil_offsets.len().saturating_sub(1) {
+                let (lo, hi) = (local.pencil_offsets[p], local.pencil_offsets[p + 1]);
+                for &slot in &slots[lo as usize..hi as usize] {
+                    let m = tap.positions[slot as usize];
+                    if m as usize == first {
+                        bytes.extend((axis as u32).to_le_bytes());
+                        bytes.extend((self.slab.global_pencil(axis, p) as u32).to_le_bytes());
+                        bytes.extend(m.to_le_bytes());
+                        for v in tap.flux[slot as usize] {
+                            bytes.extend(v.to_bits().to_le_bytes());
+                        }
                     }
                 }
             }
         }
-        const ENTRY: usize = 8 + 8 * NQ;
+        const ENTRY: usize = 12 + 8 * NQ;
         let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
         for part in self.comm.all_gather(&bytes) {
             for e in part.chunks_exact(ENTRY) {
-                let (axis, slot) = (u32_at(e, 0) as usize, u32_at(e, 4) as usize);
-                let flux = &mut hooks.taps[axis].flux[slot];
-                for (q, v) in flux.iter_mut().enumerate() {
-                    let at = 8 + 8 * q;
+                let (axis, p, m) = (u32_at(e, 0) as usize, u32_at(e, 4) as usize, u32_at(e, 8));
+                let tap = &mut hooks.taps[axis];
+                if tap.pencil_offsets.len() <= p + 1 {
+                    continue;
+                }
+                let (lo, hi) = (
+                    tap.pencil_offsets[p] as usize,
+                    tap.pencil_offsets[p + 1] as usize,
+                );
+                let Ok(k) = tap.positions[lo..hi].binary_search(&m) else {
+                    continue;
+                };
+                for (q, v) in tap.flux[lo + k].iter_mut().enumerate() {
+                    let at = 12 + 8 * q;
                     *v = f64::from_bits(u64::from_le_bytes(e[at..at + 8].try_into().expect("8")));
                 }
             }
