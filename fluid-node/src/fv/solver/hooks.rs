@@ -43,9 +43,10 @@ pub struct SplitHooks {
     /// only (0 for the others').
     pub pressures: [Vec<f64>; 3],
     /// Per axis: the faces whose fluxes are kept (pencils of the whole grid, positions along
-    /// the whole pencil). On a decomposed grid a rank's `flux` holds those of every face of its
-    /// own cells (its own faces, and the high faces of its cells on the block's high side,
-    /// which belong to the block above), 0 for the others.
+    /// the whole pencil). On a decomposed grid the ranks' taps may differ: a rank's `flux` holds
+    /// those of its own faces and those of the faces on its block's high sides (the high faces
+    /// of its cells there, which belong to the block above) that the block above keeps too, 0
+    /// for the others.
     pub taps: [FaceTap; 3],
     /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
     /// by pencil and position (on a decomposed grid, those of the rank's pencils that reach its

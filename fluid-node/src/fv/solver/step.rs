@@ -78,8 +78,8 @@ impl FluidSolver {
     ///
     /// `hooks` and `covered` name cells of the whole grid ([`FluidSolver::global_grid`]): each
     /// rank applies the ghosts and vacuum of its own cells and keeps the pressures of its own
-    /// cells and the fluxes of every face of its own cells (those of the faces on its block's
-    /// high sides come from the blocks above; collective).
+    /// cells and the fluxes of the faces of its own cells (those of the faces on its block's
+    /// high sides from the blocks above, where they keep them too; collective).
     pub fn predict(
         &mut self,
         dt: f64,
