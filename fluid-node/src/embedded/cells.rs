@@ -275,18 +275,22 @@ pub(super) fn mark_around(marked: &mut [u64], grid: &Grid, ijk: [usize; 3], r: u
     let (x, y, z) = (span(0), span(1), span(2));
     for k in z.0..=z.1 {
         for j in y.0..=y.1 {
-            let (first, last) = (grid.index(x.0, j, k), grid.index(x.1, j, k));
-            let (w0, w1) = (first / 64, last / 64);
-            let low = !0u64 << (first % 64);
-            let high = !0u64 >> (63 - last % 64);
-            if w0 == w1 {
-                marked[w0] |= low & high;
-            } else {
-                marked[w0] |= low;
-                marked[w0 + 1..w1].fill(!0);
-                marked[w1] |= high;
-            }
+            mark_run(marked, grid.index(x.0, j, k), grid.index(x.1, j, k));
         }
+    }
+}
+
+/// Sets the bits `first..=last` of `marked`, a word at a time.
+pub(super) fn mark_run(marked: &mut [u64], first: usize, last: usize) {
+    let (w0, w1) = (first / 64, last / 64);
+    let low = !0u64 << (first % 64);
+    let high = !0u64 >> (63 - last % 64);
+    if w0 == w1 {
+        marked[w0] |= low & high;
+    } else {
+        marked[w0] |= low;
+        marked[w0 + 1..w1].fill(!0);
+        marked[w1] |= high;
     }
 }
 

@@ -20,7 +20,7 @@
 use protocol::sum::OddSum;
 use rayon::prelude::*;
 
-use super::cells::{domain_face, offsets, shifted, touches_gas_with};
+use super::cells::{domain_face, mark_run, marked_cells, touches_gas_with};
 use super::near_wall::{
     NEAR_WALL_SUMS, NW_AREA, NW_FACING, NW_FACING_LEN, NW_NORMAL, NW_VELOCITY, NW_WET_AREA,
     NW_WET_NORMAL, NearWall,
@@ -172,28 +172,47 @@ struct NearOfView {
 
 impl NearOfView {
     /// The cells of `view`'s window within [`NEAR_RADIUS`] of one of `cut_cells` (global).
+    ///
+    /// NOTE: marked in a bit set of the window, a row of each neighbourhood at a time, and read
+    /// out in order (the window's order of its cells is the grid's): the ascending list that
+    /// marking each offset of each cut cell and sorting gave, in a tenth of the time (that took
+    /// 2.4 ms of the 9–12 ms of a rank's hooks at 64³ on 2 ranks, `embedded_ranks`).
     fn new(view: &HookGeometry, cut_cells: &[u32]) -> NearOfView {
         let (grid, window) = (view.grid, view.window);
-        let mut slot_of = vec![0u32; window.n_cells()];
-        let mut cells = Vec::new();
-        let span = offsets(grid.dim, NEAR_RADIUS as isize);
+        let mut marked = vec![0u64; window.n_cells().div_ceil(64)];
         for &c in cut_cells {
             let ijk = grid.ijk(c as usize);
-            for d in std::iter::once(&[0isize; 3]).chain(&span) {
-                if let Some(q) = shifted(grid, ijk, *d)
-                    && window.contains(q)
-                {
-                    let k = window.index(q);
-                    if slot_of[k] == 0 {
-                        slot_of[k] = 1;
-                        cells.push(grid.index(q[0], q[1], q[2]) as u32);
-                    }
+            let span: [(usize, usize); 3] = std::array::from_fn(|a| {
+                let r = if a < grid.dim { NEAR_RADIUS } else { 0 };
+                let lo = ijk[a].saturating_sub(r).max(window.lo[a]);
+                (lo, (ijk[a] + r).min(window.hi[a] - 1))
+            });
+            if span.iter().any(|&(lo, hi)| lo > hi) {
+                continue;
+            }
+            let (x, y, z) = (span[0], span[1], span[2]);
+            for k in z.0..=z.1 {
+                for j in y.0..=y.1 {
+                    mark_run(
+                        &mut marked,
+                        window.index([x.0, j, k]),
+                        window.index([x.1, j, k]),
+                    );
                 }
             }
         }
-        cells.sort_unstable();
-        for (k, &c) in cells.iter().enumerate() {
-            slot_of[window.index(grid.ijk(c as usize))] = k as u32 + 1;
+        let size = [window.size(0), window.size(1)];
+        let mut slot_of = vec![0u32; window.n_cells()];
+        let mut cells = Vec::new();
+        for w in marked_cells(&marked) {
+            let (i, j, k) = (
+                w % size[0],
+                (w / size[0]) % size[1],
+                w / (size[0] * size[1]),
+            );
+            let lo = window.lo;
+            cells.push(grid.index(lo[0] + i, lo[1] + j, lo[2] + k) as u32);
+            slot_of[w] = cells.len() as u32;
         }
         NearOfView { cells, slot_of }
     }

@@ -25,13 +25,14 @@
 //! surface and runs all of this on the whole grid but the loads (each rank takes the sub-faces
 //! of its own block, and the terms of all are added as one rank adds them, `loads.rs`), the
 //! ghost fills, wall runs and vacuum cells the sweeps write into its cells (derived from the
-//! geometry of its block and a halo, `hooks.rs`, with the `U^n` of its near cells), and the
+//! geometry of its block and a halo, `hooks.rs`, with the `U^n` and `p̄` of its near cells), and the
 //! correct's prisms, cell updates, swept amounts and solid flux, and the mixing sources' walks
 //! to their roots (each rank those of its own cells, all gathered on every rank in the one-rank
 //! order, `correct.rs`, `mix.rs`); the solver
-//! applies and gathers the sweeps' hooks per block, and the states of near cells come from
-//! their ranks ([`crate::fv::FluidSolver::cells_at`]), so every rank computes the bits of one
-//! rank (the fluid-node tests `fv_ranks` and `embedded_hooks_block`, docs/mpi.md).
+//! applies the sweeps' hooks per block and keeps the fluxes of every face of a rank's cells, and
+//! the states of near cells come from their ranks ([`crate::fv::FluidSolver::cells_at`]), so
+//! every rank computes the bits of one rank (the fluid-node tests `fv_ranks`, `fv_ranks_hooks`
+//! and `embedded_hooks_block`, docs/mpi.md).
 //!
 //! Properties (tested in the fluid-node tests `embedded_*`): fluid mass, momentum and energy plus
 //! what crossed the interface are conserved to round-off (the swept volumes telescope, the

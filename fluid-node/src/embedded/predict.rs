@@ -20,13 +20,18 @@ impl Embedded {
         let covered = |c: usize| lambda[c] >= 1.0 - COVERED_TOLERANCE;
         let report = solver.predict(dt, &mut self.near.hooks, &covered);
         self.wall_pressures(solver, report.sweeps[0]);
-        self.vacuum_walls();
         report
     }
 
     /// `p̄` of every near cell, the pressure of the wet faces it holds (or, covered at `t^n`,
     /// faces): the mean of its pressure at `t^n` (what the first sweep starts from) and after
-    /// the sweeps, on every axis; in a covered cell the mirrored fluid's at `t^n`.
+    /// the sweeps, on every axis; in a covered cell the mirrored fluid's at `t^n`; 0 in a cell
+    /// that held vacuum at `t^n` ([`Embedded::vacuum_wall`]).
+    ///
+    /// Each rank takes those of its own near cells, from the pressures and the predicted states
+    /// of its own cells, and one all-gather gives every rank all of them (collective; 8 bytes
+    /// per near cell). Before issue 40 item 1 every rank gathered the pressures of every near
+    /// cell on every axis and their predicted states, and computed all of them.
     ///
     /// NOTE: paper 003 (§3.4 step 1; CELIA3D's `pdtx`, `pdty`, `pdtz`) takes along each axis
     /// the pressure the sweep along it starts from. A face's work `Σ_a p̄_a V_a ν_a` then need
@@ -45,44 +50,46 @@ impl Embedded {
         let (dim, nvar) = (self.config.grid.dim, self.config.grid.dim + 2);
         let (gamma, (vr, _)) = (self.config.gamma, self.config.vacuum);
         let lambda = &self.state.geom.solid_fraction;
-        let predicted = solver.cells_at(&self.near.cells);
-        let near = &mut self.near;
-        near.wall_pressure.clear();
-        for (k, &c) in near.cells.iter().enumerate() {
+        let own: Vec<usize> = (0..self.near.cells.len())
+            .filter(|&k| self.own_slot(k))
+            .collect();
+        let own_cells: Vec<u32> = own.iter().map(|&k| self.near.cells[k]).collect();
+        let predicted = solver.own_cells_at(&own_cells);
+        let near = &self.near;
+        let mut mine = Vec::with_capacity(own.len());
+        for (i, &k) in own.iter().enumerate() {
             let start = near.hooks.pressures[first][k];
-            let p = if lambda[c as usize] >= 1.0 - COVERED_TOLERANCE {
+            let c = near.cells[k] as usize;
+            let p = if lambda[c] >= 1.0 - COVERED_TOLERANCE {
                 start
+            } else if self.vacuum_wall(k) {
+                0.0
             } else {
-                let u = full_state(&predicted[k * nvar..(k + 1) * nvar], dim, 1.0);
+                let u = full_state(&predicted[i * nvar..(i + 1) * nvar], dim, 1.0);
                 let end = crate::fv::euler::primitive_floored(&u, gamma, vr).p;
                 0.5 * (start + end)
             };
-            near.wall_pressure.push(p);
+            mine.push(p);
         }
+        self.near.wall_pressure = solver.gather_owned_by(&self.near.cells, mine, 1);
     }
 
-    /// NOTE: a wet face in a cell that held vacuum at `t^n` takes no gas pressure. The sweeps
-    /// give that cell the gas they bring in from its neighbours, and a later sweep starts from
-    /// it; but the faces to the cell's other vacuum neighbours carry nothing (Lax–Friedrichs of
-    /// vacuum against vacuum, or a crack's flux from `U^n`), so that pressure on the wall had
-    /// nothing to balance it. Seen in a crack opening across a grid plane (the flush cube at
-    /// 100^3, step 72): the cell above the plane took 0.016 Pa from its y sweep on a whole
-    /// cell face, the vacuum cell below 0, and the gap's 1e-4 of mass was left at -12 m/s.
-    fn vacuum_walls(&mut self) {
+    /// Whether the uncovered near cell in slot `k` held vacuum at `t^n`: a wet face there takes
+    /// no gas pressure.
+    ///
+    /// NOTE: the sweeps give that cell the gas they bring in from its neighbours, and a later
+    /// sweep starts from it; but the faces to the cell's other vacuum neighbours carry nothing
+    /// (Lax–Friedrichs of vacuum against vacuum, or a crack's flux from `U^n`), so that pressure
+    /// on the wall had nothing to balance it. Seen in a crack opening across a grid plane (the
+    /// flush cube at 100^3, step 72): the cell above the plane took 0.016 Pa from its y sweep on
+    /// a whole cell face, the vacuum cell below 0, and the gap's 1e-4 of mass was left at -12
+    /// m/s.
+    fn vacuum_wall(&self, k: usize) -> bool {
         let (dim, nvar) = (self.config.grid.dim, self.config.grid.dim + 2);
         let (vr, vp) = self.config.vacuum;
-        let lambda = &self.state.geom.solid_fraction;
-        let near = &mut self.near;
-        for (k, &c) in near.cells.iter().enumerate() {
-            if lambda[c as usize] >= 1.0 - COVERED_TOLERANCE {
-                continue;
-            }
-            let u = full_state(&near.saved[k * nvar..(k + 1) * nvar], dim, 1.0);
-            let w = crate::fv::euler::primitive_floored(&u, self.config.gamma, vr);
-            if !(w.rho >= vr && w.p >= vp) {
-                near.wall_pressure[k] = 0.0;
-            }
-        }
+        let u = full_state(&self.near.saved[k * nvar..(k + 1) * nvar], dim, 1.0);
+        let w = crate::fv::euler::primitive_floored(&u, self.config.gamma, vr);
+        !(w.rho >= vr && w.p >= vp)
     }
 
     /// Near cells, their faces, the ghost fills, and `U^n` (after the first sweep's ghosts).
@@ -145,8 +152,14 @@ impl Embedded {
 
     /// Taps: the faces of the near cells, per axis, grouped by pencil. The axes are their own
     /// (their taps and face slots): they run in parallel on the fluid's pool.
+    ///
+    /// On a decomposed grid, those a rank's sweeps compute or its correct reads (issue 40 item
+    /// 1): the faces of its own near cells, and along a cut axis the faces on its block's low
+    /// side of the near cells below it (the block below reads them; the solver sends them,
+    /// `FluidSolver::predict`). A face's flux does not depend on which faces are kept.
     fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
+        let block = self.config.block;
         let NearCells {
             cells,
             face_slots,
@@ -168,7 +181,24 @@ impl Embedded {
                     let c = c as usize;
                     let m = (c / stride) % n;
                     let p = c % stride + (c / (stride * n)) * stride;
-                    for f in [p * (n + 1) + m, p * (n + 1) + m + 1] {
+                    let faces = match block {
+                        None => m..m + 2,
+                        Some(b) => {
+                            let ijk = grid.ijk(c);
+                            let across =
+                                (0..3).all(|a| a == axis || b.lo[a] <= ijk[a] && ijk[a] < b.hi[a]);
+                            if !across {
+                                continue;
+                            } else if b.lo[axis] <= m && m < b.hi[axis] {
+                                m..m + 2
+                            } else if m + 1 == b.lo[axis] {
+                                m + 1..m + 2
+                            } else {
+                                continue;
+                            }
+                        }
+                    };
+                    for f in faces.map(|m| p * (n + 1) + m) {
                         marked[f / 64] |= 1 << (f % 64);
                     }
                 }

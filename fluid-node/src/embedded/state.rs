@@ -78,7 +78,9 @@ pub(super) struct NearCells {
     pub(super) slot_of: Vec<u32>,
     /// `U^n` of the near cells, `nvar` each.
     pub(super) saved: Vec<f64>,
-    /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces, by face index.
+    /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces this rank keeps
+    /// (every near cell's on one rank; on a decomposed grid those of its own near cells and, on
+    /// its block's low sides, of the near cells below: `Embedded::taps`), by face index.
     pub(super) face_slots: [Vec<(u32, u32)>; 3],
     /// What the sweeps take in (ghost fills, vacuum cells) and give back (directional
     /// pressures, face fluxes).

@@ -1,6 +1,7 @@
 //! What the split sweeps do for a coupled step ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the halo exchange, ghost states and vacuum written before a sweep, the
-//! pressures recorded, and the kept fluxes and pressures gathered on every rank (issue 16).
+//! pressures recorded, and the kept fluxes of the faces on the blocks' low sides exchanged
+//! (issue 16; issue 40 item 1: no longer every kept flux and pressure to every rank).
 
 use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
@@ -8,14 +9,6 @@ use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::cell_primitive;
 use crate::fv::solver::hooks::{GhostFill, SplitHooks};
 use crate::fv::sweep::{Pencils, frame, from_local, mirror, to_local};
-
-/// What one rank sends of the hooks' outputs: the pressures of the slots of its cells, in
-/// order (one list per axis), and its kept fluxes `(slot, flux)` per axis.
-#[derive(Default, serde::Serialize, serde::Deserialize)]
-struct HookOutputs {
-    pressures: Vec<Vec<f64>>,
-    fluxes: Vec<Vec<(u32, [f64; NQ])>>,
-}
 
 impl FluidSolver {
     /// Sends this rank's boundary planes along `axis` to its neighbours and receives theirs
@@ -140,25 +133,33 @@ impl FluidSolver {
     }
 
     /// `p̄` of this rank's cells of `cells` (whole grid, ascending) into `out` (zero for the
-    /// other ranks' cells until [`FluidSolver::gather_hook_outputs`]).
-    pub(super) fn record_pressures_at(&mut self, cells: &[u32], out: &mut Vec<f64>) {
+    /// other ranks' cells).
+    pub(super) fn record_pressures_at(&self, cells: &[u32], out: &mut Vec<f64>) {
         let nvar = self.state.nvar;
         let dim = self.grid.dim;
         let gamma = self.params.gamma;
-        let slots = &mut self.local.pressure_slots;
-        slots.clear();
         out.clear();
         out.resize(cells.len(), 0.0);
         for (k, &c) in cells.iter().enumerate() {
             if let Some(c) = self.slab.to_local(c as usize) {
-                slots.push(k as u32);
                 out[k] = cell_primitive(&self.state.u[c * nvar..(c + 1) * nvar], dim, gamma).p;
             }
         }
     }
 
-    /// After the sweeps of `order`: the kept fluxes of this rank into `hooks.taps`, then the
-    /// pressures and fluxes of every rank on every rank (collective on several ranks).
+    /// After the sweeps of `order`: the kept fluxes of this rank's faces into `hooks.taps`, and
+    /// on several ranks those of the faces on each block's low side along a cut axis, which
+    /// are the high faces of the cells of the block below it there, on every rank (collective),
+    /// each put where the receiver keeps that face (its taps may be its own: every rank's taps
+    /// name the faces of the whole grid, but need not be the same). So each rank holds the kept
+    /// fluxes of every face of its own cells that it keeps and that the block above keeps too,
+    /// as one rank computes them (a face belongs to the rank of the cell above it, the last face
+    /// to the last block).
+    ///
+    /// NOTE: every rank used to receive every kept flux and pressure (all of the near cells'
+    /// faces, 44 bytes each); what reads them, the correct's update of a rank's own near cells
+    /// (`embedded`), reads the faces of its own cells only, and `p̄` is taken by rank there
+    /// (issue 40 item 1). Traffic now: the kept faces on the blocks' low sides, 52 bytes each.
     pub(super) fn gather_hook_outputs(&mut self, hooks: &mut SplitHooks, order: &[usize]) {
         for &axis in order {
             let tap = &mut hooks.taps[axis];
@@ -172,42 +173,49 @@ impl FluidSolver {
         if self.slab.ranks == 1 {
             return;
         }
-        let slots = &self.local.pressure_slots;
-        let mine = HookOutputs {
-            pressures: (0..3)
-                .map(|a| {
-                    let p = &hooks.pressures[a];
-                    if p.is_empty() {
-                        Vec::new()
-                    } else {
-                        slots.iter().map(|&k| p[k as usize]).collect()
+        // (axis, global pencil, position along it, flux) of each kept face on the low sides.
+        let mut bytes = Vec::new();
+        for &axis in order {
+            let first = self.slab.offset[axis];
+            if first == 0 {
+                continue;
+            }
+            let (tap, local) = (&hooks.taps[axis], &self.local.taps[axis]);
+            let slots = &self.local.slots[axis];
+            for p in 0..local.pencil_offsets.len().saturating_sub(1) {
+                let (lo, hi) = (local.pencil_offsets[p], local.pencil_offsets[p + 1]);
+                for &slot in &slots[lo as usize..hi as usize] {
+                    let m = tap.positions[slot as usize];
+                    if m as usize == first {
+                        bytes.extend((axis as u32).to_le_bytes());
+                        bytes.extend((self.slab.global_pencil(axis, p) as u32).to_le_bytes());
+                        bytes.extend(m.to_le_bytes());
+                        for v in tap.flux[slot as usize] {
+                            bytes.extend(v.to_bits().to_le_bytes());
+                        }
                     }
-                })
-                .collect(),
-            fluxes: (0..3)
-                .map(|a| {
-                    let flux = &hooks.taps[a].flux;
-                    self.local.slots[a]
-                        .iter()
-                        .filter(|_| order.contains(&a))
-                        .map(|&slot| (slot, flux[slot as usize]))
-                        .collect()
-                })
-                .collect(),
-        };
-        let all = self.comm.all_gather(&protocol::codec::encode_blob(&mine));
-        let by_rank = self.slots_by_rank(&hooks.pressure_cells);
-        for (rank, bytes) in all.iter().enumerate() {
-            let part: HookOutputs =
-                protocol::codec::decode_blob(bytes).expect("ranks send valid hook outputs");
-            for (a, values) in part.pressures.iter().enumerate() {
-                for (&k, &v) in by_rank[rank].iter().zip(values) {
-                    hooks.pressures[a][k as usize] = v;
                 }
             }
-            for (a, fluxes) in part.fluxes.iter().enumerate() {
-                for &(slot, f) in fluxes {
-                    hooks.taps[a].flux[slot as usize] = f;
+        }
+        const ENTRY: usize = 12 + 8 * NQ;
+        let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+        for part in self.comm.all_gather(&bytes) {
+            for e in part.chunks_exact(ENTRY) {
+                let (axis, p, m) = (u32_at(e, 0) as usize, u32_at(e, 4) as usize, u32_at(e, 8));
+                let tap = &mut hooks.taps[axis];
+                if tap.pencil_offsets.len() <= p + 1 {
+                    continue;
+                }
+                let (lo, hi) = (
+                    tap.pencil_offsets[p] as usize,
+                    tap.pencil_offsets[p + 1] as usize,
+                );
+                let Ok(k) = tap.positions[lo..hi].binary_search(&m) else {
+                    continue;
+                };
+                for (q, v) in tap.flux[lo + k].iter_mut().enumerate() {
+                    let at = 12 + 8 * q;
+                    *v = f64::from_bits(u64::from_le_bytes(e[at..at + 8].try_into().expect("8")));
                 }
             }
         }
@@ -247,11 +255,15 @@ impl FluidSolver {
     /// values `mine` each rank gives for its own cells among them, in order (collective on
     /// several ranks).
     pub fn gather_owned(&self, cells: &[u32], mine: Vec<f64>) -> Vec<f64> {
+        self.gather_owned_by(cells, mine, self.state.nvar)
+    }
+
+    /// [`FluidSolver::gather_owned`] with `nvar` values per cell.
+    pub fn gather_owned_by(&self, cells: &[u32], mine: Vec<f64>, nvar: usize) -> Vec<f64> {
         debug_assert!(cells.is_sorted());
         if self.slab.ranks == 1 || cells.is_empty() {
             return mine;
         }
-        let nvar = self.state.nvar;
         let parts: Vec<Vec<f64>> = self
             .comm
             .all_gather(&f64_bytes(&mine))

@@ -1,8 +1,9 @@
 //! What a coupled step asks of the split sweeps ([`SplitHooks`]), on one rank or on one block of
 //! a decomposed grid: the hooks name cells, pencils and faces of the whole grid, each rank
 //! applies the ghost states and vacuum of its own cells and keeps the pressures and fluxes of
-//! its own cells and faces, and the outputs are gathered so that every rank ends with all of
-//! them, bit for bit those of one rank (issue 16).
+//! its own cells and faces, and the fluxes of the faces on each block's low side go to every
+//! rank, so that each rank ends with those of every face of its own cells, bit for bit those of
+//! one rank (issue 16; issue 40 item 1: every output went to every rank before).
 //!
 //! Ownership: cell `c` belongs to the rank holding its block; face `m` along a cut axis (the
 //! low face of cell `m`) to the rank holding cell `m`, the last face to the last block. A ghost
@@ -38,10 +39,14 @@ pub struct SplitHooks {
     /// Cells whose `p̄` is recorded, ascending.
     pub pressure_cells: Vec<u32>,
     /// Output: `p̄_axis` \[Pa\] of `pressure_cells[k]` in `pressures[axis][k]`: the pressure of
-    /// the state the sweep along `axis` starts from.
+    /// the state the sweep along `axis` starts from; on a decomposed grid, of this rank's cells
+    /// only (0 for the others').
     pub pressures: [Vec<f64>; 3],
     /// Per axis: the faces whose fluxes are kept (pencils of the whole grid, positions along
-    /// the whole pencil).
+    /// the whole pencil). On a decomposed grid the ranks' taps may differ: a rank's `flux` holds
+    /// those of its own faces and those of the faces on its block's high sides (the high faces
+    /// of its cells there, which belong to the block above) that the block above keeps too, 0
+    /// for the others.
     pub taps: [FaceTap; 3],
     /// Per axis: the walls thinner than two stencils, where the sweep cuts its pencils, sorted
     /// by pencil and position (on a decomposed grid, those of the rank's pencils that reach its
@@ -62,8 +67,6 @@ pub(super) struct LocalHooks {
     pub(super) slots: [Vec<u32>; 3],
     /// Per axis: the wall runs of this rank's pencils (all of a pencil along a cut axis).
     pub(super) walls: [Vec<WallRun>; 3],
-    /// The slots of [`SplitHooks::pressure_cells`] this rank records, ascending.
-    pub(super) pressure_slots: Vec<u32>,
 }
 
 impl LocalHooks {

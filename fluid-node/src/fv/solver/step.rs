@@ -77,9 +77,9 @@ impl FluidSolver {
     /// the solid afterwards, and its totals weigh cells by their fluid fraction.
     ///
     /// `hooks` and `covered` name cells of the whole grid ([`FluidSolver::global_grid`]): each
-    /// rank applies the ghosts and vacuum of its own cells and keeps the pressures and fluxes of
-    /// its own cells and faces, and the outputs are gathered, so that every rank ends with all
-    /// of them (collective).
+    /// rank applies the ghosts and vacuum of its own cells and keeps the pressures of its own
+    /// cells and the fluxes of the faces of its own cells (those of the faces on its block's
+    /// high sides from the blocks above, where they keep them too; collective).
     pub fn predict(
         &mut self,
         dt: f64,
