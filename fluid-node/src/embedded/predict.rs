@@ -160,8 +160,8 @@ impl Embedded {
     ///
     /// NOTE: the second rule matters where the cell across that face is no near cell, so that
     /// the block above keeps the face for none of its own cells: after a surface moved more than
-    /// a cell in a step (`fv_ranks::a_surface_jumping_towards_a_cut_is_bit_identical_on_slabs_and_blocks`:
-    /// without the rule the block below reads 0 there).
+    /// a cell in a step (the `fv_ranks` test `a_surface_jumping_towards_a_cut_...`: without the
+    /// rule the block below reads 0 there).
     fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
         let block = self.config.block;
