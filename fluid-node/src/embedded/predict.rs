@@ -157,6 +157,11 @@ impl Embedded {
     /// 1): the faces of its own near cells, and along a cut axis the faces on its block's low
     /// side of the near cells below it (the block below reads them; the solver sends them,
     /// `FluidSolver::predict`). A face's flux does not depend on which faces are kept.
+    ///
+    /// NOTE: the second rule matters where the cell across that face is no near cell, so that
+    /// the block above keeps the face for none of its own cells: after a surface moved more than
+    /// a cell in a step (the `fv_ranks` test `a_surface_jumping_towards_a_cut_...`: without the
+    /// rule the block below reads 0 there).
     fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
         let block = self.config.block;

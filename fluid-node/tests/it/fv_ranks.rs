@@ -5,7 +5,7 @@
 //! embedded solid with its wet surface across the cuts) is pinned without an MPI library;
 //! `tests/it/issue_16_mpi.rs` runs the same through MPI processes.
 
-use fluid_node::embedded::{Embedded, SolidFrame};
+use fluid_node::embedded::{Embedded, NEAR_RADIUS, SolidFrame};
 use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind, StepReport};
 use fluid_node::grid::Grid;
 use fluid_node::ranks::threads::ThreadRanks;
@@ -365,6 +365,8 @@ struct CoupledRun {
 
 /// `steps` coupled steps of the bodies `solid` moving at their velocities through the blast of
 /// `(grid, state)`, on `ranks` thread ranks; odd steps take the explicit scheme's solid flux.
+/// `jump`: the accepted surface of each step is moved `jump` cells (`jump` times the
+/// one-cell step at its velocity) instead of its velocity times the fluid's step.
 fn coupled_run(
     dims: [usize; 3],
     grid: &Grid,
@@ -372,6 +374,7 @@ fn coupled_run(
     params: &FluidParams,
     solid: &SolidFrame,
     steps: u64,
+    jump: Option<f64>,
 ) -> CoupledRun {
     let ranks = dims.iter().product();
     let handles: Vec<_> = ThreadRanks::new(ranks)
@@ -392,7 +395,8 @@ fn coupled_run(
                     let predicted = e.predict(&mut s, dt);
                     assert!(predicted.ok(), "step {n}: {:?}", predicted.troubles);
                     let current = e.surface().clone();
-                    let next = embedded_support::translated(&current, dt);
+                    let moved = jump.map_or(dt, |j| j * e.one_cell_dt());
+                    let next = embedded_support::translated(&current, moved);
                     let on_current = e.loads(&s, &current).expect("loads on F^n");
                     let on_next = e.loads(&s, &next).expect("loads on the trial");
                     let report = e
@@ -435,14 +439,30 @@ pub(crate) fn assert_coupled_same_for_ranks(
     steps: u64,
     decomps: &[[usize; 3]],
 ) {
-    let one = coupled_run([1; 3], grid, state, params, solid, steps);
+    assert_jumping_same_for_ranks(name, grid, state, params, solid, steps, None, decomps);
+}
+
+/// [`assert_coupled_same_for_ranks`] with the accepted surface moved `jump` cells per step
+/// (see [`coupled_run`]).
+#[allow(clippy::too_many_arguments)]
+fn assert_jumping_same_for_ranks(
+    name: &str,
+    grid: &Grid,
+    state: &FluidState,
+    params: &FluidParams,
+    solid: &SolidFrame,
+    steps: u64,
+    jump: Option<f64>,
+    decomps: &[[usize; 3]],
+) {
+    let one = coupled_run([1; 3], grid, state, params, solid, steps, jump);
     eprintln!(
         "{name}: {} cells mixed, {} uncovered over {steps} steps",
         one.mixed, one.uncovered
     );
     assert!(one.mixed > 0 && one.uncovered > 0, "{name}: mixing happens");
     for &k in decomps {
-        let many = coupled_run(k, grid, state, params, solid, steps);
+        let many = coupled_run(k, grid, state, params, solid, steps, jump);
         for (n, (a, b)) in one.steps.iter().zip(&many.steps).enumerate() {
             assert_eq!(a, b, "{name}: step {n} on 1 rank and {k:?}");
         }
@@ -476,6 +496,104 @@ pub(crate) fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool
             && lambda[grid.index(up[0], up[1], up[2])] == 1.0
             && lambda[grid.index(down[0], down[1], down[2])] == 1.0
     })
+}
+
+/// Whether `solid` moved `jump` cells (as [`coupled_run`] moves it) puts solid into a cell of
+/// plane `cut − 1` along `axis` whose neighbour in plane `cut` is no near cell of `solid`
+/// (farther than `NEAR_RADIUS` from each of its cut cells): a cell the correct updates below a
+/// block boundary, across which the block above holds no near cell.
+fn jumps_past_the_near_cells(
+    grid: &Grid,
+    solid: &SolidFrame,
+    jump: f64,
+    axis: usize,
+    cut: usize,
+) -> bool {
+    let s = FluidSolver::new(
+        grid.clone(),
+        params(5, [[BoundaryKind::Wall; 2]; 3]),
+        FluidState::zeros(grid.dim, grid.n_cells()),
+        1,
+    )
+    .expect("solver");
+    let before = Embedded::new(&s, solid.clone()).expect("embedded");
+    let moved = embedded_support::translated(solid, jump * before.one_cell_dt());
+    let after = Embedded::new(&s, moved).expect("embedded");
+    let cut_cells: Vec<[usize; 3]> = (before.geometry().cut_cells.iter())
+        .map(|&c| grid.ijk(c as usize))
+        .collect();
+    let near = |ijk: [usize; 3]| {
+        cut_cells
+            .iter()
+            .any(|q| (0..3).all(|a| q[a].abs_diff(ijk[a]) <= NEAR_RADIUS))
+    };
+    (0..grid.n_cells()).any(|c| {
+        let ijk = grid.ijk(c);
+        let mut up = ijk;
+        up[axis] = cut;
+        ijk[axis] == cut - 1 && after.solid_fraction()[c] > 0.0 && near(ijk) && !near(up)
+    })
+}
+
+/// Issue 40 item 1, step 2 (the taps by block): a rank keeps the faces of its own near cells and,
+/// along a cut axis, the face on its block's low side of each near cell just below it, whose flux
+/// it computes (the face is its own) and sends to the block below. That second rule matters when
+/// the cell across the face is no near cell, so that the block above would not keep the face for
+/// its own cells: here plates jump 1.6 cells in one step towards the cuts (up along each cut axis,
+/// their top rows two cells below a cut), so that the correct updates cells just below the cuts
+/// whose neighbours above are no near cells. Every step's reports, loads, totals and the final
+/// state are one rank's, 2-D and 3-D, on slabs and blocks (without that rule the block below
+/// reads 0 for those faces).
+#[test]
+fn a_surface_jumping_towards_a_cut_is_bit_identical_on_slabs_and_blocks() {
+    let jump = 1.6;
+    // 2-D, 40 × 48: the top at y = 21.5 cells (the cut at 24), the right side at x = 17.5 cells
+    // (the cut at 20), moving as many cells along both.
+    let (grid, state) = blast(&[40, 48]);
+    let plate = embedded_support::polygon_2d(
+        &[
+            [0.2, 0.3],
+            [17.5 / 40.0, 0.3],
+            [17.5 / 40.0, 21.5 / 48.0],
+            [0.2, 21.5 / 48.0],
+        ],
+        [0.4, 0.4 * 40.0 / 48.0],
+        0.0,
+    );
+    assert!(jumps_past_the_near_cells(&grid, &plate, jump, 1, 24));
+    assert!(jumps_past_the_near_cells(&grid, &plate, jump, 0, 20));
+    assert_jumping_same_for_ranks(
+        "2-D jump",
+        &grid,
+        &state,
+        &params(5, [[BoundaryKind::Wall; 2]; 3]),
+        &plate,
+        3,
+        Some(jump),
+        &[[1, 2, 1], [2, 1, 1], [2, 2, 1], [2, 4, 1]],
+    );
+    // 3-D, 16 × 16 × 24: the top at y = 5.5 cells (the cut at 8) and z = 9.5 cells (the cut at
+    // 12).
+    let (grid, state) = blast(&[16, 16, 24]);
+    let flat = embedded_support::rotation([1.0, 0.0, 0.0], 0.0);
+    let plate = embedded_support::box_3d(
+        [0.5, 4.0 / 16.0, 7.0 / 24.0],
+        [0.2, 1.5 / 16.0, 2.5 / 24.0],
+        flat,
+        [0.0, 0.4, 0.4 * 16.0 / 24.0],
+    );
+    assert!(jumps_past_the_near_cells(&grid, &plate, jump, 1, 8));
+    assert!(jumps_past_the_near_cells(&grid, &plate, jump, 2, 12));
+    assert_jumping_same_for_ranks(
+        "3-D jump",
+        &grid,
+        &state,
+        &params(5, [[BoundaryKind::Wall; 2]; 3]),
+        &plate,
+        3,
+        Some(jump),
+        &[[1, 1, 2], [1, 2, 1], [1, 2, 2]],
+    );
 }
 
 /// Issue 16 item 3 in 2-D: a tilted block and a plate two cells thick (a wall run that cuts
