@@ -8,10 +8,25 @@
 use fluid_node::embedded::{Embedded, NEAR_RADIUS, SolidFrame};
 use fluid_node::fv::{BoundaryKind, FluidParams, FluidSolver, FluidState, FluxKind, StepReport};
 use fluid_node::grid::Grid;
-use fluid_node::ranks::threads::ThreadRanks;
+use fluid_node::ranks::threads::{ThreadComm, ThreadRanks};
 
 use crate::embedded_support;
 use crate::fv_common;
+
+/// `f` on each of `ranks` connected thread ranks, one thread each; the results in rank order.
+pub(crate) fn on_thread_ranks<T: Send>(ranks: usize, f: impl Fn(ThreadComm) -> T + Sync) -> Vec<T> {
+    std::thread::scope(|scope| {
+        let f = &f;
+        let handles: Vec<_> = ThreadRanks::new(ranks)
+            .into_iter()
+            .map(|comm| scope.spawn(move || f(comm)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("rank thread"))
+            .collect()
+    })
+}
 
 /// A blast off-centre with a swirl on `cells`: the ball sits across the middle of the last
 /// axis, where 2 and 4 ranks cut it.
@@ -64,45 +79,34 @@ pub(crate) fn run_on(
     steps: usize,
     restore: Option<&[u8]>,
 ) -> Run {
-    let handles: Vec<_> = ThreadRanks::new(ranks)
-        .into_iter()
-        .map(|comm| {
-            let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-            let restore = restore.map(<[u8]>::to_vec);
-            std::thread::spawn(move || {
-                let mut s =
-                    FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
-                        .expect("solver");
-                if let Some(bytes) = restore {
-                    s.restore_checkpoint(&bytes).expect("restores");
-                }
-                let mut reports = Vec::new();
-                for _ in 0..steps {
-                    let dt = s.max_dt();
-                    let report = s.advance(dt);
-                    assert!(report.ok(), "{:?}", report.troubles);
-                    reports.push(bits(&report));
-                }
-                let limiting_cell = s.limiting_cell();
-                let totals = format!("{:?}", s.totals());
-                let state = s
-                    .gather_state()
-                    .map(|g| g.u.iter().map(|x| x.to_bits()).collect());
-                let checkpoint = s.to_checkpoint();
-                state.map(|state| Run {
-                    reports,
-                    state,
-                    totals,
-                    checkpoint,
-                    limiting_cell,
-                })
-            })
+    let mut runs: Vec<Option<Run>> = on_thread_ranks(ranks, |comm| {
+        let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+        let mut s = FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
+            .expect("solver");
+        if let Some(bytes) = restore {
+            s.restore_checkpoint(bytes).expect("restores");
+        }
+        let mut reports = Vec::new();
+        for _ in 0..steps {
+            let dt = s.max_dt();
+            let report = s.advance(dt);
+            assert!(report.ok(), "{:?}", report.troubles);
+            reports.push(bits(&report));
+        }
+        let limiting_cell = s.limiting_cell();
+        let totals = format!("{:?}", s.totals());
+        let state = s
+            .gather_state()
+            .map(|g| g.u.iter().map(|x| x.to_bits()).collect());
+        let checkpoint = s.to_checkpoint();
+        state.map(|state| Run {
+            reports,
+            state,
+            totals,
+            checkpoint,
+            limiting_cell,
         })
-        .collect();
-    let mut runs: Vec<Option<Run>> = handles
-        .into_iter()
-        .map(|h| h.join().expect("rank thread"))
-        .collect();
+    });
     assert!(runs[1..].iter().all(Option::is_none), "only rank 0 gathers");
     runs[0].take().expect("rank 0 gathers")
 }
@@ -377,56 +381,45 @@ fn coupled_run(
     jump: Option<f64>,
 ) -> CoupledRun {
     let ranks = dims.iter().product();
-    let handles: Vec<_> = ThreadRanks::new(ranks)
-        .into_iter()
-        .map(|comm| {
-            let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-            let solid = solid.clone();
-            std::thread::spawn(move || {
-                let dims = (ranks > 1).then_some(dims);
-                let mut s =
-                    FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
-                        .expect("solver");
-                let mut e = Embedded::new(&s, solid).expect("embedded");
-                let mut out = Vec::new();
-                let (mut mixed, mut uncovered) = (0, 0);
-                for n in 0..steps {
-                    let dt = s.max_dt().min(0.5 * e.one_cell_dt());
-                    let predicted = e.predict(&mut s, dt);
-                    assert!(predicted.ok(), "step {n}: {:?}", predicted.troubles);
-                    let current = e.surface().clone();
-                    let moved = jump.map_or(dt, |j| j * e.one_cell_dt());
-                    let next = embedded_support::translated(&current, moved);
-                    let on_current = e.loads(&s, &current).expect("loads on F^n");
-                    let on_next = e.loads(&s, &next).expect("loads on the trial");
-                    let report = e
-                        .correct(&mut s, dt, next, n, n % 2 == 1)
-                        .unwrap_or_else(|err| panic!("step {n}: {err}"));
-                    mixed += report.mixed_cells;
-                    uncovered += report.uncovered_cells;
-                    out.push(format!(
-                        "{predicted:?} {on_current:?} {on_next:?} {report:?} {:?} {:?} {:?}",
-                        e.totals(&s),
-                        e.budget(),
-                        e.last_loads()
-                    ));
-                }
-                let state = s
-                    .gather_state()
-                    .map(|g| g.u.iter().map(|x| x.to_bits()).collect());
-                state.map(|state| CoupledRun {
-                    steps: out,
-                    state,
-                    mixed,
-                    uncovered,
-                })
-            })
+    let mut runs: Vec<Option<CoupledRun>> = on_thread_ranks(ranks, |comm| {
+        let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+        let dims = (ranks > 1).then_some(dims);
+        let mut s = FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
+            .expect("solver");
+        let mut e = Embedded::new(&s, solid.clone()).expect("embedded");
+        let mut out = Vec::new();
+        let (mut mixed, mut uncovered) = (0, 0);
+        for n in 0..steps {
+            let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+            let predicted = e.predict(&mut s, dt);
+            assert!(predicted.ok(), "step {n}: {:?}", predicted.troubles);
+            let current = e.surface().clone();
+            let moved = jump.map_or(dt, |j| j * e.one_cell_dt());
+            let next = embedded_support::translated(&current, moved);
+            let on_current = e.loads(&s, &current).expect("loads on F^n");
+            let on_next = e.loads(&s, &next).expect("loads on the trial");
+            let report = e
+                .correct(&mut s, dt, next, n, n % 2 == 1)
+                .unwrap_or_else(|err| panic!("step {n}: {err}"));
+            mixed += report.mixed_cells;
+            uncovered += report.uncovered_cells;
+            out.push(format!(
+                "{predicted:?} {on_current:?} {on_next:?} {report:?} {:?} {:?} {:?}",
+                e.totals(&s),
+                e.budget(),
+                e.last_loads()
+            ));
+        }
+        let state = s
+            .gather_state()
+            .map(|g| g.u.iter().map(|x| x.to_bits()).collect());
+        state.map(|state| CoupledRun {
+            steps: out,
+            state,
+            mixed,
+            uncovered,
         })
-        .collect();
-    let mut runs: Vec<Option<CoupledRun>> = handles
-        .into_iter()
-        .map(|h| h.join().expect("rank thread"))
-        .collect();
+    });
     runs[0].take().expect("rank 0 gathers")
 }
 
@@ -729,28 +722,17 @@ fn refusals(
     let solid = moving_bodies_2d();
     let params = params(5, [[BoundaryKind::Wall; 2]; 3]);
     let ranks = dims.iter().product();
-    let handles: Vec<_> = ThreadRanks::new(ranks)
-        .into_iter()
-        .map(|comm| {
-            let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-            let solid = solid.clone();
-            std::thread::spawn(move || {
-                let dims = (ranks > 1).then_some(dims);
-                let mut s =
-                    FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
-                        .expect("solver");
-                let mut e = Embedded::new(&s, solid).expect("embedded");
-                let dt = s.max_dt().min(0.5 * e.one_cell_dt());
-                assert!(e.predict(&mut s, dt).ok());
-                let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
-                refuse(&mut e, &mut s, dt, far)
-            })
-        })
-        .collect();
-    handles
-        .into_iter()
-        .map(|h| h.join().expect("rank thread"))
-        .collect()
+    on_thread_ranks(ranks, |comm| {
+        let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
+        let dims = (ranks > 1).then_some(dims);
+        let mut s = FluidSolver::decomposed_as(grid, params, state, 1, Box::new(comm), dims)
+            .expect("solver");
+        let mut e = Embedded::new(&s, solid.clone()).expect("embedded");
+        let dt = s.max_dt().min(0.5 * e.one_cell_dt());
+        assert!(e.predict(&mut s, dt).ok());
+        let far = embedded_support::translated(e.surface(), 1.0 / 30.0);
+        refuse(&mut e, &mut s, dt, far)
+    })
 }
 
 /// Issue 40 item 1, step 3: each rank takes the loads' terms of its own block's sub-faces, so

@@ -8,9 +8,8 @@
 
 use fluid_node::fv::{BoundaryKind, FaceTap, FluidParams, FluidSolver, FluidState, SplitHooks};
 use fluid_node::grid::Grid;
-use fluid_node::ranks::threads::ThreadRanks;
 
-use crate::fv_ranks::{blast, params};
+use crate::fv_ranks::{blast, on_thread_ranks, params};
 
 /// What one rank holds after each step: whether it owns each recorded cell, and the hooks'
 /// pressures and kept fluxes.
@@ -70,47 +69,32 @@ fn outputs(
     steps: usize,
 ) -> Vec<RankOutputs> {
     let ranks = dims.map_or(1, |d| d.iter().product());
-    let handles: Vec<_> = ThreadRanks::new(ranks)
-        .into_iter()
-        .map(|comm| {
-            let (grid, state, params) = (grid.clone(), state.clone(), params.clone());
-            let cells = cells.to_vec();
-            std::thread::spawn(move || {
-                let mut s = FluidSolver::decomposed_as(
-                    grid.clone(),
-                    params,
-                    state,
-                    1,
-                    Box::new(comm),
-                    dims,
-                )
+    on_thread_ranks(ranks, |comm| {
+        let (state, params) = (state.clone(), params.clone());
+        let cells = cells.to_vec();
+        let mut s =
+            FluidSolver::decomposed_as(grid.clone(), params, state, 1, Box::new(comm), dims)
                 .expect("solver");
-                let own = (cells.iter())
-                    .map(|&c| s.slab().to_local(c as usize).is_some())
-                    .collect();
-                let mut out = RankOutputs {
-                    own,
-                    steps: Vec::new(),
-                };
-                for _ in 0..steps {
-                    let mut hooks = SplitHooks {
-                        pressure_cells: cells.clone(),
-                        taps: taps_of(&grid, &cells),
-                        ..SplitHooks::default()
-                    };
-                    let dt = s.max_dt();
-                    let report = s.predict(dt, &mut hooks, &|_| false);
-                    assert!(report.ok(), "{:?}", report.troubles);
-                    out.steps.push(hooks);
-                }
-                out
-            })
-        })
-        .collect();
-    handles
-        .into_iter()
-        .map(|h| h.join().expect("rank thread"))
-        .collect()
+        let own = (cells.iter())
+            .map(|&c| s.slab().to_local(c as usize).is_some())
+            .collect();
+        let mut out = RankOutputs {
+            own,
+            steps: Vec::new(),
+        };
+        for _ in 0..steps {
+            let mut hooks = SplitHooks {
+                pressure_cells: cells.clone(),
+                taps: taps_of(grid, &cells),
+                ..SplitHooks::default()
+            };
+            let dt = s.max_dt();
+            let report = s.predict(dt, &mut hooks, &|_| false);
+            assert!(report.ok(), "{:?}", report.troubles);
+            out.steps.push(hooks);
+        }
+        out
+    })
 }
 
 /// Every rank of each process grid of `decomps` holds one rank's pressures of its own cells
