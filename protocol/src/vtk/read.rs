@@ -3,7 +3,6 @@
 //! the bytes there are.
 
 use std::collections::BTreeMap;
-use std::io::Read as _;
 
 use super::write::Values;
 
@@ -257,24 +256,51 @@ fn decompress(data: &[u8], offset: usize) -> Result<Vec<u8>, String> {
             .get(at..at.saturating_add(size))
             .ok_or_else(|| format!("block {b} ({size} bytes at {at}) lies past the data"))?;
         at += size;
-        let mut raw = Vec::new();
-        flate2::read::ZlibDecoder::new(block)
-            .read_to_end(&mut raw)
-            .map_err(|e| format!("block {b}: {e}"))?;
         let expected = if b + 1 == n_blocks && last != 0 {
             last
         } else {
             block_size
         };
-        if raw.len() != expected {
-            return Err(format!(
-                "block {b} holds {} bytes, its header says {expected}",
-                raw.len()
-            ));
-        }
-        out.extend_from_slice(&raw);
+        inflate_block(block, expected, &mut out).map_err(|e| format!("block {b}: {e}"))?;
     }
     Ok(out)
+}
+
+/// Inflates one zlib stream `block` onto the end of `out`, which must then have grown by
+/// exactly `expected` bytes.
+///
+/// NOTE (issue 39 item 4): straight into `out`, sized once, instead of through a reader and a
+/// buffer of its own per block: the Foxglove views inflate the arrays of every output on the
+/// record's thread. A stream that would give more than `expected` bytes is found by inflating
+/// into one byte more; one that claims more than deflate can give for its size (1032 bytes a
+/// byte) is refused before anything is allocated.
+fn inflate_block(block: &[u8], expected: usize, out: &mut Vec<u8>) -> Result<(), String> {
+    if expected > block.len().saturating_mul(1032).saturating_add(64) {
+        return Err(format!(
+            "its header says {expected} bytes, more than its {} compressed bytes can hold",
+            block.len()
+        ));
+    }
+    let start = out.len();
+    out.resize(start + expected + 1, 0);
+    let mut z = flate2::Decompress::new(true);
+    let status = z
+        .decompress(block, &mut out[start..], flate2::FlushDecompress::Finish)
+        .map_err(|e| e.to_string())?;
+    let got = z.total_out() as usize;
+    out.truncate(start + got.min(expected));
+    match status {
+        flate2::Status::StreamEnd if got == expected => Ok(()),
+        flate2::Status::StreamEnd => {
+            Err(format!("it holds {got} bytes, its header says {expected}"))
+        }
+        _ if got > expected => Err(format!(
+            "it holds more than the {expected} bytes its header says"
+        )),
+        _ => Err(format!(
+            "its stream ends early, after {got} of the {expected} bytes its header says"
+        )),
+    }
 }
 
 /// The name and attributes of a tag's text (without `<` and `>`).

@@ -272,3 +272,51 @@ fn parse_some_decodes_only_the_arrays_asked_for() {
     let some_again = read::parse_some(&damaged, |_, name| name == "rho").expect("velocity skipped");
     assert_eq!(some_again.arrays, some.arrays[..1]);
 }
+
+/// A block whose stream gives more or fewer bytes than the array's header says, or whose header
+/// claims more than its compressed bytes can hold, is refused with the block and the reason
+/// (`rho`, the first array: two blocks of 32 768 and 7 232 bytes).
+#[test]
+fn a_block_that_disagrees_with_its_header_is_refused() {
+    let bytes = image_data(&image([10, 25, 20]), "");
+    let data_at = bytes.len() - appended(&bytes).len();
+    let word = |b: &[u8], i: usize| {
+        u64::from_le_bytes(b[data_at + 8 * i..data_at + 8 * i + 8].try_into().unwrap())
+    };
+    assert_eq!(
+        [word(&bytes, 0), word(&bytes, 1), word(&bytes, 2)],
+        [2, 32_768, 7_232]
+    );
+    let with = |i: usize, value: u64| {
+        let mut b = bytes.clone();
+        b[data_at + 8 * i..data_at + 8 * i + 8].copy_from_slice(&value.to_le_bytes());
+        read::parse(&b)
+            .expect_err("a header that disagrees")
+            .to_string()
+    };
+    let refused = [
+        (
+            with(2, 7_231),
+            "block 1: it holds 7232 bytes, its header says 7231",
+        ),
+        (
+            with(2, 100),
+            "block 1: it holds more than the 100 bytes its header says",
+        ),
+        (
+            with(2, 7_233),
+            "block 1: it holds 7232 bytes, its header says 7233",
+        ),
+        (
+            with(1, 1 << 40),
+            "block 0: its header says 1099511627776 bytes, more than",
+        ),
+        (with(3, word(&bytes, 3) - 10), "block 0: "),
+    ];
+    for (err, reason) in refused {
+        assert!(
+            err.contains("DataArray \"rho\"") && err.contains(reason),
+            "{err}"
+        );
+    }
+}
