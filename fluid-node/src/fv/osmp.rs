@@ -318,11 +318,16 @@ pub fn psi_line<const ORDER: u32, const LIMITED: bool>(
     let (d5_mmm, d5_ppp) = (at(5, -o3), at(5, o3));
     for j in 0..nf {
         // Upwind orientation: D_m is at f + m for λ > 0, at f − m otherwise.
-        let pos = lam[j] > 0.0;
-        // Both loads first, then a select: no control flow, so the loop vectorises.
+        let pos = u64::from(lam[j] > 0.0).wrapping_neg();
+        // Both loads, then a blend of their bits by the mask `pos` (all ones where λ > 0):
+        // the value of `if λ > 0 { x } else { y }`, bit for bit.
+        // NOTE: written as that `if`, the select of two loads became one load from a selected
+        // address, which LLVM vectorised as a gather (`vgatherqpd`, 8 lanes loaded one by
+        // one, ten a wave's face in AVX-512) and left scalar for AVX2 and SSE2; as a blend of
+        // bits it is two contiguous loads (the second masked) in every instruction set.
         let up = |a: &[f64], b: &[f64]| {
-            let (x, y) = (a[j], b[j]);
-            if pos { x } else { y }
+            let (x, y) = (a[j].to_bits(), b[j].to_bits());
+            f64::from_bits((x & pos) | (y & !pos))
         };
         let mut p = d0[j] - (d1_0[j] - up(d1_m, d1_p));
         if ORDER >= 5 {
