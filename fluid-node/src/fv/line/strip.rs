@@ -32,6 +32,7 @@ use crate::fv::euler::{
     NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
+use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius};
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
@@ -182,12 +183,6 @@ impl CellView<'_> {
             vel: [self.vel[0][i], self.vel[1][i], self.vel[2][i]],
             h: self.h[i],
         }
-    }
-
-    /// The conserved state of cell `i`.
-    #[inline(always)]
-    fn state(&self, i: usize) -> State {
-        std::array::from_fn(|q| self.q[q][i])
     }
 }
 
@@ -447,10 +442,13 @@ fn strip_faces<const ORDER: u32>(
     let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
     let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][j0..j0 + count]);
     let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
-    face_loop(
-        &cells,
-        (roe_vel, roe_h, roe_c, roe_valid),
-        (lam, alpha, psi),
+    face_loop_on(
+        s.isa,
+        &FaceInputs {
+            cells,
+            roe: (roe_vel, roe_h, roe_c, roe_valid),
+            waves: (lam, alpha, psi),
+        },
         &mut st.star_ok[j0..j0 + count],
         &mut fq0[j0..j0 + count],
         &mut fq1[j0..j0 + count],
@@ -512,15 +510,26 @@ fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
     }
 }
 
-/// The regular flux of every face `j` of `cells` (faces between cells `j` and `j + 1`) into
-/// `fq0..fq4`, and whether its linearised star states are physical. The outputs are separate
-/// `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+/// What [`face_loop`] reads: the cells of the faces (`nf + 1`), the Roe averages (velocity, H, c,
+/// validity) and the waves' speeds, strengths and `Ψ` at the faces (`nf`).
+#[allow(clippy::type_complexity)]
+struct FaceInputs<'a> {
+    cells: CellView<'a>,
+    roe: ([&'a [f64]; 3], &'a [f64], &'a [f64], &'a [bool]),
+    waves: ([&'a [f64]; 3], [&'a [f64]; NQ], [&'a [f64]; NQ]),
+}
+
+/// [`face_loop`] on the instruction set `isa`: a function of its own for each (`isa.rs`).
+///
+/// NOTE: inlined into the line kernel, the face loop stayed scalar on every instruction set:
+/// LLVM asked for more run-time checks of overlap among its ~30 input and 6 output arrays than
+/// it makes ("too many memory checks needed"). In a function of its own the outputs are
+/// `noalias` arguments, and it vectorises. One call a strip.
 #[inline(always)]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn face_loop(
-    cells: &CellView<'_>,
-    (roe_vel, roe_h, roe_c, roe_valid): ([&[f64]; 3], &[f64], &[f64], &[bool]),
-    (lam, alpha, psi): ([&[f64]; 3], [&[f64]; NQ], [&[f64]; NQ]),
+#[allow(clippy::too_many_arguments)]
+fn face_loop_on(
+    isa: Isa,
+    inputs: &FaceInputs<'_>,
     star_ok: &mut [bool],
     fq0: &mut [f64],
     fq1: &mut [f64],
@@ -528,6 +537,88 @@ fn face_loop(
     fq3: &mut [f64],
     fq4: &mut [f64],
 ) {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 if Isa::Avx512.supported() => {
+            // SAFETY: the CPU has AVX-512F (checked on the line above).
+            unsafe { face_loop_avx512(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::Avx2.supported() => {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            unsafe { face_loop_avx2(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
+        }
+        _ => face_loop_baseline(inputs, star_ok, fq0, fq1, fq2, fq3, fq4),
+    }
+}
+
+/// [`face_loop`] for the baseline (`face_loop_on`).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_baseline(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// [`face_loop`] for AVX2 (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_avx2(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// [`face_loop`] for AVX-512F (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_avx512(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// The regular flux of every face `j` of `inputs.cells` (faces between cells `j` and `j + 1`)
+/// into `fq0..fq4`, and whether its linearised star states are physical. The outputs are
+/// separate `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+#[inline(always)]
+fn face_loop(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    let FaceInputs {
+        cells,
+        roe: (roe_vel, roe_h, roe_c, roe_valid),
+        waves: (lam, alpha, psi),
+    } = inputs;
     let nf = star_ok.len();
     let (fq0, fq1, fq2, fq3, fq4) = (
         &mut fq0[..nf],
@@ -536,7 +627,18 @@ fn face_loop(
         &mut fq3[..nf],
         &mut fq4[..nf],
     );
-    let phys = cells.flux;
+    // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
+    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar.
+    fn cut(x: &[f64], len: usize) -> &[f64] {
+        &x[..len]
+    }
+    let cut1 = |x| cut(x, nf + 1);
+    let cut = |x| cut(x, nf);
+    let (roe_vel, roe_h, roe_c) = (roe_vel.map(cut), cut(roe_h), cut(roe_c));
+    let roe_valid = &roe_valid[..nf];
+    let (lam, alpha, psi) = (lam.map(cut), alpha.map(cut), psi.map(cut));
+    let phys = cells.flux.map(cut1);
+    let q_cells = cells.q.map(cut1);
     for j in 0..nf {
         let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
         let mut flux = [0.0; NQ];
@@ -564,7 +666,10 @@ fn face_loop(
             }
         }
         [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
-        let (ul, ur) = (cells.state(j), cells.state(j + 1));
+        let (ul, ur): (State, State) = (
+            std::array::from_fn(|q| q_cells[q][j]),
+            std::array::from_fn(|q| q_cells[q][j + 1]),
+        );
         star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
     }
 }
