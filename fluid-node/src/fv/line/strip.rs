@@ -225,11 +225,18 @@ fn cell_loop(
     vacuum: &mut [bool],
     setup: &LineSetup,
 ) {
-    for (q, cq) in c.q.iter_mut().enumerate() {
-        let cq = &mut cq[lo..lo + u.len()];
-        for i in 0..u.len() {
-            cq[i] = u[i][q];
-        }
+    // NOTE: one pass over the cells, each copied whole into the five arrays: a pass per
+    // component (`cq[i] = u[i][q]`) became a gather of every fifth value on AVX-512.
+    let m = u.len();
+    let [q0, q1, q2, q3, q4] = &mut c.q;
+    let (q0, q1, q2) = (
+        &mut q0[lo..lo + m],
+        &mut q1[lo..lo + m],
+        &mut q2[lo..lo + m],
+    );
+    let (q3, q4) = (&mut q3[lo..lo + m], &mut q4[lo..lo + m]);
+    for (i, ui) in u.iter().enumerate() {
+        [q0[i], q1[i], q2[i], q3[i], q4[i]] = *ui;
     }
     let r = lo..lo + len;
     let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][r.clone()]);
@@ -468,8 +475,9 @@ fn strip_faces<const ORDER: u32>(
     let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
     let first = faces.start + CARRY / 2 - a;
     s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
+    let face_q: [&[f64]; NQ] = std::array::from_fn(|q| &st.face_q[q][first..first + faces.len()]);
     for (j, face) in s.face[faces].iter_mut().enumerate() {
-        *face = std::array::from_fn(|q| st.face_q[q][first + j]);
+        *face = std::array::from_fn(|q| face_q[q][j]);
     }
 }
 
@@ -484,6 +492,17 @@ fn strip_faces<const ORDER: u32>(
 fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
     let LineSetup { n, ng, gamma, .. } = *setup;
     let all_valid = s.valid.iter().fold(true, |acc, &v| acc & v);
+    // NOTE: the usual line has no special face at all: one pass without a branch a face says
+    // so (the vacuum flags of each face's two cells and its star-state check), and every face
+    // is regular.
+    let (vacuum, star_ok) = (&s.vacuum[ng - 1..ng + n + 1], &s.star_ok[..n + 1]);
+    let all_regular = (0..=n).fold(all_valid, |all, fi| {
+        all & !(vacuum[fi] | vacuum[fi + 1]) & star_ok[fi]
+    });
+    if all_regular {
+        s.kind[..=n].fill(FaceFlux::Regular);
+        return;
+    }
     if !all_valid {
         s.bad_prefix[0] = 0;
         for l in 0..s.valid.len() {
