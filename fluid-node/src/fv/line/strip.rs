@@ -38,6 +38,9 @@ use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_rad
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
 pub(super) const STRIP_FACES: usize = 48;
+/// The most faces a strip computes, counted from its first entry (`j0 + count` of `strip_faces`:
+/// `STRIP_FACES` a strip of a long line, up to `SHORT_LINE` for a short line).
+const PSI_FACES: usize = SHORT_LINE;
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
@@ -54,8 +57,6 @@ pub(super) struct Strip {
     roe: RoeLine,
     speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
-    /// `Ψ` of each wave at the strip's faces.
-    psi: [Vec<f64>; NQ],
     /// The regular face fluxes, one array per component.
     face_q: [Vec<f64>; NQ],
     /// Whether each cell is vacuum, each interface's average valid, each face's linearised
@@ -121,7 +122,7 @@ impl Strip {
         for w in &mut self.waves {
             w.resize(len);
         }
-        for v in self.psi.iter_mut().chain(&mut self.face_q) {
+        for v in &mut self.face_q {
             v.resize(len, 0.0);
         }
         for v in [&mut self.vacuum, &mut self.valid, &mut self.star_ok] {
@@ -370,17 +371,23 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     let nf = setup.n + 1;
     // The faces computed, counted from CARRY / 2 faces before the line's first.
     let todo = nf + CARRY / 2;
+    // `Ψ` of each wave at a strip's faces; the inactive waves' stay 0.
+    // NOTE: an array on the stack, which the compiler knows no other array of the kernel
+    // overlaps: written into the strip's buffers, each wave's loop first compared its output's
+    // addresses with those of its ~35 inputs at run time (~160 instructions a wave a strip).
+    // Zeroed once a line (a zeroed array a strip cost more than the checks).
+    let mut psi = [[0.0; PSI_FACES]; NQ];
     if todo <= SHORT_LINE {
         // One strip: the whole line (loops of the line's length).
         s.strip.reserve(todo + CARRY);
-        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf));
+        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
     } else {
         // Strips of STRIP_FACES faces (the last one's beyond the line's end computed on what
         // is there, and not kept).
         s.strip.reserve(STRIP_CELLS);
         for k in 0..todo.div_ceil(STRIP_FACES) {
             let a = k * STRIP_FACES;
-            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES));
+            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES), &mut psi);
         }
     }
     special_faces(s, setup, radius);
@@ -402,6 +409,7 @@ fn strip_faces<const ORDER: u32>(
     a: usize,
     nc: usize,
     (j0, count): (usize, usize),
+    psi: &mut [[f64; PSI_FACES]; NQ],
 ) {
     let r = stencil_radius(ORDER);
     let (len, sigma) = (s.u.len(), setup.sigma);
@@ -427,16 +435,14 @@ fn strip_faces<const ORDER: u32>(
     // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
     // (`f0`: the interface of face j0).
     let f0 = CARRY / 2 + r + j0;
-    // Wave k travels at speed [u−c, u+c, u, u, u][k].
+    // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
+    // entries stay 0).
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
         st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
-        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut st.psi[k][j0..j0 + count]);
-    }
-    for k in nw..NQ {
-        st.psi[k][j0..j0 + count].fill(0.0);
+        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
@@ -447,7 +453,7 @@ fn strip_faces<const ORDER: u32>(
     let roe_valid = &st.valid[w.clone()];
     let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
     let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
-    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][j0..j0 + count]);
+    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &psi[k][j0..j0 + count]);
     let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
     face_loop_on(
         s.isa,
