@@ -626,6 +626,24 @@ fn face_loop_avx512(
     face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
 }
 
+/// The first `len` entries of each of three arrays.
+#[inline(always)]
+fn cut3(x: [&[f64]; 3], len: usize) -> [&[f64]; 3] {
+    [&x[0][..len], &x[1][..len], &x[2][..len]]
+}
+
+/// The first `len` entries of each of five arrays.
+#[inline(always)]
+fn cut5(x: [&[f64]; 5], len: usize) -> [&[f64]; 5] {
+    [
+        &x[0][..len],
+        &x[1][..len],
+        &x[2][..len],
+        &x[3][..len],
+        &x[4][..len],
+    ]
+}
+
 /// The regular flux of every face `j` of `inputs.cells` (faces between cells `j` and `j + 1`)
 /// into `fq0..fq4`, and whether its linearised star states are physical. The outputs are
 /// separate `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
@@ -653,17 +671,15 @@ fn face_loop(
         &mut fq4[..nf],
     );
     // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
-    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar.
-    fn cut(x: &[f64], len: usize) -> &[f64] {
-        &x[..len]
-    }
-    let cut1 = |x| cut(x, nf + 1);
-    let cut = |x| cut(x, nf);
-    let (roe_vel, roe_h, roe_c) = (roe_vel.map(cut), cut(roe_h), cut(roe_c));
+    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar. The
+    // cuts are arrays written out (`cut3`, `cut5`): cut with `array::map`, the lengths of the
+    // cells' arrays were lost to the compiler, and the last vector's faces (4 of 48 on AVX2,
+    // 8 on AVX-512) ran on a scalar loop with the checks.
+    let (roe_vel, roe_h, roe_c) = (cut3(*roe_vel, nf), &roe_h[..nf], &roe_c[..nf]);
     let roe_valid = &roe_valid[..nf];
-    let (lam, alpha, psi) = (lam.map(cut), alpha.map(cut), psi.map(cut));
-    let phys = cells.flux.map(cut1);
-    let q_cells = cells.q.map(cut1);
+    let (lam, alpha, psi) = (cut3(*lam, nf), cut5(*alpha, nf), cut5(*psi, nf));
+    let phys = cut5(cells.flux, nf + 1);
+    let q_cells = cut5(cells.q, nf + 1);
     for j in 0..nf {
         let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
         let mut flux = [0.0; NQ];
