@@ -4,10 +4,12 @@
 //! strip runs every pass of the scheme over its part of the line in a [`Strip`]'s buffers,
 //! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
 //! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
-//! speeds' and waves' coefficients, OSMP's `Ψ` per wave, and the regular flux at the strip's
-//! faces. What a strip's faces read below its own cells and interfaces (the stencils reach
-//! `R = stencil_radius` interfaces before a face) it takes from the strip before, which
-//! computed it ([`Strip::carry`]): every cell and interface is computed once, as before.
+//! speeds' and waves' coefficients, OSMP's `Ψ` per wave (into an array on the stack of the
+//! line's update), and the regular flux at the strip's faces (a function of its own for each
+//! instruction set, [`face_loop_on`]). What a strip's faces read below its own cells and
+//! interfaces (the stencils reach `R = stencil_radius` interfaces before a face) it takes from
+//! the strip before, which computed it ([`Strip::carry`]): every cell and interface is computed
+//! once, as before.
 //!
 //! Every loop of a strip runs over a number of entries fixed at compile time and a multiple of
 //! 8 (the lanes of AVX-512), so that none has a scalar remainder: a strip is short, and a
