@@ -46,6 +46,10 @@ const PSI_FACES: usize = SHORT_LINE;
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
+/// The lowest entry of a strip that its stencils read: its first face's interface is
+/// `CARRY / 2 + R` (`strip_faces`), and `Ψ` reads `R` interfaces below it (`R ≤ 3`); the cell,
+/// interface and curvature passes start at `CARRY − 1`, `CARRY − 1` and `CARRY − 3`.
+const FIRST_READ: usize = CARRY / 2;
 /// The length of every buffer of a strip (its cells).
 const STRIP_CELLS: usize = STRIP_FACES + CARRY;
 /// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
@@ -69,20 +73,25 @@ pub(super) struct Strip {
 }
 
 impl Strip {
-    /// Moves the entries `shift .. shift + CARRY` of what the next strip reads below the part it
-    /// computes to `0 .. CARRY` (the next strip starts `shift ≥ CARRY` cells further along the
-    /// line), for `nw` waves and the `nd` arrays of `d` the order fills.
+    /// Moves the entries `shift + FIRST_READ .. shift + CARRY` of what the next strip reads
+    /// below the part it computes to `FIRST_READ .. CARRY` (the next strip starts `shift ≥
+    /// CARRY` cells further along the line), for `nw` waves and the `nd` arrays of `d` the order
+    /// fills.
     ///
-    /// NOTE: copies of a length fixed at compile time (two 64-byte moves an array); a
+    /// NOTE: copies of a length fixed at compile time (one 64-byte move an array); a
     /// `copy_within` of a run-time range was a `memmove` call per array, ~90 a strip, which
-    /// cost more than the strip saved.
+    /// cost more than the strip saved. The entries below `FIRST_READ` are not moved: no stencil
+    /// reads them (the moves were 2 % of the kernel's instructions).
     #[inline(always)]
     fn carry(&mut self, shift: usize, nw: usize, nd: usize) {
         assert!(shift >= CARRY, "strips of {shift} cells (at least {CARRY})");
+        const N: usize = CARRY - FIRST_READ;
         let mv = |v: &mut Vec<f64>| {
             let (head, tail) = v.split_at_mut(shift);
-            let src: &[f64; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
-            let dst: &mut [f64; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            let src: &[f64; N] = tail[FIRST_READ..CARRY].try_into().expect("N entries");
+            let dst: &mut [f64; N] = (&mut head[FIRST_READ..CARRY])
+                .try_into()
+                .expect("N entries");
             *dst = *src;
         };
         let c = &mut self.cells;
@@ -105,8 +114,10 @@ impl Strip {
         }
         for v in [&mut self.vacuum, &mut self.valid] {
             let (head, tail) = v.split_at_mut(shift);
-            let src: &[bool; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
-            let dst: &mut [bool; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            let src: &[bool; N] = tail[FIRST_READ..CARRY].try_into().expect("N entries");
+            let dst: &mut [bool; N] = (&mut head[FIRST_READ..CARRY])
+                .try_into()
+                .expect("N entries");
             *dst = *src;
         }
     }
