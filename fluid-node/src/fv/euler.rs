@@ -231,7 +231,9 @@ pub fn roe_star_states_positive(
     }
     // p > 0 ⇔ 2ρE > |ρu|² when ρ > 0 (no division).
     let p_pos = |s: &State| 2.0 * s[0] * s[4] > s[1] * s[1] + s[2] * s[2] + s[3] * s[3];
-    sl[0] > 0.0 && sr[0] > 0.0 && p_pos(&sl) && p_pos(&sr)
+    // Branch-free (`&`, not `&&`: every comparison is made, the answer is the same), so that
+    // the line kernel's face loop vectorises.
+    (sl[0] > 0.0) & (sr[0] > 0.0) & p_pos(&sl) & p_pos(&sr)
 }
 
 /// Einfeldt's HLLE flux with Roe-average signal speeds (Einfeldt et al. 1991): positively

@@ -2,7 +2,8 @@
 //!
 //! The kernel (`line::advance_line` and everything it inlines: the cell and interface passes,
 //! OSMP's `Ψ`, the face fluxes, the update) is one body of source compiled several times: for
-//! the x86-64 baseline (SSE2), and under `#[target_feature]` for AVX2 and for AVX-512F. The
+//! the x86-64 baseline (SSE2), and under `#[target_feature]` for AVX2 and for AVX-512F (the
+//! regular face loop is a function of its own in each copy, `line/strip.rs`: `face_loop_on`). The
 //! loops of that body run over one array per quantity along the pencil (structure of arrays,
 //! `osmp.rs`, `line.rs`), with selects instead of branches on the regular faces, so the
 //! compiler vectorises them 2, 4 or 8 lanes wide. One binary runs on any x86-64 CPU:

@@ -4,10 +4,12 @@
 //! strip runs every pass of the scheme over its part of the line in a [`Strip`]'s buffers,
 //! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
 //! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
-//! speeds' and waves' coefficients, OSMP's `Ψ` per wave, and the regular flux at the strip's
-//! faces. What a strip's faces read below its own cells and interfaces (the stencils reach
-//! `R = stencil_radius` interfaces before a face) it takes from the strip before, which
-//! computed it ([`Strip::carry`]): every cell and interface is computed once, as before.
+//! speeds' and waves' coefficients, OSMP's `Ψ` per wave (into an array on the stack of the
+//! line's update), and the regular flux at the strip's faces (a function of its own for each
+//! instruction set, [`face_loop_on`]). What a strip's faces read below its own cells and
+//! interfaces (the stencils reach `R = stencil_radius` interfaces before a face) it takes from
+//! the strip before, which computed it ([`Strip::carry`]): every cell and interface is computed
+//! once, as before.
 //!
 //! Every loop of a strip runs over a number of entries fixed at compile time and a multiple of
 //! 8 (the lanes of AVX-512), so that none has a scalar remainder: a strip is short, and a
@@ -32,14 +34,22 @@ use crate::fv::euler::{
     NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
+use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius};
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
 pub(super) const STRIP_FACES: usize = 48;
+/// The most faces a strip computes, counted from its first entry (`j0 + count` of `strip_faces`:
+/// `STRIP_FACES` a strip of a long line, up to `SHORT_LINE` for a short line).
+const PSI_FACES: usize = SHORT_LINE;
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
+/// The lowest entry of a strip that its stencils read: its first face's interface is
+/// `CARRY / 2 + R` (`strip_faces`), and `Ψ` reads `R` interfaces below it (`R ≤ 3`); the cell,
+/// interface and curvature passes start at `CARRY − 1`, `CARRY − 1` and `CARRY − 3`.
+const FIRST_READ: usize = CARRY / 2;
 /// The length of every buffer of a strip (its cells).
 const STRIP_CELLS: usize = STRIP_FACES + CARRY;
 /// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
@@ -53,8 +63,6 @@ pub(super) struct Strip {
     roe: RoeLine,
     speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
-    /// `Ψ` of each wave at the strip's faces.
-    psi: [Vec<f64>; NQ],
     /// The regular face fluxes, one array per component.
     face_q: [Vec<f64>; NQ],
     /// Whether each cell is vacuum, each interface's average valid, each face's linearised
@@ -65,20 +73,25 @@ pub(super) struct Strip {
 }
 
 impl Strip {
-    /// Moves the entries `shift .. shift + CARRY` of what the next strip reads below the part it
-    /// computes to `0 .. CARRY` (the next strip starts `shift ≥ CARRY` cells further along the
-    /// line), for `nw` waves and the `nd` arrays of `d` the order fills.
+    /// Moves the entries `shift + FIRST_READ .. shift + CARRY` of what the next strip reads
+    /// below the part it computes to `FIRST_READ .. CARRY` (the next strip starts `shift ≥
+    /// CARRY` cells further along the line), for `nw` waves and the `nd` arrays of `d` the order
+    /// fills.
     ///
-    /// NOTE: copies of a length fixed at compile time (two 64-byte moves an array); a
+    /// NOTE: copies of a length fixed at compile time (one 64-byte move an array); a
     /// `copy_within` of a run-time range was a `memmove` call per array, ~90 a strip, which
-    /// cost more than the strip saved.
+    /// cost more than the strip saved. The entries below `FIRST_READ` are not moved: no stencil
+    /// reads them (the moves were 2 % of the kernel's instructions).
     #[inline(always)]
     fn carry(&mut self, shift: usize, nw: usize, nd: usize) {
         assert!(shift >= CARRY, "strips of {shift} cells (at least {CARRY})");
+        const N: usize = CARRY - FIRST_READ;
         let mv = |v: &mut Vec<f64>| {
             let (head, tail) = v.split_at_mut(shift);
-            let src: &[f64; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
-            let dst: &mut [f64; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            let src: &[f64; N] = tail[FIRST_READ..CARRY].try_into().expect("N entries");
+            let dst: &mut [f64; N] = (&mut head[FIRST_READ..CARRY])
+                .try_into()
+                .expect("N entries");
             *dst = *src;
         };
         let c = &mut self.cells;
@@ -101,8 +114,10 @@ impl Strip {
         }
         for v in [&mut self.vacuum, &mut self.valid] {
             let (head, tail) = v.split_at_mut(shift);
-            let src: &[bool; CARRY] = tail[..CARRY].try_into().expect("CARRY entries");
-            let dst: &mut [bool; CARRY] = (&mut head[..CARRY]).try_into().expect("CARRY entries");
+            let src: &[bool; N] = tail[FIRST_READ..CARRY].try_into().expect("N entries");
+            let dst: &mut [bool; N] = (&mut head[FIRST_READ..CARRY])
+                .try_into()
+                .expect("N entries");
             *dst = *src;
         }
     }
@@ -120,7 +135,7 @@ impl Strip {
         for w in &mut self.waves {
             w.resize(len);
         }
-        for v in self.psi.iter_mut().chain(&mut self.face_q) {
+        for v in &mut self.face_q {
             v.resize(len, 0.0);
         }
         for v in [&mut self.vacuum, &mut self.valid, &mut self.star_ok] {
@@ -183,12 +198,6 @@ impl CellView<'_> {
             h: self.h[i],
         }
     }
-
-    /// The conserved state of cell `i`.
-    #[inline(always)]
-    fn state(&self, i: usize) -> State {
-        std::array::from_fn(|q| self.q[q][i])
-    }
 }
 
 /// The Roe averages of a strip's interfaces, one array per field (whether each is valid is in
@@ -230,11 +239,18 @@ fn cell_loop(
     vacuum: &mut [bool],
     setup: &LineSetup,
 ) {
-    for (q, cq) in c.q.iter_mut().enumerate() {
-        let cq = &mut cq[lo..lo + u.len()];
-        for i in 0..u.len() {
-            cq[i] = u[i][q];
-        }
+    // NOTE: one pass over the cells, each copied whole into the five arrays: a pass per
+    // component (`cq[i] = u[i][q]`) became a gather of every fifth value on AVX-512.
+    let m = u.len();
+    let [q0, q1, q2, q3, q4] = &mut c.q;
+    let (q0, q1, q2) = (
+        &mut q0[lo..lo + m],
+        &mut q1[lo..lo + m],
+        &mut q2[lo..lo + m],
+    );
+    let (q3, q4) = (&mut q3[lo..lo + m], &mut q4[lo..lo + m]);
+    for (i, ui) in u.iter().enumerate() {
+        [q0[i], q1[i], q2[i], q3[i], q4[i]] = *ui;
     }
     let r = lo..lo + len;
     let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][r.clone()]);
@@ -368,17 +384,23 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     let nf = setup.n + 1;
     // The faces computed, counted from CARRY / 2 faces before the line's first.
     let todo = nf + CARRY / 2;
+    // `Ψ` of each wave at a strip's faces; the inactive waves' stay 0.
+    // NOTE: an array on the stack, which the compiler knows no other array of the kernel
+    // overlaps: written into the strip's buffers, each wave's loop first compared its output's
+    // addresses with those of its ~35 inputs at run time (~160 instructions a wave a strip).
+    // Zeroed once a line (a zeroed array a strip cost more than the checks).
+    let mut psi = [[0.0; PSI_FACES]; NQ];
     if todo <= SHORT_LINE {
         // One strip: the whole line (loops of the line's length).
         s.strip.reserve(todo + CARRY);
-        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf));
+        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
     } else {
         // Strips of STRIP_FACES faces (the last one's beyond the line's end computed on what
         // is there, and not kept).
         s.strip.reserve(STRIP_CELLS);
         for k in 0..todo.div_ceil(STRIP_FACES) {
             let a = k * STRIP_FACES;
-            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES));
+            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES), &mut psi);
         }
     }
     special_faces(s, setup, radius);
@@ -400,6 +422,7 @@ fn strip_faces<const ORDER: u32>(
     a: usize,
     nc: usize,
     (j0, count): (usize, usize),
+    psi: &mut [[f64; PSI_FACES]; NQ],
 ) {
     let r = stencil_radius(ORDER);
     let (len, sigma) = (s.u.len(), setup.sigma);
@@ -425,16 +448,14 @@ fn strip_faces<const ORDER: u32>(
     // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
     // (`f0`: the interface of face j0).
     let f0 = CARRY / 2 + r + j0;
-    // Wave k travels at speed [u−c, u+c, u, u, u][k].
+    // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
+    // entries stay 0).
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
         st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
-        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut st.psi[k][j0..j0 + count]);
-    }
-    for k in nw..NQ {
-        st.psi[k][j0..j0 + count].fill(0.0);
+        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
@@ -445,12 +466,15 @@ fn strip_faces<const ORDER: u32>(
     let roe_valid = &st.valid[w.clone()];
     let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
     let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
-    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &st.psi[k][j0..j0 + count]);
+    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &psi[k][j0..j0 + count]);
     let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
-    face_loop(
-        &cells,
-        (roe_vel, roe_h, roe_c, roe_valid),
-        (lam, alpha, psi),
+    face_loop_on(
+        s.isa,
+        &FaceInputs {
+            cells,
+            roe: (roe_vel, roe_h, roe_c, roe_valid),
+            waves: (lam, alpha, psi),
+        },
         &mut st.star_ok[j0..j0 + count],
         &mut fq0[j0..j0 + count],
         &mut fq1[j0..j0 + count],
@@ -470,8 +494,9 @@ fn strip_faces<const ORDER: u32>(
     let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
     let first = faces.start + CARRY / 2 - a;
     s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
+    let face_q: [&[f64]; NQ] = std::array::from_fn(|q| &st.face_q[q][first..first + faces.len()]);
     for (j, face) in s.face[faces].iter_mut().enumerate() {
-        *face = std::array::from_fn(|q| st.face_q[q][first + j]);
+        *face = std::array::from_fn(|q| face_q[q][j]);
     }
 }
 
@@ -486,6 +511,17 @@ fn strip_faces<const ORDER: u32>(
 fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
     let LineSetup { n, ng, gamma, .. } = *setup;
     let all_valid = s.valid.iter().fold(true, |acc, &v| acc & v);
+    // NOTE: the usual line has no special face at all: one pass without a branch a face says
+    // so (the vacuum flags of each face's two cells and its star-state check), and every face
+    // is regular.
+    let (vacuum, star_ok) = (&s.vacuum[ng - 1..ng + n + 1], &s.star_ok[..n + 1]);
+    let all_regular = (0..=n).fold(all_valid, |all, fi| {
+        all & !(vacuum[fi] | vacuum[fi + 1]) & star_ok[fi]
+    });
+    if all_regular {
+        s.kind[..=n].fill(FaceFlux::Regular);
+        return;
+    }
     if !all_valid {
         s.bad_prefix[0] = 0;
         for l in 0..s.valid.len() {
@@ -512,15 +548,26 @@ fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
     }
 }
 
-/// The regular flux of every face `j` of `cells` (faces between cells `j` and `j + 1`) into
-/// `fq0..fq4`, and whether its linearised star states are physical. The outputs are separate
-/// `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+/// What [`face_loop`] reads: the cells of the faces (`nf + 1`), the Roe averages (velocity, H, c,
+/// validity) and the waves' speeds, strengths and `Ψ` at the faces (`nf`).
+#[allow(clippy::type_complexity)]
+struct FaceInputs<'a> {
+    cells: CellView<'a>,
+    roe: ([&'a [f64]; 3], &'a [f64], &'a [f64], &'a [bool]),
+    waves: ([&'a [f64]; 3], [&'a [f64]; NQ], [&'a [f64]; NQ]),
+}
+
+/// [`face_loop`] on the instruction set `isa`: a function of its own for each (`isa.rs`).
+///
+/// NOTE: inlined into the line kernel, the face loop stayed scalar on every instruction set:
+/// LLVM asked for more run-time checks of overlap among its ~30 input and 6 output arrays than
+/// it makes ("too many memory checks needed"). In a function of its own the outputs are
+/// `noalias` arguments, and it vectorises. One call a strip.
 #[inline(always)]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn face_loop(
-    cells: &CellView<'_>,
-    (roe_vel, roe_h, roe_c, roe_valid): ([&[f64]; 3], &[f64], &[f64], &[bool]),
-    (lam, alpha, psi): ([&[f64]; 3], [&[f64]; NQ], [&[f64]; NQ]),
+#[allow(clippy::too_many_arguments)]
+fn face_loop_on(
+    isa: Isa,
+    inputs: &FaceInputs<'_>,
     star_ok: &mut [bool],
     fq0: &mut [f64],
     fq1: &mut [f64],
@@ -528,6 +575,106 @@ fn face_loop(
     fq3: &mut [f64],
     fq4: &mut [f64],
 ) {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 if Isa::Avx512.supported() => {
+            // SAFETY: the CPU has AVX-512F (checked on the line above).
+            unsafe { face_loop_avx512(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::Avx2.supported() => {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            unsafe { face_loop_avx2(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
+        }
+        _ => face_loop_baseline(inputs, star_ok, fq0, fq1, fq2, fq3, fq4),
+    }
+}
+
+/// [`face_loop`] for the baseline (`face_loop_on`).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_baseline(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// [`face_loop`] for AVX2 (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_avx2(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// [`face_loop`] for AVX-512F (without FMA, `isa.rs`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn face_loop_avx512(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+}
+
+/// The first `len` entries of each of three arrays.
+#[inline(always)]
+fn cut3(x: [&[f64]; 3], len: usize) -> [&[f64]; 3] {
+    [&x[0][..len], &x[1][..len], &x[2][..len]]
+}
+
+/// The first `len` entries of each of five arrays.
+#[inline(always)]
+fn cut5(x: [&[f64]; 5], len: usize) -> [&[f64]; 5] {
+    [
+        &x[0][..len],
+        &x[1][..len],
+        &x[2][..len],
+        &x[3][..len],
+        &x[4][..len],
+    ]
+}
+
+/// The regular flux of every face `j` of `inputs.cells` (faces between cells `j` and `j + 1`)
+/// into `fq0..fq4`, and whether its linearised star states are physical. The outputs are
+/// separate `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
+#[inline(always)]
+fn face_loop(
+    inputs: &FaceInputs<'_>,
+    star_ok: &mut [bool],
+    fq0: &mut [f64],
+    fq1: &mut [f64],
+    fq2: &mut [f64],
+    fq3: &mut [f64],
+    fq4: &mut [f64],
+) {
+    let FaceInputs {
+        cells,
+        roe: (roe_vel, roe_h, roe_c, roe_valid),
+        waves: (lam, alpha, psi),
+    } = inputs;
     let nf = star_ok.len();
     let (fq0, fq1, fq2, fq3, fq4) = (
         &mut fq0[..nf],
@@ -536,7 +683,16 @@ fn face_loop(
         &mut fq3[..nf],
         &mut fq4[..nf],
     );
-    let phys = cells.flux;
+    // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
+    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar. The
+    // cuts are arrays written out (`cut3`, `cut5`): cut with `array::map`, the lengths of the
+    // cells' arrays were lost to the compiler, and the last vector's faces (4 of 48 on AVX2,
+    // 8 on AVX-512) ran on a scalar loop with the checks.
+    let (roe_vel, roe_h, roe_c) = (cut3(*roe_vel, nf), &roe_h[..nf], &roe_c[..nf]);
+    let roe_valid = &roe_valid[..nf];
+    let (lam, alpha, psi) = (cut3(*lam, nf), cut5(*alpha, nf), cut5(*psi, nf));
+    let phys = cut5(cells.flux, nf + 1);
+    let q_cells = cut5(cells.q, nf + 1);
     for j in 0..nf {
         let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
         let mut flux = [0.0; NQ];
@@ -564,7 +720,10 @@ fn face_loop(
             }
         }
         [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
-        let (ul, ur) = (cells.state(j), cells.state(j + 1));
+        let (ul, ur): (State, State) = (
+            std::array::from_fn(|q| q_cells[q][j]),
+            std::array::from_fn(|q| q_cells[q][j + 1]),
+        );
         star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
     }
 }
