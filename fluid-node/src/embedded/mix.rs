@@ -20,6 +20,7 @@ use crate::grid::Grid;
 use super::CorrectReport;
 use super::gather::gather_roots;
 
+mod by_root;
 mod predicted;
 mod widen;
 
@@ -89,12 +90,13 @@ impl Embedded {
     /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
     /// and covered-with-content cells into their targets.
     ///
-    /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
-    /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
-    /// group's members) are gathered first, and every rank computes every group; the solver
-    /// keeps the writes of its own cells. Only the sources' walks to their roots are shared out:
-    /// each rank walks from the sources in its own cells, and the pairs are gathered
-    /// ([`gather_roots`]).
+    /// Collective. Each rank walks from the sources in its own cells to their roots, and the
+    /// pairs are gathered ([`gather_roots`]). Each rank then sums the groups whose roots it
+    /// holds, and every group's mixture is gathered ([`Mixing::mixtures`]); every rank writes
+    /// them all, and the solver keeps the writes of its own cells. If a group's mixture is not
+    /// physical, groups merge and widen into rings that may lie on other ranks: then the
+    /// predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a group's
+    /// members) are gathered, and every rank merges and mixes every group.
     pub(super) fn mix(
         &mut self,
         solver: &mut FluidSolver,
@@ -137,25 +139,19 @@ impl Embedded {
             groups = gather_roots(solver, &groups);
         }
         groups.sort_unstable();
+        // NOTE: the groups are mixed by their roots' ranks, and every mixture gathered
+        // (`mixtures`), unless a group's mixture is not physical: then groups merge and widen,
+        // which reads cells around them, and every rank mixes every group as before.
+        let by_root = m.mixtures(solver, &groups, kind);
+        let mut out = Writes::default();
+        if let Some(mixtures) = by_root {
+            m.unmixed(kind, &mut out);
+            m.write_mixtures(&groups, &mixtures, kind, &mut out);
+            return Ok(m.written(solver, out));
+        }
         let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
-        let mut out = Writes::default();
-        // Updated, unmixed cells: U = content / α.
-        for (k, &c) in m.near.iter().enumerate() {
-            if kind[k] != CellKind::Updated || sources.binary_search(&k).is_ok() {
-                continue;
-            }
-            let a = m.alpha(c as usize);
-            if a <= COVERED_TOLERANCE {
-                // Covered, nothing to keep: the cell holds a ghost state.
-                continue;
-            }
-            let mut v = [0.0; NQ];
-            for q in 0..nvar {
-                v[q] = m.content[k][q] / a;
-            }
-            out.writes.push((c, v));
-        }
+        m.unmixed(kind, &mut out);
         // NOTE: a group that has taken in every cell no other group holds and is still not
         // physical may fail while the gas as a whole is physical, the other groups keeping
         // their surplus (a 0.24 m square at Mach 250 on 24² cells stopped at step 0 so). Then
@@ -195,17 +191,7 @@ impl Embedded {
             let n = one.groups.len();
             m.mix_group(&one, 0..n, kind, (&mut predicted, solver), &mut out, report)?;
         }
-        let mut writes = out.writes;
-        solver.set_cells(&writes);
-        // The last value written of each cell, by cell.
-        writes.reverse();
-        writes.sort_by_key(|w| w.0);
-        writes.dedup_by_key(|w| w.0);
-        Ok(Mixed {
-            cells: out.mixed,
-            written: writes,
-            leaving: out.leaving,
-        })
+        Ok(m.written(solver, out))
     }
 
     /// The near slots to mix, ascending: covered cells left with content, cells the solid
