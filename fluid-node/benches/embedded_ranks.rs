@@ -186,7 +186,10 @@ fn main() {
         println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
         println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
         let merged = |t: &RankTimes| t.merged_or_widened.to_string();
-        println!("| {k} | steps merging or widening groups | {} |", row(&merged));
+        println!(
+            "| {k} | steps merging or widening groups | {} |",
+            row(&merged)
+        );
         let mb = |b: usize| format!("{:.1}", b as f64 / 1e6);
         let part = |name: &str, f: &dyn Fn(&RankTimes) -> usize| {
             println!("| {k} | {name}, MB | {} |", row(&|t| mb(f(t))));
