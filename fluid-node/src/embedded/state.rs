@@ -114,6 +114,12 @@ impl Config {
         let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
         state_ok(&full, self.gamma, self.vacuum.0, self.vacuum.1)
     }
+
+    /// Whether a state written into a cell (its first `dim + 2` values) is acceptable: what
+    /// `Embedded::check_written` tests.
+    pub(super) fn written_ok(&self, written: &[f64; NQ]) -> bool {
+        self.physical(written, 1.0)
+    }
 }
 
 impl NearCells {

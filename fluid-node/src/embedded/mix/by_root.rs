@@ -5,7 +5,7 @@
 
 use super::super::COVERED_TOLERANCE;
 use super::super::cells::{CellKind, part_of, sum_parts};
-use super::{Mixed, Mixing, Writes};
+use super::{Failure, Mixed, Mixing, Writes, WrittenCheck};
 use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 
@@ -16,31 +16,33 @@ impl Mixing<'_> {
         (self.config.block).is_none_or(|b| b.contains(grid.ijk(c)))
     }
 
-    /// The mixture of every group of `groups` (`(root, source slot)`, sorted), by root, if every
-    /// group's mixture is physical; `None` if one is not, on every rank (collective on several
-    /// ranks).
+    /// The mixture of every group of `groups` (`(root, source slot)`, sorted), by root, and the
+    /// first cell any rank found not physical (`failure`, this rank's, see
+    /// [`Mixing::first_failure`]), if every group's mixture is physical; `None` if one is not,
+    /// on every rank (collective on several ranks).
     ///
     /// Each rank sums the groups whose root it holds, from its root's predicted state and its
     /// members' contents, as [`Mixing::merge`] tests them and [`Mixing::mix_group`] mixes them,
-    /// and one gather gives every rank every group's mixture and whether it is physical
-    /// (`dim + 3` values per group).
+    /// and one all-gather gives every rank every group's mixture and whether it is physical
+    /// (`dim + 3` values per group), with each rank's `failure`.
     ///
     /// NOTE: when every group's mixture is physical, no group merges (the merge joins only
     /// groups whose mixture is not) and none widens, so a group's mixture is the sum of its
     /// root's part and its members' contents over their fluid fractions, which the root's rank
-    /// has: the contents of every updated cell are on every rank (`gather_contents`), and a
-    /// root's predicted state on its own rank. The sums do not depend on the order of their
-    /// terms (`sum_parts`), so the mixture is the one every rank computed from the predicted
-    /// states gathered around every group before (`cells_at`, `dim + 2` values per cell within
+    /// has: the sources' contents come with their roots (`gather_roots`), and a root's predicted
+    /// state and content are its own rank's. The sums do not depend on the order of their terms
+    /// (`sum_parts`), so the mixture is the one every rank computed from the predicted states
+    /// gathered around every group before (`cells_at`, `dim + 2` values per cell within
     /// `WIDEN_RINGS` of a group's cells). A root's part reads the kinds as the mixing starts:
-    /// the groups before it mark only updated cells `Mixed` or `Updated`, which a part reads
-    /// as it reads `Updated`.
+    /// the groups before it mark only updated cells `Mixed` and roots `Updated`, and no group
+    /// reads another's root, so a part reads what it read before.
     pub(super) fn mixtures(
         &self,
         solver: &FluidSolver,
         groups: &[(usize, usize)],
         kind: &[CellKind],
-    ) -> Option<Vec<[f64; NQ]>> {
+        failure: Failure,
+    ) -> Option<(Vec<[f64; NQ]>, Failure)> {
         let nvar = self.nvar;
         let mut roots: Vec<u32> = groups.iter().map(|g| g.0 as u32).collect();
         roots.dedup();
@@ -48,7 +50,11 @@ impl Mixing<'_> {
             .filter(|&c| self.own_cell(c as usize))
             .collect();
         let predicted = solver.own_cells_at(&own_roots);
-        let mut mine = Vec::with_capacity(own_roots.len() * (nvar + 1));
+        // This rank's failure (the cell, or `u32::MAX`, and the state), then `nvar` values and
+        // whether it is physical per group it roots.
+        let (cell, state) = failure.unwrap_or((u32::MAX, [0.0; NQ]));
+        let mut mine = vec![f64::from(cell)];
+        mine.extend_from_slice(&state[..nvar]);
         let mut parts: Vec<([f64; NQ], f64)> = Vec::new();
         let (mut i, mut own) = (0, 0);
         while i < groups.len() {
@@ -82,23 +88,57 @@ impl Mixing<'_> {
             }
             i = j;
         }
-        let all = solver.gather_owned_by(&roots, mine, nvar + 1);
-        let mixtures = all.chunks_exact(nvar + 1);
-        if mixtures.clone().any(|m| m[nvar] != 1.0) {
-            return None;
+        let parts: Vec<Vec<f64>> = if self.config.block.is_some() {
+            let bytes: Vec<u8> = mine
+                .iter()
+                .flat_map(|v| v.to_bits().to_le_bytes())
+                .collect();
+            (solver.comm().all_gather(&bytes).iter())
+                .map(|b| {
+                    (b.chunks_exact(8))
+                        .map(|v| f64::from_bits(u64::from_le_bytes(v.try_into().expect("8"))))
+                        .collect()
+                })
+                .collect()
+        } else {
+            vec![mine]
+        };
+        let slab = solver.slab();
+        let mut at = vec![1 + nvar; parts.len()];
+        let mut mixtures = Vec::with_capacity(roots.len());
+        for &root in &roots {
+            let r = if parts.len() > 1 {
+                slab.owner(root as usize)
+            } else {
+                0
+            };
+            let m = &parts[r][at[r]..at[r] + nvar + 1];
+            at[r] += nvar + 1;
+            if m[nvar] != 1.0 {
+                return None;
+            }
+            mixtures.push(std::array::from_fn(|q| if q < nvar { m[q] } else { 0.0 }));
         }
-        Some(
-            mixtures
-                .map(|m| std::array::from_fn(|q| if q < nvar { m[q] } else { 0.0 }))
-                .collect(),
-        )
+        let failure = (parts.iter())
+            .filter(|p| p[0] != f64::from(u32::MAX))
+            .map(|p| {
+                (
+                    p[0] as u32,
+                    std::array::from_fn(|q| if q < nvar { p[1 + q] } else { 0.0 }),
+                )
+            })
+            .min_by_key(|f| f.0);
+        Some((mixtures, failure))
     }
 
     /// The updated cells that are not mixed: `U = content / α` (a covered one keeps its ghost
-    /// state).
-    pub(super) fn unmixed(&self, kind: &[CellKind], out: &mut Writes) {
+    /// state); this rank's only if `own_only` (the others' contents are not at hand then).
+    pub(super) fn unmixed(&self, kind: &[CellKind], out: &mut Writes, own_only: bool) {
         for (k, &c) in self.near.iter().enumerate() {
-            if kind[k] != CellKind::Updated || self.sources.binary_search(&k).is_ok() {
+            if kind[k] != CellKind::Updated
+                || self.sources.binary_search(&k).is_ok()
+                || (own_only && !self.own(k))
+            {
                 continue;
             }
             let a = self.alpha(c as usize);
@@ -147,7 +187,12 @@ impl Mixing<'_> {
     }
 
     /// Writes `out` into the solver (each rank keeps its own cells) and gives what was written.
-    pub(super) fn written(&self, solver: &mut FluidSolver, out: Writes) -> Mixed {
+    pub(super) fn written(
+        &self,
+        solver: &mut FluidSolver,
+        out: Writes,
+        check: WrittenCheck,
+    ) -> Mixed {
         let mut writes = out.writes;
         solver.set_cells(&writes);
         // The last value written of each cell, by cell.
@@ -158,6 +203,43 @@ impl Mixing<'_> {
             cells: out.mixed,
             written: writes,
             leaving: out.leaving,
+            check,
         }
+    }
+
+    /// The first of this rank's cells (in the near cells' order) that `Embedded::check_written`
+    /// would refuse if every group's mixture is physical, with the state written into it:
+    /// `unmixed` holds this rank's [`Mixing::unmixed`] writes.
+    ///
+    /// NOTE: the check reads the last state written into each updated cell and each root. A
+    /// root or a source is written a group's mixture last, which the check accepts when it is
+    /// physical (`Config::physical` tests `sum / vol`, the state written), so only the other
+    /// updated cells can fail, each with its own `content / α`, which this rank has for its own
+    /// cells. The first of all is the first of the ranks' firsts.
+    pub(super) fn first_failure(
+        &self,
+        kind: &[CellKind],
+        groups: &[(usize, usize)],
+        unmixed: &[(u32, [f64; NQ])],
+    ) -> Failure {
+        let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
+        roots.dedup();
+        for (k, &c) in self.near.iter().enumerate() {
+            if kind[k] == CellKind::Predicted
+                || self.new_lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
+                || !self.own(k)
+                || self.sources.binary_search(&k).is_ok()
+                || roots.binary_search(&(c as usize)).is_ok()
+            {
+                continue;
+            }
+            let w = unmixed
+                .binary_search_by_key(&c, |w| w.0)
+                .expect("the correct wrote every updated cell it left uncovered");
+            if !self.config.written_ok(&unmixed[w].1) {
+                return Some(unmixed[w]);
+            }
+        }
+        None
     }
 }
