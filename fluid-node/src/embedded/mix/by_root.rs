@@ -19,7 +19,8 @@ impl Mixing<'_> {
     /// The mixture of every group of `groups` (`(root, source slot)`, sorted), by root, and the
     /// first cell any rank found not physical (`failure`, this rank's, see
     /// [`Mixing::first_failure`]), if every group's mixture is physical; `None` if one is not,
-    /// on every rank (collective on several ranks).
+    /// on every rank (collective on several ranks), and `None` without a gather when the
+    /// mixing by root is off (`Embedded::set_mixing_by_root`).
     ///
     /// Each rank sums the groups whose root it holds, from its root's predicted state and its
     /// members' contents, as [`Mixing::merge`] tests them and [`Mixing::mix_group`] mixes them,
@@ -43,6 +44,9 @@ impl Mixing<'_> {
         kind: &[CellKind],
         failure: Failure,
     ) -> Option<(Vec<[f64; NQ]>, Failure)> {
+        if !self.config.mixing_by_root {
+            return None;
+        }
         let nvar = self.nvar;
         let mut roots: Vec<u32> = groups.iter().map(|g| g.0 as u32).collect();
         roots.dedup();
