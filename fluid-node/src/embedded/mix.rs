@@ -29,7 +29,8 @@ mod widen;
 pub(super) struct Mixed {
     /// Cells mixed into a neighbour.
     pub(super) cells: usize,
-    /// The values written, one per cell (the last), by cell.
+    /// The values written, one per cell (the last), by cell: every written cell of the grid
+    /// with [`WrittenCheck::Whole`], else this rank's and the groups' cells.
     pub(super) written: Vec<(u32, [f64; NQ])>,
     /// What left through open sides from pockets of covered cells there \[kg, kg m/s, J\].
     pub(super) leaving: [f64; NQ],

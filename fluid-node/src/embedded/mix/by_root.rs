@@ -213,7 +213,8 @@ impl Mixing<'_> {
 
     /// The first of this rank's cells (in the near cells' order) that `Embedded::check_written`
     /// would refuse if every group's mixture is physical, with the state written into it:
-    /// `unmixed` holds this rank's [`Mixing::unmixed`] writes.
+    /// `unmixed` holds this rank's [`Mixing::unmixed`] writes, by cell (the near cells are
+    /// ascending).
     ///
     /// NOTE: the check reads the last state written into each updated cell and each root. A
     /// root or a source is written a group's mixture last, which the check accepts when it is
