@@ -12,8 +12,7 @@ use super::cells::{
 };
 use super::state::{Config, NearCells};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, WIDEN_RINGS};
-use crate::cutcell::CutGeometry;
-use crate::cutcell::face_index;
+use crate::cutcell::{CutGeometry, face_index};
 use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 use crate::grid::Grid;
