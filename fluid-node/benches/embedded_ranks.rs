@@ -4,8 +4,9 @@
 //! the grid), each rank timing its own predicts and corrects (a rank's time includes its waits
 //! for the others at the collectives, and with more ranks than cores, for a core), and counting
 //! the sub-faces of `F^{n+1}` in its own cells (whose prisms it clips) and its near cells (whose
-//! updates it makes), the work of the correct that is shared out by rank, and the heap bytes
-//! its `Embedded` holds after the last step, by part (`Embedded::memory`).
+//! updates it makes), the work of the correct that is shared out by rank, the steps whose mixing
+//! groups merged or widened (the mixing then merges and mixes every group on every rank), and
+//! the heap bytes its `Embedded` holds after the last step, by part (`Embedded::memory`).
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
@@ -95,6 +96,8 @@ struct RankTimes {
     subfaces: usize,
     /// Cells of the rank's block.
     cells: usize,
+    /// Steps whose mixing groups merged or widened (which the mixing does on every rank).
+    merged_or_widened: usize,
     /// Heap bytes its `Embedded` holds after the last step, by part.
     memory: fluid_node::embedded::EmbeddedMemory,
 }
@@ -115,6 +118,7 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                     correct: Vec::new(),
                     subfaces: 0,
                     cells: 0,
+                    merged_or_widened: 0,
                     memory: Default::default(),
                 };
                 for n in 0..steps {
@@ -125,8 +129,11 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                     assert!(report.ok(), "step {n}: {:?}", report.troubles);
                     let next = moved(e.surface(), dt);
                     let t = Instant::now();
-                    e.correct(&mut s, dt, next, n, false).expect("correct");
+                    let report = e.correct(&mut s, dt, next, n, false).expect("correct");
                     times.correct.push(t.elapsed().as_secs_f64());
+                    if report.merged_groups + report.widened_groups > 0 {
+                        times.merged_or_widened += 1;
+                    }
                 }
                 let slab = s.slab();
                 let own = |c: u32| slab.to_local(c as usize).is_some();
@@ -178,6 +185,11 @@ fn main() {
         println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
         println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
         println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
+        let merged = |t: &RankTimes| t.merged_or_widened.to_string();
+        println!(
+            "| {k} | steps merging or widening groups | {} |",
+            row(&merged)
+        );
         let mb = |b: usize| format!("{:.1}", b as f64 / 1e6);
         let part = |name: &str, f: &dyn Fn(&RankTimes) -> usize| {
             println!("| {k} | {name}, MB | {} |", row(&|t| mb(f(t))));

@@ -16,13 +16,13 @@ use super::error::Reach;
 use super::gather::{CellUpdate, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
+use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{
     SubFace, Surface, compute, face_index, subface_swept_volumes, subface_swept_volumes_of,
 };
 use crate::fv::euler::NQ;
-use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver};
 
 /// What one [`Embedded::correct`] did (diagnostics).
@@ -93,9 +93,6 @@ impl Embedded {
         }
         self.scratch.odd_content = gained;
         swept?;
-        if self.config.block.is_some() {
-            self.gather_contents(solver);
-        }
         let mixed = self.mix(solver, &mut report)?;
         report.mixed_cells = mixed.cells;
         report.work_received = exchanged.work;
@@ -105,7 +102,7 @@ impl Embedded {
         for a in 0..3 {
             budget.impulse_given[a] -= exchanged.impulse[a];
         }
-        self.check_written(step, &mixed.written)?;
+        self.check_written(step, &mixed)?;
         for q in 0..NQ {
             leaving[q] += mixed.leaving[q];
         }
@@ -258,8 +255,9 @@ impl Embedded {
     ///
     /// Collective on a decomposed grid: each rank updates its own near cells, and every rank
     /// receives every rank's updates but their contents ([`gather_updates`]), so every rank
-    /// holds the kinds, count and outflow of one rank; the contents come with the swept amounts
-    /// and the solid flux ([`Embedded::gather_contents`]).
+    /// holds the kinds, count and outflow of one rank; a rank then holds the contents of its
+    /// own cells, which the mixing completes with those of the sources
+    /// (`Embedded::mix`).
     ///
     /// NOTE: the sweeps count the whole flux through a domain face as leaving; a body at rest
     /// against an outflow side (its face flush with it, gas streaming out past it) lost 1.3e-4
@@ -289,8 +287,8 @@ impl Embedded {
         // same bits on any number of threads. On a decomposed grid each rank updates its own
         // near cells, and the updates of every rank are gathered on every rank in the cells'
         // order (`gather_updates`): the same list, so the same bits, as one rank's, but the
-        // contents of other ranks' cells, which nothing reads before `gather_contents` puts
-        // them in.
+        // contents of other ranks' cells, which the mixing reads only once it has gathered
+        // them (the sources', or every updated cell's when groups merge or widen).
         let this = &*self;
         let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
         let mut updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
@@ -713,12 +711,17 @@ impl Embedded {
         Ok(())
     }
 
-    /// Stops on a cell the correct left uncovered with a state that is not physical.
-    fn check_written(&self, step: u64, written: &[(u32, [f64; NQ])]) -> Result<(), EmbeddedError> {
-        let grid = &self.config.grid;
-        let dim = grid.dim;
-        let nvar = dim + 2;
-        let (vr, vp) = self.config.vacuum;
+    /// Stops on a cell the correct left uncovered with a state that is not physical: the first
+    /// in the near cells' order, as the ranks agreed on it while mixing, or as found among every
+    /// written cell (see [`WrittenCheck`]).
+    fn check_written(&self, step: u64, mixed: &Mixed) -> Result<(), EmbeddedError> {
+        let written = match mixed.check {
+            WrittenCheck::Agreed(None) => return Ok(()),
+            WrittenCheck::Agreed(Some((c, state))) => {
+                return Err(self.non_physical(step, c as usize, &state));
+            }
+            WrittenCheck::Whole => &mixed.written,
+        };
         let new_lambda = &self.scratch.trial.solid_fraction;
         for (k, &c) in self.near.cells.iter().enumerate() {
             if self.scratch.kind[k] == CellKind::Predicted
@@ -729,22 +732,28 @@ impl Embedded {
             let w = written
                 .binary_search_by_key(&c, |w| w.0)
                 .expect("the correct wrote every updated cell it left uncovered");
-            let c = c as usize;
-            let full = full_state(&written[w].1[..nvar], dim, 1.0);
-            if !state_ok(&full, self.config.gamma, vr, vp) {
-                let w = crate::fv::euler::primitive(&full, self.config.gamma);
-                let ijk = grid.ijk(c);
-                return Err(EmbeddedError::NonPhysical {
-                    step,
-                    cell: ijk,
-                    center: grid.cell_center(ijk),
-                    fluid_fraction: 1.0 - new_lambda[c],
-                    rho: w.rho,
-                    p: w.p,
-                    velocity: w.vel,
-                });
+            if !self.config.written_ok(&written[w].1) {
+                return Err(self.non_physical(step, c as usize, &written[w].1));
             }
         }
         Ok(())
+    }
+
+    /// The refusal of cell `c`, written `state`, which is not physical.
+    fn non_physical(&self, step: u64, c: usize, state: &[f64; NQ]) -> EmbeddedError {
+        let grid = &self.config.grid;
+        let dim = grid.dim;
+        let full = full_state(&state[..dim + 2], dim, 1.0);
+        let w = crate::fv::euler::primitive(&full, self.config.gamma);
+        let ijk = grid.ijk(c);
+        EmbeddedError::NonPhysical {
+            step,
+            cell: ijk,
+            center: grid.cell_center(ijk),
+            fluid_fraction: 1.0 - self.scratch.trial.solid_fraction[c],
+            rho: w.rho,
+            p: w.p,
+            velocity: w.vel,
+        }
     }
 }

@@ -1,7 +1,8 @@
 //! The all-gathers that give every rank one rank's results of the parts of the correct and the
 //! mixing that each rank does for its own cells (issue 40 item 1, steps 4 and 5; docs/mpi.md):
-//! the prism entries, the cell updates, the updated cells' contents and the mixing sources'
-//! roots. Each keeps the one-rank order, so what reads them computes one rank's bits.
+//! the prism entries, the cell updates, the mixing sources, their roots and contents, and the
+//! updated cells' contents when groups merge or widen. Each keeps the one-rank order, so what
+//! reads them computes one rank's bits.
 
 use super::cells::CellKind;
 use super::{Embedded, EmbeddedError};
@@ -34,6 +35,8 @@ impl Embedded {
     /// cells only (the sub-faces' cells and those of prisms beyond the domain are marked
     /// updated, and a piece goes to another cell only if that one is updated), and the mixing
     /// reads the contents of updated cells only. Traffic: `dim + 2` values per updated cell.
+    /// Only when mixing groups merge or widen, which reads the contents around any group; else
+    /// a rank reads the contents of its own cells and of the sources (`gather_roots`).
     pub(super) fn gather_contents(&mut self, solver: &FluidSolver) {
         let nvar = self.config.grid.dim + 2;
         let updated: Vec<usize> = (0..self.near.cells.len())
@@ -160,22 +163,70 @@ pub(super) fn gather_updates(
     all
 }
 
+/// Every rank's mixing sources (near slots, ascending), uncovered cells' count and largest
+/// residue dropped, from each rank's `mine`, `uncovered` and `dropped` for its own cells, on
+/// every rank (collective): the sources one rank finds, their sum and their largest (the
+/// largest of the ranks' largest is the largest of all, bit for bit). Traffic: 4 bytes per
+/// source.
+pub(super) fn gather_sources(
+    solver: &FluidSolver,
+    mine: &[usize],
+    uncovered: usize,
+    dropped: f64,
+) -> (Vec<usize>, usize, f64) {
+    let mut bytes = Vec::with_capacity(16 + 4 * mine.len());
+    bytes.extend((uncovered as u64).to_le_bytes());
+    bytes.extend(dropped.to_bits().to_le_bytes());
+    for &k in mine {
+        bytes.extend((k as u32).to_le_bytes());
+    }
+    let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8"));
+    let (mut all, mut uncovered, mut dropped) = (Vec::new(), 0, dropped);
+    for part in solver.comm().all_gather(&bytes) {
+        uncovered += u64_at(&part, 0) as usize;
+        dropped = dropped.max(f64::from_bits(u64_at(&part, 8)));
+        all.extend(
+            (part[16..].chunks_exact(4))
+                .map(|p| u32::from_le_bytes(p.try_into().expect("4")) as usize),
+        );
+    }
+    all.sort_unstable();
+    (all, uncovered, dropped)
+}
+
 /// Every rank's `(root, source slot)` pairs on every rank (collective), in rank order: each
 /// rank walked from its own sources, so together they are the pairs one rank makes, in another
-/// order (the caller sorts them). Traffic: 8 bytes per source.
-pub(super) fn gather_roots(solver: &FluidSolver, mine: &[(usize, usize)]) -> Vec<(usize, usize)> {
-    let mut bytes = Vec::with_capacity(8 * mine.len());
+/// order (the caller sorts them). Each source's content (its first `nvar` values) comes with
+/// it, into `content`: the sum of a group on its root's rank reads its members' contents
+/// (`Mixing::mixtures`). Traffic: 8 bytes and `nvar` values per source.
+pub(super) fn gather_roots(
+    solver: &FluidSolver,
+    mine: &[(usize, usize)],
+    content: &mut [[f64; NQ]],
+    nvar: usize,
+) -> Vec<(usize, usize)> {
+    let size = 8 + 8 * nvar;
+    let mut bytes = Vec::with_capacity(size * mine.len());
     for &(root, k) in mine {
         bytes.extend((root as u32).to_le_bytes());
         bytes.extend((k as u32).to_le_bytes());
+        for v in &content[k][..nvar] {
+            bytes.extend(v.to_bits().to_le_bytes());
+        }
     }
     let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let f64_at = |b: &[u8], at: usize| {
+        f64::from_bits(u64::from_le_bytes(b[at..at + 8].try_into().expect("8")))
+    };
     let mut all = Vec::new();
     for part in solver.comm().all_gather(&bytes) {
-        all.extend(
-            part.chunks_exact(8)
-                .map(|p| (u32_at(p, 0) as usize, u32_at(p, 4) as usize)),
-        );
+        for p in part.chunks_exact(size) {
+            let (root, k) = (u32_at(p, 0) as usize, u32_at(p, 4) as usize);
+            for q in 0..nvar {
+                content[k][q] = f64_at(p, 8 + 8 * q);
+            }
+            all.push((root, k));
+        }
     }
     all
 }

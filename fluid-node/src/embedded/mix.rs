@@ -10,16 +10,17 @@ use super::cells::{
     CellKind, cell_bits, face_neighbours, fluid_part, mark_around, marked_cells, max_abs, offsets,
     oriented, part_of, shifted, sum_parts,
 };
-use super::state::Config;
+use super::state::{Config, NearCells};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MERGE_ROUNDS, MIX_BELOW, WIDEN_RINGS};
-use crate::cutcell::face_index;
+use crate::cutcell::{CutGeometry, face_index};
 use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 use crate::grid::Grid;
 
 use super::CorrectReport;
-use super::gather::gather_roots;
+use super::gather::{gather_roots, gather_sources};
 
+mod by_root;
 mod predicted;
 mod widen;
 
@@ -27,10 +28,26 @@ mod widen;
 pub(super) struct Mixed {
     /// Cells mixed into a neighbour.
     pub(super) cells: usize,
-    /// The values written, one per cell (the last), by cell.
+    /// The values written, one per cell (the last), by cell: every written cell of the grid
+    /// with [`WrittenCheck::Whole`], else this rank's and the groups' cells.
     pub(super) written: Vec<(u32, [f64; NQ])>,
     /// What left through open sides from pockets of covered cells there \[kg, kg m/s, J\].
     pub(super) leaving: [f64; NQ],
+    /// How the written cells are checked (see [`WrittenCheck`]).
+    pub(super) check: WrittenCheck,
+}
+
+/// The first written cell found not physical, if any: the cell and the state written.
+pub(super) type Failure = Option<(u32, [f64; NQ])>;
+
+/// How [`Embedded::check_written`] checks the cells the mixing wrote.
+pub(super) enum WrittenCheck {
+    /// [`Mixed::written`] holds every written cell of the grid: check them all.
+    Whole,
+    /// [`Mixed::written`] holds this rank's cells and the groups' only, and the ranks have
+    /// checked the cells that could fail and agreed on the first that does, if any (cell,
+    /// written state; see [`Mixing::first_failure`]).
+    Agreed(Failure),
 }
 
 /// Where the walk to a target looks without a large neighbour, within this many cells.
@@ -50,7 +67,7 @@ struct Mixing<'a> {
     /// Near slots to mix, ascending.
     sources: &'a [usize],
     /// Wall normal `Σ A ν` of each near cell's sub-faces at t^{n+1}.
-    normal: Vec<[f64; 3]>,
+    normal: &'a [[f64; 3]],
     /// Offsets of the neighbours within one cell.
     span: Vec<[isize; 3]>,
     nvar: usize,
@@ -89,73 +106,93 @@ impl Embedded {
     /// Writes `U^{n+1}` of the updated near cells into the solver, mixing the small, uncovered
     /// and covered-with-content cells into their targets.
     ///
-    /// Collective: the groups' targets and the rings they widen into may lie on other ranks,
-    /// so the predicted states they read (each root and the cells within [`WIDEN_RINGS`] of a
-    /// group's members) are gathered first, and every rank computes every group; the solver
-    /// keeps the writes of its own cells. Only the sources' walks to their roots are shared out:
-    /// each rank walks from the sources in its own cells, and the pairs are gathered
-    /// ([`gather_roots`]).
+    /// Collective. Each rank finds the sources among its own updated cells, and the sources of
+    /// every rank are gathered ([`gather_sources`]); each rank walks from its own sources to
+    /// their roots, and the pairs are gathered with the sources' contents ([`gather_roots`]).
+    /// Each rank then sums the groups whose roots it holds, and every group's mixture is
+    /// gathered ([`Mixing::mixtures`]); every rank writes them all and the unmixed updated
+    /// cells of its own, and the solver keeps the writes of its own cells. If a group's mixture
+    /// is not physical, groups merge and widen into rings that may lie on other ranks: then the
+    /// contents of every updated cell ([`Embedded::gather_contents`]) and the predicted states
+    /// the groups read (each root and the cells within [`WIDEN_RINGS`] of a group's members)
+    /// are gathered, and every rank merges and mixes every group.
     pub(super) fn mix(
         &mut self,
         solver: &mut FluidSolver,
         report: &mut CorrectReport,
     ) -> Result<Mixed, EmbeddedError> {
         let near_scale = max_abs(&self.near.saved);
-        let sources = self.mix_sources(report, near_scale);
+        let sources = self.mix_sources(solver, report, near_scale);
         let normal = self.wall_normals();
-        let grid = &self.config.grid;
-        let nvar = grid.dim + 2;
-        let m = Mixing {
-            config: &self.config,
-            grid,
-            slot_of: &self.near.slot_of,
-            near: &self.near.cells,
-            new_lambda: &self.scratch.trial.solid_fraction,
-            old_lambda: &self.state.geom.solid_fraction,
-            face_fraction: &self.scratch.trial.face_fraction,
-            content: &self.scratch.content,
-            sources: &sources,
-            normal,
-            span: offsets(grid.dim, 1),
-            nvar,
-        };
-        let kind = &mut self.scratch.kind;
+        let nvar = self.config.grid.dim + 2;
         // NOTE: each source's walk to its root reads only what the mixing reads (none of it
         // changes while groups form), so the walks run in parallel on the fluid's pool and are
         // collected in the sources' order: the same groups on any number of threads. On a
         // decomposed grid each rank walks from its own sources (what the walks read is the same
-        // on every rank: the geometry, the wall normals and the sources, which every rank takes
-        // from every updated cell's content), and the pairs of every rank are gathered
+        // on every rank: the geometry, the wall normals and the sources, which every rank
+        // gathers), and the pairs of every rank are gathered with the sources' contents
         // (`gather_roots`): the same sorted list as one rank's.
-        let mut groups: Vec<(usize, usize)> = solver.install(|| {
-            (sources.par_iter())
-                .filter(|&&k| m.own(k))
-                .map(|&k| (m.root(k), k))
-                .collect()
-        });
+        let mut groups: Vec<(usize, usize)> = {
+            let m = Mixing::new(
+                &self.config,
+                &self.near,
+                &self.scratch.trial,
+                &self.state.geom,
+                &self.scratch.content,
+                &sources,
+                &normal,
+            );
+            solver.install(|| {
+                (sources.par_iter())
+                    .filter(|&&k| m.own(k))
+                    .map(|&k| (m.root(k), k))
+                    .collect()
+            })
+        };
         if self.config.block.is_some() {
-            groups = gather_roots(solver, &groups);
+            groups = gather_roots(solver, &groups, &mut self.scratch.content, nvar);
         }
         groups.sort_unstable();
+        // NOTE: the groups are mixed by their roots' ranks, and every mixture gathered
+        // (`mixtures`), unless a group's mixture is not physical: then groups merge and widen,
+        // which reads cells around them, and every rank mixes every group as before.
+        {
+            let m = Mixing::new(
+                &self.config,
+                &self.near,
+                &self.scratch.trial,
+                &self.state.geom,
+                &self.scratch.content,
+                &sources,
+                &normal,
+            );
+            let kind = &mut self.scratch.kind;
+            let mut out = Writes::default();
+            m.unmixed(kind, &mut out, true);
+            let failure = m.first_failure(kind, &groups, &out.writes);
+            if let Some((mixtures, failure)) = m.mixtures(solver, &groups, kind, failure) {
+                m.write_mixtures(&groups, &mixtures, kind, &mut out);
+                return Ok(m.written(solver, out, WrittenCheck::Agreed(failure)));
+            }
+        }
+        // The contents of every updated cell, which the merge and the rings read.
+        if self.config.block.is_some() {
+            self.gather_contents(solver);
+        }
+        let m = Mixing::new(
+            &self.config,
+            &self.near,
+            &self.scratch.trial,
+            &self.state.geom,
+            &self.scratch.content,
+            &sources,
+            &normal,
+        );
+        let kind = &mut self.scratch.kind;
+        let mut out = Writes::default();
         let mut predicted = m.predicted(solver, &groups);
         let groups = m.merge(groups, kind, &predicted, report);
-        let mut out = Writes::default();
-        // Updated, unmixed cells: U = content / α.
-        for (k, &c) in m.near.iter().enumerate() {
-            if kind[k] != CellKind::Updated || sources.binary_search(&k).is_ok() {
-                continue;
-            }
-            let a = m.alpha(c as usize);
-            if a <= COVERED_TOLERANCE {
-                // Covered, nothing to keep: the cell holds a ghost state.
-                continue;
-            }
-            let mut v = [0.0; NQ];
-            for q in 0..nvar {
-                v[q] = m.content[k][q] / a;
-            }
-            out.writes.push((c, v));
-        }
+        m.unmixed(kind, &mut out, false);
         // NOTE: a group that has taken in every cell no other group holds and is still not
         // physical may fail while the gas as a whole is physical, the other groups keeping
         // their surplus (a 0.24 m square at Mach 250 on 24² cells stopped at step 0 so). Then
@@ -195,24 +232,25 @@ impl Embedded {
             let n = one.groups.len();
             m.mix_group(&one, 0..n, kind, (&mut predicted, solver), &mut out, report)?;
         }
-        let mut writes = out.writes;
-        solver.set_cells(&writes);
-        // The last value written of each cell, by cell.
-        writes.reverse();
-        writes.sort_by_key(|w| w.0);
-        writes.dedup_by_key(|w| w.0);
-        Ok(Mixed {
-            cells: out.mixed,
-            written: writes,
-            leaving: out.leaving,
-        })
+        Ok(m.written(solver, out, WrittenCheck::Whole))
     }
 
     /// The near slots to mix, ascending: covered cells left with content, cells the solid
     /// uncovers, small cells and cells whose update is not physical. A cell of a crack that
     /// nothing has reached yet is left vacuum.
-    fn mix_sources(&mut self, report: &mut CorrectReport, near_scale: f64) -> Vec<usize> {
+    ///
+    /// Collective on a decomposed grid: each rank finds those of its own cells, from their
+    /// contents, and the sources, the uncovered cells' count and the largest residue dropped
+    /// of every rank are gathered ([`gather_sources`]).
+    fn mix_sources(
+        &mut self,
+        solver: &FluidSolver,
+        report: &mut CorrectReport,
+        near_scale: f64,
+    ) -> Vec<usize> {
+        let uncovered_before = report.uncovered_cells;
         let nvar = self.config.grid.dim + 2;
+        let (grid, block) = (&self.config.grid, self.config.block);
         let new_lambda = &self.scratch.trial.solid_fraction;
         let old_lambda = &self.state.geom.solid_fraction;
         let alpha = |c: usize| fluid_part(new_lambda[c]);
@@ -221,7 +259,9 @@ impl Embedded {
         let mut sources: Vec<usize> = Vec::new();
         for (k, &c) in self.near.cells.iter().enumerate() {
             let c = c as usize;
-            if self.scratch.kind[k] != CellKind::Updated {
+            if self.scratch.kind[k] != CellKind::Updated
+                || block.is_some_and(|b| !b.contains(grid.ijk(c)))
+            {
                 continue;
             }
             let a = alpha(c);
@@ -267,6 +307,14 @@ impl Embedded {
                 sources.push(k);
             }
         }
+        if block.is_some() {
+            let uncovered = report.uncovered_cells - uncovered_before;
+            let (all, uncovered, dropped) =
+                gather_sources(solver, &sources, uncovered, report.dropped);
+            report.uncovered_cells = uncovered_before + uncovered;
+            report.dropped = dropped;
+            sources = all;
+        }
         sources
     }
 
@@ -285,6 +333,35 @@ impl Embedded {
         terms.add_into(normal.as_flattened_mut());
         self.scratch.odd = terms;
         normal
+    }
+}
+
+impl<'a> Mixing<'a> {
+    /// What the mixing reads, with the sources and wall normals found.
+    fn new(
+        config: &'a Config,
+        near: &'a NearCells,
+        trial: &'a CutGeometry,
+        old: &'a CutGeometry,
+        content: &'a [[f64; NQ]],
+        sources: &'a [usize],
+        normal: &'a [[f64; 3]],
+    ) -> Self {
+        let grid = &config.grid;
+        Mixing {
+            config,
+            grid,
+            slot_of: &near.slot_of,
+            near: &near.cells,
+            new_lambda: &trial.solid_fraction,
+            old_lambda: &old.solid_fraction,
+            face_fraction: &trial.face_fraction,
+            content,
+            sources,
+            normal,
+            span: offsets(grid.dim, 1),
+            nvar: grid.dim + 2,
+        }
     }
 }
 

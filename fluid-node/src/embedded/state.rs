@@ -42,6 +42,9 @@ pub(super) struct Config {
     /// Whether the semi-implicit loads and solid flux take their lever arms on `F^n`
     /// (`levers.rs`; set with `run.solid_substeps` other than 1).
     pub(super) start_levers: bool,
+    /// Whether the mixing's groups go by their roots' ranks when none merges or widens
+    /// (`mix/by_root.rs`; on unless [`Embedded::set_mixing_by_root`] turns it off).
+    pub(super) mixing_by_root: bool,
     pub(super) grid: Grid,
     /// Ghost cells of the sweeps' stencil.
     pub(super) ng: usize,
@@ -114,6 +117,12 @@ impl Config {
         let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
         state_ok(&full, self.gamma, self.vacuum.0, self.vacuum.1)
     }
+
+    /// Whether a state written into a cell (its first `dim + 2` values) is acceptable: what
+    /// `Embedded::check_written` tests.
+    pub(super) fn written_ok(&self, written: &[f64; NQ]) -> bool {
+        self.physical(written, 1.0)
+    }
 }
 
 impl NearCells {
@@ -171,6 +180,7 @@ impl Embedded {
             },
             config: Config {
                 fracture: false,
+                mixing_by_root: true,
                 start_levers: false,
                 ng: params.ghost_cells(),
                 gamma: params.gamma,
@@ -221,6 +231,15 @@ impl Embedded {
     /// fluid's stiffness instead of pumping it.
     pub fn set_start_levers(&mut self, start: bool) {
         self.config.start_levers = start;
+    }
+
+    /// Whether the mixing's groups are summed by the ranks of their roots, and their mixtures
+    /// gathered, in a step where no group merges or widens (on by default). Off, every rank
+    /// merges and mixes every group in every step, the path of a step where one does; both
+    /// give the same bits (the test
+    /// `fv_ranks::the_mixing_by_root_gives_the_whole_mixings_bits` pins it).
+    pub fn set_mixing_by_root(&mut self, by_root: bool) {
+        self.config.mixing_by_root = by_root;
     }
 
     /// Replaces the accepted surface and kinematics (start of a run, or after a restore).

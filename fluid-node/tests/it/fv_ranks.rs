@@ -365,12 +365,16 @@ struct CoupledRun {
     state: Vec<u64>,
     mixed: usize,
     uncovered: usize,
+    /// Steps that mixed cells and merged or widened no group (the mixing by root takes them).
+    unmerged: usize,
 }
 
 /// `steps` coupled steps of the bodies `solid` moving at their velocities through the blast of
 /// `(grid, state)`, on `ranks` thread ranks; odd steps take the explicit scheme's solid flux.
 /// `jump`: the accepted surface of each step is moved `jump` cells (`jump` times the
-/// one-cell step at its velocity) instead of its velocity times the fluid's step.
+/// one-cell step at its velocity) instead of its velocity times the fluid's step. `by_root`:
+/// the mixing's groups by their roots' ranks (`Embedded::set_mixing_by_root`, on by default).
+#[allow(clippy::too_many_arguments)]
 fn coupled_run(
     dims: [usize; 3],
     grid: &Grid,
@@ -379,6 +383,7 @@ fn coupled_run(
     solid: &SolidFrame,
     steps: u64,
     jump: Option<f64>,
+    by_root: bool,
 ) -> CoupledRun {
     let ranks = dims.iter().product();
     let mut runs: Vec<Option<CoupledRun>> = on_thread_ranks(ranks, |comm| {
@@ -387,8 +392,9 @@ fn coupled_run(
         let mut s = FluidSolver::decomposed_as(grid, params, state, 2, Box::new(comm), dims)
             .expect("solver");
         let mut e = Embedded::new(&s, solid.clone()).expect("embedded");
+        e.set_mixing_by_root(by_root);
         let mut out = Vec::new();
-        let (mut mixed, mut uncovered) = (0, 0);
+        let (mut mixed, mut uncovered, mut unmerged) = (0, 0, 0);
         for n in 0..steps {
             let dt = s.max_dt().min(0.5 * e.one_cell_dt());
             let predicted = e.predict(&mut s, dt);
@@ -403,6 +409,9 @@ fn coupled_run(
                 .unwrap_or_else(|err| panic!("step {n}: {err}"));
             mixed += report.mixed_cells;
             uncovered += report.uncovered_cells;
+            if report.mixed_cells > 0 && report.merged_groups + report.widened_groups == 0 {
+                unmerged += 1;
+            }
             out.push(format!(
                 "{predicted:?} {on_current:?} {on_next:?} {report:?} {:?} {:?} {:?}",
                 e.totals(&s),
@@ -418,6 +427,7 @@ fn coupled_run(
             state,
             mixed,
             uncovered,
+            unmerged,
         })
     });
     runs[0].take().expect("rank 0 gathers")
@@ -448,14 +458,14 @@ fn assert_jumping_same_for_ranks(
     jump: Option<f64>,
     decomps: &[[usize; 3]],
 ) {
-    let one = coupled_run([1; 3], grid, state, params, solid, steps, jump);
+    let one = coupled_run([1; 3], grid, state, params, solid, steps, jump, true);
     eprintln!(
         "{name}: {} cells mixed, {} uncovered over {steps} steps",
         one.mixed, one.uncovered
     );
     assert!(one.mixed > 0 && one.uncovered > 0, "{name}: mixing happens");
     for &k in decomps {
-        let many = coupled_run(k, grid, state, params, solid, steps, jump);
+        let many = coupled_run(k, grid, state, params, solid, steps, jump, true);
         for (n, (a, b)) in one.steps.iter().zip(&many.steps).enumerate() {
             assert_eq!(a, b, "{name}: step {n} on 1 rank and {k:?}");
         }
@@ -654,6 +664,46 @@ fn a_moving_body_across_the_cuts_3d_is_bit_identical_on_slabs_and_blocks() {
         [1, 2, 4],
     ];
     assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &p, &solid, 8, &decomps);
+}
+
+/// The mixing's groups summed by the ranks of their roots, in the steps where no group merges
+/// or widens (`Embedded::set_mixing_by_root`, on by default), give the bits of the whole
+/// mixing (every group merged and mixed on every rank), on one rank and on blocks: the moving
+/// bodies of the 2-D and 3-D tests above, whose mixings take both paths (the 2-D body merges
+/// or widens groups in some steps).
+#[test]
+fn the_mixing_by_root_gives_the_whole_mixings_bits() {
+    let walls = [[BoundaryKind::Wall; 2]; 3];
+    let (grid, state) = blast(&[40, 48]);
+    let two = (
+        grid,
+        state,
+        params(5, walls),
+        moving_bodies_2d(),
+        10,
+        [2, 2, 1],
+    );
+    let (grid, state) = blast(&[16, 16, 24]);
+    let three = (
+        grid,
+        state,
+        params(5, walls),
+        moving_bodies_3d(),
+        8,
+        [1, 2, 2],
+    );
+    for (grid, state, p, solid, steps, blocks) in [two, three] {
+        for dims in [[1, 1, 1], blocks] {
+            let run = |by_root| coupled_run(dims, &grid, &state, &p, &solid, steps, None, by_root);
+            let (whole, by_root) = (run(false), run(true));
+            let name = format!("{}-D on {dims:?}", grid.dim);
+            assert!(by_root.unmerged > 0, "{name}: no step mixes by root");
+            for (n, (a, b)) in whole.steps.iter().zip(&by_root.steps).enumerate() {
+                assert_eq!(a, b, "{name}: step {n}, whole mixing and by root");
+            }
+            assert!(whole == by_root, "{name}: whole mixing and by root differ");
+        }
+    }
 }
 
 /// The bodies of the 2-D test on the 40 × 48 blast: a tilted block, a plate two cells thick
