@@ -51,6 +51,61 @@ impl Block {
         }
         block
     }
+
+    /// One past the last stored value of the block's cells (`NV` a cell).
+    fn end<const NV: usize>(&self) -> usize {
+        let last = self.bases[..self.count].iter().max().copied().unwrap_or(0);
+        (last + self.n.saturating_sub(1) * self.stride + 1) * NV
+    }
+
+    /// Asks the CPU to bring the block's cells at position `m` along the axis into the cache
+    /// (`u` the state, `NV` values a cell; a hint only, no access).
+    ///
+    /// NOTE: along y or z, a position's cells are a run of 640 bytes a row or a plane from the
+    /// next (3-D, 16 pencils): ten cache lines, too short for the hardware's stream prefetcher
+    /// to find before the run ends, so the gather waited on each run's loads (65 % of its
+    /// samples on one load). Along x the pencils are sixteen streams the hardware follows, and
+    /// a hint a cell costs little.
+    #[inline(always)]
+    fn prefetch<const NV: usize>(&self, u: *const f64, m: usize) {
+        let along = m * self.stride;
+        let bases = &self.bases[..self.count];
+        if self.count > 0 && bases[self.count - 1] == bases[0] + self.count - 1 {
+            let first = (bases[0] + along) * NV;
+            let last = (bases[0] + along + self.count) * NV - 1;
+            let mut byte = (first * 8) & !63;
+            while byte <= last * 8 {
+                prefetch_line(u.wrapping_byte_add(byte));
+                byte += 64;
+            }
+        } else {
+            for &base in bases {
+                let c = base + along;
+                prefetch_line(u.wrapping_add(c * NV));
+                prefetch_line(u.wrapping_add((c + 1) * NV - 1));
+            }
+        }
+    }
+}
+
+/// Positions along the axis a block's gather and scatter hint ahead of their copy
+/// ([`Block::prefetch`]).
+const AHEAD: usize = 4;
+
+/// A hint to the CPU to bring the cache line of `p` into the nearest cache (never an access:
+/// `p` need not be valid).
+///
+/// NOTE: the scatter takes the same read hint. `prefetchw` (the line in the state a store
+/// needs) gave the scatter 15–20 % more samples in two alternated profiles.
+#[inline(always)]
+fn prefetch_line(p: *const f64) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `prefetcht0` reads nothing and faults on no address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Fills `tile` with the cells of the pencils of `block`, pencil after pencil (`tile[k n + m]`
@@ -94,9 +149,18 @@ fn local_index(nvar: usize, fr: &[Option<usize>; 3]) -> [usize; NQ] {
 fn gather_cells<const NV: usize>(tile: &mut [State], u: &[f64], block: &Block, map: &[usize; NQ]) {
     let (src, keep) = source_index::<NV>(map);
     let n = block.n;
+    let bases = &block.bases[..block.count];
+    let tile = &mut tile[..block.count * n];
+    assert!(
+        block.end::<NV>() <= u.len(),
+        "the block's cells lie in the state"
+    );
     for m in 0..n {
+        if m + AHEAD < n {
+            block.prefetch::<NV>(u.as_ptr(), m + AHEAD);
+        }
         let along = m * block.stride;
-        for (k, &base) in block.bases[..block.count].iter().enumerate() {
+        for (k, &base) in bases.iter().enumerate() {
             let c = base + along;
             let cell: &[f64; NV] = u[c * NV..(c + 1) * NV].try_into().expect("NV values");
             tile[k * n + m] = if NV == NQ {
@@ -179,13 +243,22 @@ impl<'a> CellWriter<'a> {
         map: &[usize; NQ],
     ) {
         let n = block.n;
+        let bases = &block.bases[..block.count];
+        let tile = &tile[..block.count * n];
+        assert!(
+            block.end::<NV>() <= self.len,
+            "the block's cells lie in the state"
+        );
         for m in 0..n {
+            if m + AHEAD < n {
+                block.prefetch::<NV>(self.ptr, m + AHEAD);
+            }
             let along = m * block.stride;
-            for (k, &base) in block.bases[..block.count].iter().enumerate() {
+            for (k, &base) in bases.iter().enumerate() {
                 let c = base + along;
-                assert!((c + 1) * NV <= self.len, "cell {c} outside the state");
-                // SAFETY: in bounds (asserted); the caller guarantees that no other thread
-                // touches this cell, and `_out` that the slice outlives the writer.
+                // SAFETY: in bounds (the block's last cell is, asserted above); the caller
+                // guarantees that no other thread touches this cell, and `_out` that the slice
+                // outlives the writer.
                 let cell = unsafe { &mut *self.ptr.add(c * NV).cast::<[f64; NV]>() };
                 let local = &tile[k * n + m];
                 for j in 0..NV {
