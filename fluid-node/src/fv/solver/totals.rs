@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
-use crate::fv::isa::Isa;
+use crate::fv::isa::{Isa, prefetch_line};
 use crate::fv::slab::{put_block, rank_of, take_block};
 use crate::fv::solver::cfl::{RATE_LANES, RateParams, fastest, fold_rates};
 use crate::fv::solver::{FluidSolver, Totals};
@@ -407,6 +407,12 @@ fn sum_cells<const NV: usize, R: RunningSums<NV>>(
     let mut sums = R::start(acc);
     let mut fast: (f64, usize) = (0.0, first);
     for (g, group) in cells.chunks(RATE_LANES * NV).enumerate() {
+        // NOTE: the lines of the group eight ahead (2.5 kB in 3-D): the hardware's stream
+        // prefetcher alone left the pass waiting on its loads (160 → 135–140 samples).
+        let ahead = group.as_ptr().wrapping_add(8 * RATE_LANES * NV);
+        for line in 0..=RATE_LANES * NV / 8 {
+            prefetch_line(ahead.wrapping_add(8 * line));
+        }
         if let Some(rates) = rates
             && !fast.0.is_nan()
         {
