@@ -53,10 +53,12 @@ impl Block {
         block
     }
 
-    /// One past the last stored value of the block's cells (`NV` a cell).
+    /// One past the last stored value of the block's cells (`NV` a cell; 0 without cells).
     fn end<const NV: usize>(&self) -> usize {
-        let last = self.bases[..self.count].iter().max().copied().unwrap_or(0);
-        (last + self.n.saturating_sub(1) * self.stride + 1) * NV
+        match self.bases[..self.count].iter().max() {
+            Some(&last) if self.n > 0 => (last + (self.n - 1) * self.stride + 1) * NV,
+            _ => 0,
+        }
     }
 
     /// Whether the block's pencils are neighbours along the stored order (so that its cells at
