@@ -77,3 +77,19 @@ impl Default for Isa {
         Isa::best()
     }
 }
+
+/// A hint to the CPU to bring the cache line of `p` into the nearest cache (never an access:
+/// `p` need not be valid).
+///
+/// NOTE: `block.rs`'s scatter takes the same read hint. `prefetchw` (the line in the state a
+/// store needs) gave the scatter 15–20 % more samples in two alternated profiles.
+#[inline(always)]
+pub(crate) fn prefetch_line(p: *const f64) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `prefetcht0` reads nothing and faults on no address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}

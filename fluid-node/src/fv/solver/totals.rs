@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
 use crate::fv::euler::NQ;
-use crate::fv::isa::Isa;
+use crate::fv::isa::{Isa, prefetch_line};
 use crate::fv::slab::{put_block, rank_of, take_block};
 use crate::fv::solver::cfl::{RATE_LANES, RateParams, fastest, fold_rates};
 use crate::fv::solver::{FluidSolver, Totals};
@@ -357,7 +357,7 @@ fn sum_cells_on<const NV: usize>(
             // SAFETY: the CPU has AVX2 (checked on the line above).
             unsafe { sum_cells_avx2::<NV>(acc, cells, rates, first) }
         }
-        _ => sum_cells::<NV>(acc, cells, rates, first),
+        _ => sum_cells::<NV, Scalar<NV>>(acc, cells, rates, first),
     }
 }
 
@@ -370,7 +370,7 @@ fn sum_cells_avx2<const NV: usize>(
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV>(acc, cells, rates, first)
+    sum_cells::<NV, lanes::Avx2<NV>>(acc, cells, rates, first)
 }
 
 /// [`sum_cells`] compiled for AVX-512F (without FMA, `fv::isa`).
@@ -382,13 +382,14 @@ fn sum_cells_avx512<const NV: usize>(
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    sum_cells::<NV>(acc, cells, rates, first)
+    sum_cells::<NV, lanes::Avx512<NV>>(acc, cells, rates, first)
 }
 
 /// Adds the cells `cells` (`NV` stored values each: ρ, the momenta, E) into `acc` (the
-/// physical order), each value in turn, as [`CompensatedSum::add`] does; with `rates`, returns
-/// the fastest `(rate, cell)` of the cells (numbered from `first`) as `compute_max_dt` finds it:
-/// the first NaN, else the first of the largest rates (`(0, first)` without `rates`).
+/// physical order), each value in turn, as [`CompensatedSum::add`] does (the running sums
+/// `R` of the instruction set); with `rates`, returns the fastest `(rate, cell)` of the cells
+/// (numbered from `first`) as `compute_max_dt` finds it: the first NaN, else the first of the
+/// largest rates (`(0, first)` without `rates`).
 ///
 /// NOTE: the sums run in local variables and are stored into `acc` once at the end. Adding
 /// into `acc` in place kept its ten values in memory (the compiler cannot keep a `&mut` array
@@ -397,40 +398,221 @@ fn sum_cells_avx512<const NV: usize>(
 /// The rates are taken [`RATE_LANES`] cells at a time ([`RateParams::cell_rates`], the same
 /// bits as [`RateParams::cell_rate`], which takes the cells of a last short group).
 #[inline(always)]
-fn sum_cells<const NV: usize>(
+fn sum_cells<const NV: usize, R: RunningSums<NV>>(
     acc: &mut [CompensatedSum; NQ],
     cells: &[f64],
     rates: Option<&RateParams>,
     first: usize,
 ) -> (f64, usize) {
-    let slot = |j: usize| if j == NV - 1 { NQ - 1 } else { j };
-    let mut sum: [f64; NV] = std::array::from_fn(|j| acc[slot(j)].sum);
-    let mut comp: [f64; NV] = std::array::from_fn(|j| acc[slot(j)].comp);
+    let mut sums = R::start(acc);
     let mut fast: (f64, usize) = (0.0, first);
     for (g, group) in cells.chunks(RATE_LANES * NV).enumerate() {
+        // NOTE: the lines of the group eight ahead (2.5 kB in 3-D): the hardware's stream
+        // prefetcher alone left the pass waiting on its loads (160 → 135–140 samples).
+        let ahead = group.as_ptr().wrapping_add(8 * RATE_LANES * NV);
+        for line in 0..=RATE_LANES * NV / 8 {
+            prefetch_line(ahead.wrapping_add(8 * line));
+        }
         if let Some(rates) = rates
             && !fast.0.is_nan()
         {
             fold_rates::<NV>(rates, group, first + g * RATE_LANES, &mut fast);
         }
         for cell in group.chunks_exact(NV) {
+            sums.add(cell.try_into().expect("NV values"));
+        }
+    }
+    sums.finish(acc);
+    fast
+}
+
+/// The compensated sums of the `NV` stored values of the cells (value `j` into slot `j` of
+/// the physical order, the energy, last, into slot `NQ − 1`), as [`sum_cells`] runs them.
+trait RunningSums<const NV: usize> {
+    /// The sums of `acc` to continue.
+    fn start(acc: &[CompensatedSum; NQ]) -> Self;
+    /// [`CompensatedSum::add`] of each value of `cell` into its sum.
+    fn add(&mut self, cell: &[f64; NV]);
+    /// Stores the sums into `acc`.
+    fn finish(self, acc: &mut [CompensatedSum; NQ]);
+}
+
+/// The slot of the physical order that stored value `j` of a cell of `nv` values sums into.
+#[inline(always)]
+fn slot(nv: usize, j: usize) -> usize {
+    if j == nv - 1 { NQ - 1 } else { j }
+}
+
+/// [`RunningSums`] one value at a time (the baseline).
+struct Scalar<const NV: usize>([CompensatedSum; NV]);
+
+impl<const NV: usize> RunningSums<NV> for Scalar<NV> {
+    #[inline(always)]
+    fn start(acc: &[CompensatedSum; NQ]) -> Self {
+        Scalar(std::array::from_fn(|j| acc[slot(NV, j)]))
+    }
+
+    #[inline(always)]
+    fn add(&mut self, cell: &[f64; NV]) {
+        for j in 0..NV {
+            self.0[j].add(cell[j]);
+        }
+    }
+
+    #[inline(always)]
+    fn finish(self, acc: &mut [CompensatedSum; NQ]) {
+        for j in 0..NV {
+            acc[slot(NV, j)] = self.0[j];
+        }
+    }
+}
+
+/// [`RunningSums`] on the vector units: a cell's values in the lanes of one vector, each lane
+/// the running sum of one value, so that a cell takes one vector `TwoSum`.
+///
+/// NOTE: each lane makes [`CompensatedSum::add`]'s IEEE operations on its own value, cell
+/// after cell: the same sums in the same order as the scalar code, so the same bits (lanes
+/// beyond `NV` add zeros and are dropped). One value at a time, the ten sums' ~35 scalar
+/// operations a cell were most of the totals pass's instructions.
+#[cfg(target_arch = "x86_64")]
+mod lanes {
+    use std::arch::x86_64::*;
+
+    use super::{CompensatedSum, NQ, RunningSums, slot};
+
+    /// A cell's values in the lanes of one AVX-512 vector (`NV ≤ 8`).
+    pub(super) struct Avx512<const NV: usize> {
+        sum: __m512d,
+        comp: __m512d,
+    }
+
+    impl<const NV: usize> Avx512<NV> {
+        /// The lanes that hold a cell's values.
+        const MASK: __mmask8 = ((1u16 << NV) - 1) as __mmask8;
+    }
+
+    impl<const NV: usize> RunningSums<NV> for Avx512<NV> {
+        #[inline(always)]
+        fn start(acc: &[CompensatedSum; NQ]) -> Self {
+            let sum: [f64; 8] =
+                std::array::from_fn(|j| if j < NV { acc[slot(NV, j)].sum } else { 0.0 });
+            let comp: [f64; 8] =
+                std::array::from_fn(|j| if j < NV { acc[slot(NV, j)].comp } else { 0.0 });
+            // SAFETY: the caller runs on AVX-512F (`sum_cells_avx512`); 8 values each.
+            unsafe {
+                Avx512 {
+                    sum: _mm512_loadu_pd(sum.as_ptr()),
+                    comp: _mm512_loadu_pd(comp.as_ptr()),
+                }
+            }
+        }
+
+        #[inline(always)]
+        fn add(&mut self, cell: &[f64; NV]) {
+            // SAFETY: the caller runs on AVX-512F; the masked load reads the `NV` values alone.
+            unsafe {
+                let x = _mm512_maskz_loadu_pd(Self::MASK, cell.as_ptr());
+                let t = _mm512_add_pd(self.sum, x);
+                let z = _mm512_sub_pd(t, self.sum);
+                let err = _mm512_add_pd(
+                    _mm512_sub_pd(self.sum, _mm512_sub_pd(t, z)),
+                    _mm512_sub_pd(x, z),
+                );
+                self.comp = _mm512_add_pd(self.comp, err);
+                self.sum = t;
+            }
+        }
+
+        #[inline(always)]
+        fn finish(self, acc: &mut [CompensatedSum; NQ]) {
+            let (mut sum, mut comp) = ([0.0; 8], [0.0; 8]);
+            // SAFETY: the caller runs on AVX-512F; 8 values each.
+            unsafe {
+                _mm512_storeu_pd(sum.as_mut_ptr(), self.sum);
+                _mm512_storeu_pd(comp.as_mut_ptr(), self.comp);
+            }
             for j in 0..NV {
-                let mut c = CompensatedSum {
+                acc[slot(NV, j)] = CompensatedSum {
                     sum: sum[j],
                     comp: comp[j],
                 };
-                c.add(cell[j]);
-                (sum[j], comp[j]) = (c.sum, c.comp);
             }
         }
     }
-    for j in 0..NV {
-        acc[slot(j)] = CompensatedSum {
-            sum: sum[j],
-            comp: comp[j],
-        };
+
+    /// A cell's first four values in the lanes of one AVX2 vector, a fifth alone (`3 ≤ NV ≤ 5`).
+    pub(super) struct Avx2<const NV: usize> {
+        sum: __m256d,
+        comp: __m256d,
+        fifth: CompensatedSum,
     }
-    fast
+
+    impl<const NV: usize> Avx2<NV> {
+        /// The lanes that hold a cell's values (the sign bit set), of the first four.
+        const MASK: [i64; 4] = [-1, -1, -1, if NV > 3 { -1 } else { 0 }];
+    }
+
+    impl<const NV: usize> RunningSums<NV> for Avx2<NV> {
+        #[inline(always)]
+        fn start(acc: &[CompensatedSum; NQ]) -> Self {
+            let sum: [f64; 4] =
+                std::array::from_fn(|j| if j < NV { acc[slot(NV, j)].sum } else { 0.0 });
+            let comp: [f64; 4] =
+                std::array::from_fn(|j| if j < NV { acc[slot(NV, j)].comp } else { 0.0 });
+            // SAFETY: the caller runs on AVX2 (`sum_cells_avx2`); 4 values each.
+            unsafe {
+                Avx2 {
+                    sum: _mm256_loadu_pd(sum.as_ptr()),
+                    comp: _mm256_loadu_pd(comp.as_ptr()),
+                    fifth: if NV > 4 {
+                        acc[slot(NV, 4)]
+                    } else {
+                        CompensatedSum::default()
+                    },
+                }
+            }
+        }
+
+        #[inline(always)]
+        fn add(&mut self, cell: &[f64; NV]) {
+            // SAFETY: the caller runs on AVX2; the masked load reads the first `min(NV, 4)`
+            // values alone.
+            unsafe {
+                let mask = _mm256_loadu_si256(Self::MASK.as_ptr().cast());
+                let x = _mm256_maskload_pd(cell.as_ptr(), mask);
+                let t = _mm256_add_pd(self.sum, x);
+                let z = _mm256_sub_pd(t, self.sum);
+                let err = _mm256_add_pd(
+                    _mm256_sub_pd(self.sum, _mm256_sub_pd(t, z)),
+                    _mm256_sub_pd(x, z),
+                );
+                self.comp = _mm256_add_pd(self.comp, err);
+                self.sum = t;
+            }
+            if NV > 4 {
+                self.fifth.add(cell[4.min(NV - 1)]);
+            }
+        }
+
+        #[inline(always)]
+        fn finish(self, acc: &mut [CompensatedSum; NQ]) {
+            let (mut sum, mut comp) = ([0.0; 4], [0.0; 4]);
+            // SAFETY: the caller runs on AVX2; 4 values each.
+            unsafe {
+                _mm256_storeu_pd(sum.as_mut_ptr(), self.sum);
+                _mm256_storeu_pd(comp.as_mut_ptr(), self.comp);
+            }
+            for j in 0..NV.min(4) {
+                acc[slot(NV, j)] = CompensatedSum {
+                    sum: sum[j],
+                    comp: comp[j],
+                };
+            }
+            if NV > 4 {
+                acc[slot(NV, 4)] = self.fifth;
+            }
+        }
+    }
 }
 
 /// Compensated sum: the running sum and the sum of its exact rounding errors.
