@@ -126,6 +126,21 @@ impl Embedded {
         let sources = self.mix_sources(solver, report, near_scale);
         let normal = self.wall_normals();
         let nvar = self.config.grid.dim + 2;
+        // The mixing's view of the state, taken anew after each step that changes the contents
+        // (the fields, not `self`, are borrowed, so that `scratch.kind` stays writable).
+        macro_rules! mixing {
+            () => {
+                Mixing::new(
+                    &self.config,
+                    &self.near,
+                    &self.scratch.trial,
+                    &self.state.geom,
+                    &self.scratch.content,
+                    &sources,
+                    &normal,
+                )
+            };
+        }
         // NOTE: each source's walk to its root reads only what the mixing reads (none of it
         // changes while groups form), so the walks run in parallel on the fluid's pool and are
         // collected in the sources' order: the same groups on any number of threads. On a
@@ -134,15 +149,7 @@ impl Embedded {
         // gathers), and the pairs of every rank are gathered with the sources' contents
         // (`gather_roots`): the same sorted list as one rank's.
         let mut groups: Vec<(usize, usize)> = {
-            let m = Mixing::new(
-                &self.config,
-                &self.near,
-                &self.scratch.trial,
-                &self.state.geom,
-                &self.scratch.content,
-                &sources,
-                &normal,
-            );
+            let m = mixing!();
             solver.install(|| {
                 (sources.par_iter())
                     .filter(|&&k| m.own(k))
@@ -158,15 +165,7 @@ impl Embedded {
         // (`mixtures`), unless a group's mixture is not physical: then groups merge and widen,
         // which reads cells around them, and every rank mixes every group as before.
         {
-            let m = Mixing::new(
-                &self.config,
-                &self.near,
-                &self.scratch.trial,
-                &self.state.geom,
-                &self.scratch.content,
-                &sources,
-                &normal,
-            );
+            let m = mixing!();
             let kind = &mut self.scratch.kind;
             let mut out = Writes::default();
             m.unmixed(kind, &mut out, true);
@@ -180,15 +179,7 @@ impl Embedded {
         if self.config.block.is_some() {
             self.gather_contents(solver);
         }
-        let m = Mixing::new(
-            &self.config,
-            &self.near,
-            &self.scratch.trial,
-            &self.state.geom,
-            &self.scratch.content,
-            &sources,
-            &normal,
-        );
+        let m = mixing!();
         let kind = &mut self.scratch.kind;
         let mut out = Writes::default();
         let mut predicted = m.predicted(solver, &groups);
@@ -373,8 +364,12 @@ impl Mixing<'_> {
 
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
     fn own(&self, k: usize) -> bool {
-        let grid = self.grid;
-        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near[k] as usize)))
+        self.own_cell(self.near[k] as usize)
+    }
+
+    /// Whether cell `c` (whole grid) is a cell of this rank (every cell on one rank).
+    fn own_cell(&self, c: usize) -> bool {
+        (self.config.block).is_none_or(|b| b.contains(self.grid.ijk(c)))
     }
 
     /// Large enough to take others in, and holding fluid at t^n.

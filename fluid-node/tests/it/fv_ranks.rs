@@ -476,16 +476,22 @@ fn assert_jumping_same_for_ranks(
     }
 }
 
-/// Covered cells (Λ = 1) of `solid` on both sides of the plane `cut` of the last axis, in one
-/// pencil along it: a wall run across the cut.
-pub(crate) fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool {
-    let s = FluidSolver::new(
+/// A one-rank solver of `grid` with walls on every side and a zero state: what the geometry of a
+/// body on `grid` needs.
+fn walls_solver(grid: &Grid) -> FluidSolver {
+    FluidSolver::new(
         grid.clone(),
         params(5, [[BoundaryKind::Wall; 2]; 3]),
         FluidState::zeros(grid.dim, grid.n_cells()),
         1,
     )
-    .expect("solver");
+    .expect("solver")
+}
+
+/// Covered cells (Λ = 1) of `solid` on both sides of the plane `cut` of the last axis, in one
+/// pencil along it: a wall run across the cut.
+pub(crate) fn covers_across(grid: &Grid, solid: &SolidFrame, cut: usize) -> bool {
+    let s = walls_solver(grid);
     let e = Embedded::new(&s, solid.clone()).expect("embedded");
     let lambda = e.solid_fraction();
     let axis = grid.dim - 1;
@@ -512,13 +518,7 @@ fn jumps_past_the_near_cells(
     axis: usize,
     cut: usize,
 ) -> bool {
-    let s = FluidSolver::new(
-        grid.clone(),
-        params(5, [[BoundaryKind::Wall; 2]; 3]),
-        FluidState::zeros(grid.dim, grid.n_cells()),
-        1,
-    )
-    .expect("solver");
+    let s = walls_solver(grid);
     let before = Embedded::new(&s, solid.clone()).expect("embedded");
     let moved = embedded_support::translated(solid, jump * before.one_cell_dt());
     let after = Embedded::new(&s, moved).expect("embedded");

@@ -10,12 +10,6 @@ use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 
 impl Mixing<'_> {
-    /// Whether cell `c` (whole grid) is a cell of this rank (every cell on one rank).
-    fn own_cell(&self, c: usize) -> bool {
-        let grid = self.grid;
-        (self.config.block).is_none_or(|b| b.contains(grid.ijk(c)))
-    }
-
     /// The mixture of every group of `groups` (`(root, source slot)`, sorted), by root, and the
     /// first cell any rank found not physical (`failure`, this rank's, see
     /// [`Mixing::first_failure`]), if every group's mixture is physical; `None` if one is not,
