@@ -284,6 +284,7 @@ mod tests {
                 wet: vec![true; 4],
             },
             particles: Vec::new(),
+            changed_only: false,
         }
     }
 
@@ -351,6 +352,7 @@ mod tests {
                 wet: vec![true; 12],
             },
             particles: Vec::new(),
+            changed_only: false,
         };
         let (mut f, mut t) = (Vec::new(), Vec::new());
         integrate_pressure(&state, |_, _| 3.0, &mut f, &mut t);

@@ -52,6 +52,17 @@ pub enum Error {
     /// The embedded solid's error (a step of the cut-cell method).
     #[error(transparent)]
     Embedded(#[from] EmbeddedError),
+    /// A solid state of changed particles only (the solid's trials after a step's first, which
+    /// the coupler puts back together and never forwards).
+    #[error(
+        "solid state of step {step} iteration {iteration} holds only the particles that changed since the step's first trial; the fluid takes whole states"
+    )]
+    ChangesOnly {
+        /// Coupling step.
+        step: u64,
+        /// Fixed-point iteration.
+        iteration: u32,
+    },
     /// A solid state whose arrays do not fit together.
     #[error(
         "solid state of step {step} is malformed: dim {dim} (surface {surface_dim}), {positions} positions, {velocities} velocities, {angular_velocities} angular velocities, {vertex_values} vertex values, {element_indices} element indices for {elements} elements, {wet_flags} wet flags, {particle_ids} particle numbers (none, or one per particle)"

@@ -468,6 +468,12 @@ fn solid_frame(s: &SolidState) -> Result<SolidFrame, Error> {
     let surface = &s.surface;
     let ne = surface.n_elements();
     let step = s.stamp.step;
+    if s.changed_only {
+        return Err(Error::ChangesOnly {
+            step,
+            iteration: s.stamp.iteration,
+        });
+    }
     if !(dim == 2 || dim == 3)
         || surface.dim != s.dim
         || s.velocity.len() != n * dim

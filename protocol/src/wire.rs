@@ -7,8 +7,10 @@
 
 use serde::{Deserialize, Serialize};
 
+mod changes;
+
 /// Bumped on any change to the layout or meaning of a message.
-pub const PROTOCOL_VERSION: u32 = 6;
+pub const PROTOCOL_VERSION: u32 = 7;
 
 /// Number of rotational degrees of freedom for a spatial dimension: 0 in 1-D, 1 in 2-D, 3 in 3-D.
 pub const fn n_rot(dim: u32) -> usize {
@@ -250,7 +252,18 @@ pub struct SolidState {
     /// particle, in order. The solid sends all of them; the coupler sends the fluid only those
     /// the elements belong to (issue 39 item 4: in `clamped-beam-2d` 124 of 728, the rest
     /// inside the beam), and spreads the fluid's loads back onto all of them for the solid.
+    /// With [`SolidState::changed_only`]: the particles whose kinematics differ from the step's
+    /// first trial.
     pub particles: Vec<u32>,
+    /// `true`: a trial after the step's first that carries only the particles whose kinematics
+    /// differ, bit for bit, from that first trial's (listed in `particles`); every other particle
+    /// is as in the first trial, and `surface` is whole, its `element_particle` counting among
+    /// every particle. The solid sends its trials after the first so (issue 39 item 4: in the
+    /// semi-implicit scheme the internal forces are held, so only the particles the fluid pushes
+    /// move differently from one trial to the next: 124 of 728 in `clamped-beam-2d`), and the
+    /// coupler puts them back onto the first trial ([`SolidState::merged_onto`]) before anything
+    /// reads them. Never sent to the fluid.
+    pub changed_only: bool,
 }
 
 impl SolidState {

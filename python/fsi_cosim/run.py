@@ -164,10 +164,15 @@ class Run:
                 raise FileNotFoundError("no coupler-node: pass coupler= to open_run or set COSIM_COUPLER")
             d = parent
 
-    def exchange(self, step):
+    def exchange(self, step, whole=True):
         """Step `step`'s exchanged messages, as `coupler-node inspect RECORD --step N --export
         json` gives them: a list of dicts with `topic`, `sequence`, `kind` and `fields` (the
-        message's fields; arrays as lists, made numpy arrays here)."""
+        message's fields; arrays as lists, made numpy arrays here).
+
+        The solid sends a step's trials after the first as the particles that changed
+        (`changed_only`, their numbers in `particles`); with `whole` (the default) each of those
+        is put back onto the step's first trial, as the coupler does, so every `SolidState`
+        holds every particle; `whole=False` gives the messages as recorded."""
         out = subprocess.run(
             [self.coupler(), "inspect", self.record(), "--step", str(step), "--export", "json"],
             check=True, capture_output=True,
@@ -175,7 +180,37 @@ class Run:
         doc = json.loads(out.stdout)
         for m in doc["messages"]:
             m["fields"] = _arrays(m["fields"])
+        if whole:
+            _whole_trials(doc["messages"])
         return doc["messages"]
+
+
+_PER_PARTICLE = ("position", "orientation", "velocity", "angular_velocity", "diameter")
+
+
+def _whole_trials(messages):
+    """Puts each `changed_only` SolidState back onto the first whole one of its topic before it
+    (the step's first trial), in place, as `SolidState::merged_onto` does."""
+    first = {}
+    for m in sorted(messages, key=lambda m: (m["topic"], m["sequence"])):
+        if m["kind"] != "SolidState":
+            continue
+        f = m["fields"]
+        if not f.get("changed_only"):
+            first[m["topic"]] = f
+            continue
+        base = first.get(m["topic"])
+        if base is None:
+            raise ValueError(f"{m['topic']} #{m['sequence']}: changes without the step's first trial")
+        ids = np.asarray(f["particles"], dtype=np.int64)
+        n = len(base["diameter"])
+        for key in _PER_PARTICLE:
+            whole = np.array(base[key], dtype=np.float64).reshape(n, -1)
+            if len(ids):
+                whole[ids] = np.asarray(f[key], dtype=np.float64).reshape(len(ids), -1)
+            f[key] = whole.reshape(-1)
+        f["particles"] = np.array([], dtype=np.int64)
+        f["changed_only"] = False
 
 
 def _arrays(value):

@@ -125,6 +125,7 @@ impl PrescribedDouble {
             diameter: vec![2.0 * self.half.iter().map(|h| h * h).sum::<f64>().sqrt()],
             surface: self.surface(x),
             particles: Vec::new(),
+            changed_only: false,
         }
     }
 

@@ -384,6 +384,7 @@ impl SolidModel for RealSolid {
             diameter,
             surface: Self::surface(&trial.wet),
             particles: Vec::new(),
+            changed_only: false,
         })
     }
 
@@ -420,6 +421,7 @@ impl SolidModel for RealSolid {
             diameter: self.diameters(),
             surface: Self::surface(self.solid.wet_surface()),
             particles: Vec::new(),
+            changed_only: false,
         };
         for p in 0..n {
             let id = ParticleId(p as u32);

@@ -5,7 +5,7 @@
 
 use protocol::session::{fail, run_node, unexpected};
 use protocol::transport::Link;
-use protocol::wire::{Decision, Message, NodeKind, Stamp, StepPlan};
+use protocol::wire::{Decision, Message, NodeKind, SolidState, Stamp, StepPlan};
 
 use crate::model::SolidModel;
 
@@ -23,6 +23,9 @@ fn advance(
         .begin_step(plan)
         .map_err(|e| fail(link, plan.stamp, e.to_string()))?;
     if coupled {
+        // The step's first trial, whole: the later ones go out as the particles that differ
+        // from it (`SolidState::changes_from`; issue 39 item 4).
+        let mut first: Option<SolidState> = None;
         loop {
             let loads = match link.recv()? {
                 Message::InterfaceLoads(l) => l,
@@ -32,7 +35,13 @@ fn advance(
                 .trial(plan, Some(&loads))
                 .map_err(|e| fail(link, loads.stamp, e.to_string()))?;
             trial.stamp = loads.stamp;
-            link.send(&Message::SolidState(trial))?;
+            match &first {
+                Some(first) => link.send(&Message::SolidState(trial.changes_from(first)))?,
+                None => {
+                    link.send(&Message::SolidState(trial.clone()))?;
+                    first = Some(trial);
+                }
+            }
             let decision = match link.recv()? {
                 Message::FixedPointDecision(d) => d,
                 other => return Err(unexpected(&other, "a FixedPointDecision")),

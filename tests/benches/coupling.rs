@@ -42,6 +42,7 @@ fn trial_state(n_triangles: usize) -> SolidState {
             wet: vec![true; n_triangles],
         },
         particles: Vec::new(),
+        changed_only: false,
     }
 }
 

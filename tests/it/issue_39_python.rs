@@ -128,10 +128,17 @@ fn the_python_reader_reads_what_the_run_wrote() {
     assert_eq!(f("particle_last_x"), x[x.len() - 3]);
     assert_eq!(f("particle_last_sigma_n"), sigma[sigma.len() - 1]);
 
+    exchange_matches(&rec, step, &py);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Step `step`'s exchanged messages as the reader gives them (`py`, through `coupler-node inspect
+/// --step`) against the record `rec`: as recorded, and the solid's trials put back whole.
+fn exchange_matches(rec: &record::Recording, step: u64, py: &Value) {
     // One step's exchanged messages (through `coupler-node inspect --step`).
     // (`inspect` lists the step's diagnostics with its frames.)
     let at_step: Vec<_> = rec.messages.iter().filter(|m| m.step == step).collect();
-    assert_eq!(u("exchange_messages"), at_step.len() as u64);
+    assert_eq!(py["exchange_messages"].as_u64(), Some(at_step.len() as u64));
     // Each SolidState: (topic, sequence, positions, first position), sorted.
     let mut states: Vec<(String, u64, usize, f64)> = at_step
         .iter()
@@ -162,5 +169,25 @@ fn the_python_reader_reads_what_the_run_wrote() {
         })
         .collect();
     assert_eq!(got, states);
-    let _ = std::fs::remove_dir_all(&dir);
+    // Put back whole (`Run.exchange`'s default): every trial of the solid as long as the step's
+    // first, none left as changes. (The solid sends its later trials as their changes.)
+    let first_len = at_step
+        .iter()
+        .filter(|m| m.topic == "/solid-to-coupler")
+        .find_map(|m| match codec::decode(&m.data).expect("a frame").1 {
+            Message::SolidState(s) if !s.changed_only => Some(s.position.len() as u64),
+            _ => None,
+        })
+        .expect("the step's first trial");
+    let changes = at_step
+        .iter()
+        .filter(|m| m.topic == "/solid-to-coupler")
+        .filter(|m| {
+            matches!(codec::decode(&m.data).expect("a frame").1,
+                Message::SolidState(s) if s.changed_only)
+        })
+        .count();
+    assert!(changes > 0, "no trial of step {step} sent as its changes");
+    assert_eq!(py["whole_state_lengths"], serde_json::json!([first_len]));
+    assert_eq!(py["whole_states_changed_only"], serde_json::json!(0));
 }

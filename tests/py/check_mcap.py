@@ -8,7 +8,7 @@ Opens the file, reads every message, and checks that
     (bus and checkpoint channels: "bincode", schema "protocol::wire::Message"/"bincode-serde";
     "/diagnostics": "json", schema "cosim.Diagnostics"/"jsonschema" holding a JSON object);
     topics are '/'-rooted (record layout 2),
-  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 6,
+  - every bincode message starts with the frame magic b"FSI\\0" and protocol version 7,
   - the Foxglove channels ("/foxglove/solid": schema "foxglove.SceneUpdate", "/foxglove/fluid":
     "foxglove.Grid"; "json"/"jsonschema") hold JSON objects whose timestamp, log time and
     publish time are the same simulated time (they are views of the output files: counted
@@ -43,7 +43,7 @@ FRAME_TOPICS = {
 }
 DIAGNOSTICS = "/diagnostics"
 FOXGLOVE = {"/foxglove/solid": "foxglove.SceneUpdate", "/foxglove/fluid": "foxglove.Grid"}
-PROTOCOL_VERSION = 6
+PROTOCOL_VERSION = 7
 
 
 class CheckError(Exception):

@@ -29,7 +29,9 @@ def main(path, step):
     fluid = run.fluid(k)
     p = fluid.grid("p")
     solid = run.solid(k)
-    exchange = run.exchange(step)
+    exchange = run.exchange(step, whole=False)
+    # The solid's trials put back whole: every one as long as the step's first.
+    whole = [m for m in run.exchange(step) if m["kind"] == "SolidState"]
     state = [m for m in exchange if m["kind"] == "SolidState"]
     out = {
         "steps": int(run.summary["steps"]),
@@ -50,6 +52,9 @@ def main(path, step):
         "particle_last_x": x(solid.points[-1, 0]),
         "particle_last_sigma_n": x(solid["sigma_n"][-1]),
         "exchange_messages": len(exchange),
+        "whole_state_lengths": sorted({int(len(m["fields"]["position"])) for m in whole
+                                       if m["topic"] == "/solid-to-coupler"}),
+        "whole_states_changed_only": sum(bool(m["fields"]["changed_only"]) for m in whole),
         # Each SolidState: topic, sequence, its positions' length and first value.
         "exchange_states": sorted(
             [m["topic"], m["sequence"], int(len(m["fields"]["position"])), x(m["fields"]["position"][0])]

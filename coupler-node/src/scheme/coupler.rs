@@ -45,6 +45,9 @@ pub struct Coupler {
     pub(super) substep_bound: Option<Proposal>,
     /// Solid sub-steps of the agreed step (1 without `run.solid_substeps`).
     pub(super) substeps: u32,
+    /// The current step's first trial, whole: the solid sends the later ones as the particles
+    /// that changed (`SolidState::changed_only`).
+    pub(super) first_trial: Option<SolidState>,
 }
 
 /// Where the handshake stands; each phase holds what it has collected so far.
@@ -92,6 +95,7 @@ impl Coupler {
             stale_before: 0,
             substep_bound: None,
             substeps: 1,
+            first_trial: None,
         }
     }
 

@@ -66,6 +66,7 @@ pub(super) fn for_fluid(s: &SolidState) -> SolidState {
         diameter: pick(&s.diameter, 1),
         surface,
         particles: kept,
+        changed_only: false,
     }
 }
 
@@ -100,6 +101,7 @@ mod tests {
                 wet: vec![true, false, true],
             },
             particles: Vec::new(),
+            changed_only: false,
         }
     }
 

@@ -63,6 +63,12 @@ impl Coupler {
                 self.initial_totals.push(totals);
             }
             Message::SolidState(state) if matches!(self.phase, Phase::Greeting { .. }) => {
+                if state.changed_only {
+                    return Err(CouplerError::Invalid {
+                        from,
+                        what: "the initial SolidState holds only changed particles".into(),
+                    });
+                }
                 check_state(from, &state)?;
                 if let Phase::Greeting { surface, .. } = &mut self.phase {
                     *surface = true;
@@ -106,6 +112,7 @@ impl Coupler {
                 }
             }
             Message::SolidState(state) => {
+                let state = self.whole_trial(from, state)?;
                 check_state(from, &state)?;
                 self.on_trial(state, actions)?;
             }
@@ -130,6 +137,37 @@ impl Coupler {
             }
         }
         self.advance(actions)
+    }
+}
+
+impl Coupler {
+    /// The whole trial of a `SolidState` from the solid: a trial of changes only put back onto
+    /// the step's first trial, which is kept when it arrives.
+    fn whole_trial(
+        &mut self,
+        from: NodeKind,
+        state: SolidState,
+    ) -> Result<SolidState, CouplerError> {
+        let stamp = state.stamp;
+        if !state.changed_only {
+            if stamp.iteration == 0 {
+                self.first_trial = Some(state.clone());
+            }
+            return Ok(state);
+        }
+        let invalid = |what: String| CouplerError::Invalid {
+            from,
+            what: format!(
+                "SolidState at step {} iteration {} (changed particles only): {what}",
+                stamp.step, stamp.iteration
+            ),
+        };
+        let first = self
+            .first_trial
+            .as_ref()
+            .filter(|f| f.stamp.step == stamp.step && stamp.iteration > 0)
+            .ok_or_else(|| invalid("the step's first trial did not come whole".into()))?;
+        state.merged_onto(first).map_err(invalid)
     }
 }
 

@@ -27,6 +27,13 @@ struct World {
     revision_from: Option<u64>,
     /// With `run.solid_substeps`: the solid's stable step, its second proposal (iteration 1).
     substep_bound: Option<f64>,
+    /// A second particle that never moves (inside the solid), in every state.
+    interior: bool,
+    /// `Some(false)`: the solid sends its trials after a step's first as their changes
+    /// (`SolidState::changes_from`); `Some(true)`: every trial, the first as well.
+    changes: Option<bool>,
+    /// The solid's whole first trial of the current step.
+    first: Option<SolidState>,
     sent: Vec<(NodeKind, Message)>,
 }
 
@@ -104,6 +111,7 @@ fn state(stamp: Stamp, x: f64) -> SolidState {
             wet: vec![true],
         },
         particles: Vec::new(),
+        changed_only: false,
     }
 }
 
@@ -127,7 +135,38 @@ impl World {
             surface_x: 0.0,
             revision_from: None,
             substep_bound: None,
+            interior: false,
+            changes: None,
+            first: None,
             sent: Vec::new(),
+        }
+    }
+
+    /// `s` with the interior particle at (5, 0) when the world has one.
+    fn with_interior(&self, mut s: SolidState) -> SolidState {
+        if self.interior {
+            s.position.extend([5.0, 0.0]);
+            s.orientation.push(0.25);
+            s.velocity.extend([0.0, 0.0]);
+            s.angular_velocity.push(0.0);
+            s.diameter.push(1.0);
+        }
+        s
+    }
+
+    /// A trial as the solid sends it (see [`World::changes`]).
+    fn as_sent(&mut self, trial: SolidState) -> SolidState {
+        let Some(always) = self.changes else {
+            return trial;
+        };
+        if trial.stamp.iteration == 0 {
+            self.first = Some(trial.clone());
+        }
+        let first = self.first.as_ref().expect("a first trial");
+        if trial.stamp.iteration > 0 || always {
+            trial.changes_from(first)
+        } else {
+            trial
         }
     }
 
@@ -140,7 +179,7 @@ impl World {
         inbox.push_back((NodeKind::Solid, totals(NodeKind::Solid, 0, 0.0)));
         inbox.push_back((
             NodeKind::Solid,
-            Message::SolidState(state(Stamp::step(0), 0.0)),
+            Message::SolidState(self.with_interior(state(Stamp::step(0), 0.0))),
         ));
         // The fluid proposes before the coupler has seen the solid: it must be queued.
         inbox.push_back((NodeKind::Fluid, proposal(0, self.fluid_dt)));
@@ -202,10 +241,11 @@ impl World {
                             (NodeKind::Solid, Message::InterfaceLoads(l)) => {
                                 let x =
                                     self.a + self.drift * l.stamp.step as f64 + self.b * l.force[0];
-                                let mut answer = state(l.stamp, x);
+                                let mut answer = self.with_interior(state(l.stamp, x));
                                 if self.revision_from.is_some_and(|from| l.stamp.step >= from) {
                                     answer.surface.revision = 1;
                                 }
+                                let answer = self.as_sent(answer);
                                 inbox.push_back((NodeKind::Solid, Message::SolidState(answer)));
                             }
                             (NodeKind::Solid, Message::FixedPointDecision(d))
@@ -595,4 +635,58 @@ fn criterion_22_weights_rotation_by_diameter() {
         "{}",
         criterion_22(&a, &b)
     );
+}
+
+#[test]
+fn trials_sent_as_their_changes_couple_as_the_whole_trials() {
+    let run = |changes: Option<bool>| {
+        let mut world = World::new(1.0, 0.9, 1.0);
+        world.drift = 0.1;
+        world.interior = true;
+        world.changes = changes;
+        let mut coupler = Coupler::new(cfg(Scheme::SemiImplicit, Relaxation::IqnIls, vec![0.3]));
+        let reports = world.run(&mut coupler).map(|(r, _)| r);
+        (reports, world)
+    };
+    let (whole, whole_world) = run(None);
+    let (changed, changed_world) = run(Some(false));
+    let (whole, changed) = (whole.expect("converges"), changed.expect("converges"));
+    // The same steps, residuals and relaxation to the bit, and the same messages to the fluid.
+    let key = |r: &StepReport| {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        (
+            r.step,
+            r.dt.to_bits(),
+            bits(&r.residuals),
+            bits(&r.relaxation),
+            r.columns.clone(),
+        )
+    };
+    assert_eq!(
+        whole.iter().map(key).collect::<Vec<_>>(),
+        changed.iter().map(key).collect::<Vec<_>>()
+    );
+    let to_fluid = |w: &World| {
+        w.sent
+            .iter()
+            .filter(|(to, _)| *to == NodeKind::Fluid)
+            .map(|(_, m)| format!("{m:?}"))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(to_fluid(&whole_world), to_fluid(&changed_world));
+    assert!(
+        whole.iter().any(|r| r.iterations > 1),
+        "no second trial to send as changes"
+    );
+    // A first trial sent as changes has nothing to put them onto: refused with the reason.
+    match run(Some(true)).0 {
+        Err(CouplerError::Invalid { from, what }) => {
+            assert_eq!(from, NodeKind::Solid);
+            assert!(
+                what.contains("the step's first trial did not come whole"),
+                "{what}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
 }

@@ -56,6 +56,7 @@ fn solid_state(step: u64, iteration: u32) -> Message {
             wet: vec![true],
         },
         particles: Vec::new(),
+        changed_only: false,
     })
 }
 

@@ -65,6 +65,7 @@ fn every_message() -> Vec<Message> {
             diameter: vec![0.05],
             surface: surface(),
             particles: Vec::new(),
+            changed_only: false,
         }),
         Message::FixedPointDecision(FixedPointDecision {
             stamp,

@@ -1,8 +1,9 @@
-//! Integration tests of `protocol`, one test binary: the codec, the scene schema and its
-//! reference, the run keys, and the iceoryx2 bus between real ends.
+//! Integration tests of `protocol`, one test binary: the codec, trials sent as their changes,
+//! the scene schema and its reference, the run keys, and the iceoryx2 bus between real ends.
 
 #[cfg(feature = "bus")]
 mod bus;
+mod changed_trials;
 mod codec;
 mod issue_11_validation;
 mod run_keys;
