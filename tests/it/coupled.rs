@@ -36,11 +36,24 @@ pub(crate) fn totals(run: &InProcess, node: NodeKind) -> Vec<ConservedTotals> {
         .collect()
 }
 
+/// The solid's states as the coupler reads them: its later trials of a step, sent as the
+/// particles that changed, put back onto the step's first (`SolidState::merged_onto`).
 pub(crate) fn solid_states(run: &InProcess) -> Vec<SolidState> {
+    let mut first: Option<SolidState> = None;
     sent_by(run, NodeKind::Solid)
         .into_iter()
         .filter_map(|m| match m {
-            Message::SolidState(s) => Some(s),
+            Message::SolidState(s) if s.changed_only => {
+                let base = first.as_ref().expect("a whole trial before the changes");
+                Some(
+                    s.merged_onto(base)
+                        .expect("changes that fit the first trial"),
+                )
+            }
+            Message::SolidState(s) => {
+                first = Some(s.clone());
+                Some(s)
+            }
             _ => None,
         })
         .collect()
