@@ -43,8 +43,7 @@ use crate::fv::osmp::{
 /// and entry 0, where the face loop writes, start cache lines (`isa::AlignedVec`).
 type CellVec = AlignedVec<0>;
 /// An array over the interfaces of a strip: entry `CARRY − 1`, where the interface pass, the
-/// speeds' and the waves' products start, starts a cache line (`Ψ` and the face loop read
-/// them from `CARRY / 2 + R` on, which does not).
+/// speeds and the products start, starts a cache line (not `CARRY / 2 + R`, where `Ψ` reads).
 type InterfaceVec = AlignedVec<INTERFACE_PAD>;
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
@@ -104,9 +103,8 @@ impl Strip {
                 .expect("N entries");
             *dst = *src;
         };
-        // NOTE: plain loops: over chained iterators of the arrays (`AlignedVec`s, taken as
-        // slices by the closure) the moves became a call of `Chain::fold` a strip, out of the
-        // kernel (168 of 2,626 samples of a 128³ run).
+        // NOTE: plain loops: over chained iterators of the arrays the moves were a call of
+        // `Chain::fold` a strip, out of the kernel (168 of 2,626 samples of a 128³ run).
         let c = &mut self.cells;
         for v in &mut c.q {
             mv(v);
@@ -306,10 +304,8 @@ fn cell_loop(
 /// sides, physical fluxes and vacuum flags. Its outputs are separate `&mut` arguments (see
 /// [`interface_loop`]; the flux's five in one array), each cut to the loop's length.
 ///
-/// NOTE: with its outputs cut from one `&mut CellLine`, the loop compared their addresses
-/// with its inputs' at run time before the vector loop; once the strip's arrays were 64-byte
-/// aligned (`CellVec`) a check failed and the loop ran on its scalar copy (9 % of the kernel's
-/// samples on scalar `vsqrtsd`, `vdivsd`, ...).
+/// NOTE: with its outputs cut from one `&mut CellLine` the loop checked them against its
+/// inputs at run time; with the arrays aligned (`CellVec`) it then ran on its scalar copy.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn cell_pass(
