@@ -93,3 +93,63 @@ pub(crate) fn prefetch_line(p: *const f64) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = p;
 }
+
+/// The f64 values of one cache line, aligned to it.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct CacheLine([f64; 8]);
+
+/// A growable array of `f64` (a slice through `Deref`) whose entry `8 k − PAD` starts a 64-byte
+/// cache line, for the line kernel's scratch arrays: a loop over entries from such an index
+/// on reads and writes each vector of AVX-512 from one line, not two.
+///
+/// NOTE: a `Vec<f64>` is 16-byte aligned by the allocator, so a vector of 8 values at an
+/// arbitrary entry straddled two lines 7 times in 8 (`line/strip.rs` states which entries its
+/// loops start at, and the `PAD` of each array).
+#[derive(Clone, Debug, Default)]
+pub struct AlignedVec<const PAD: usize> {
+    /// The storage: `PAD` values of padding, then the entries.
+    lines: Vec<CacheLine>,
+    /// Entries.
+    len: usize,
+}
+
+impl<const PAD: usize> AlignedVec<PAD> {
+    /// Resizes to `len` entries, new ones `value` (as `Vec::resize`; keeps the capacity).
+    pub fn resize(&mut self, len: usize, value: f64) {
+        let old = self.len;
+        self.lines
+            .resize((PAD + len).div_ceil(8), CacheLine::default());
+        self.len = len;
+        if len > old {
+            self[old..].fill(value);
+        }
+    }
+}
+
+impl<const PAD: usize> std::ops::Deref for AlignedVec<PAD> {
+    type Target = [f64];
+
+    #[inline(always)]
+    fn deref(&self) -> &[f64] {
+        if self.len == 0 {
+            return &[];
+        }
+        // SAFETY: `CacheLine` is `repr(C)` around `[f64; 8]` (64 bytes, no padding), so the
+        // lines are `8 × lines.len() ≥ PAD + len` initialised values in a row.
+        unsafe { std::slice::from_raw_parts(self.lines.as_ptr().cast::<f64>().add(PAD), self.len) }
+    }
+}
+
+impl<const PAD: usize> std::ops::DerefMut for AlignedVec<PAD> {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [f64] {
+        if self.len == 0 {
+            return &mut [];
+        }
+        // SAFETY: as in `deref`, through the unique borrow of the lines.
+        unsafe {
+            std::slice::from_raw_parts_mut(self.lines.as_mut_ptr().cast::<f64>().add(PAD), self.len)
+        }
+    }
+}

@@ -11,6 +11,16 @@
 //! vectorises them. What depends only on a speed ([`SpeedLine`]) is computed once for the
 //! entropy and shear waves, which travel together.
 
+use crate::fv::isa::AlignedVec;
+
+/// The padding of the interface arrays ([`SpeedLine`], [`WaveLine`]; `isa::AlignedVec`): the
+/// line kernel's strips write them from entry 15 on (`CARRY − 1`, `line/strip.rs`), which then
+/// starts a cache line.
+pub const INTERFACE_PAD: usize = 1;
+
+/// An array over the interfaces of a line.
+type InterfaceVec = AlignedVec<INTERFACE_PAD>;
+
 /// Courant numbers and speeds below this are treated as zero in the bounds (avoids 0/0) [-].
 const EPS: f64 = 1e-12;
 
@@ -84,15 +94,15 @@ pub fn curvature_m4(d_l: f64, d_r: f64) -> f64 {
 #[derive(Clone, Debug, Default)]
 pub struct SpeedLine {
     /// Eigenvalue λ [m/s] (filled by the caller).
-    pub lam: Vec<f64>,
+    pub lam: InterfaceVec,
     /// Courant number ν = σ|λ| [-].
-    pub nu: Vec<f64>,
+    pub nu: InterfaceVec,
     /// `1 / max(ν, EPS)` [-].
-    pub inv_nu: Vec<f64>,
+    pub inv_nu: InterfaceVec,
     /// `1 / max(|λ|, EPS)` [s/m].
-    pub inv_lam: Vec<f64>,
+    pub inv_lam: InterfaceVec,
     /// `c_q(ν)`, q = 1..5 (only the first [`n_coefficients`] are filled).
-    pub c: [Vec<f64>; 5],
+    pub c: [InterfaceVec; 5],
 }
 
 impl SpeedLine {
@@ -164,12 +174,12 @@ impl SpeedLine {
 #[derive(Clone, Debug, Default)]
 pub struct WaveLine {
     /// Strength α (units of the conserved variables; filled by the caller).
-    pub alpha: Vec<f64>,
+    pub alpha: InterfaceVec,
     /// `D = (1−ν) α` and its products with `c_1..c_5`: `d[0]` is `D`, `d[q]` is `c_q D`
     /// (only `1 + n_coefficients` arrays are filled).
-    pub d: [Vec<f64>; 6],
+    pub d: [InterfaceVec; 6],
     /// `d^{M4}` at each interface (curvature of `λα`).
-    pub dm4: Vec<f64>,
+    pub dm4: InterfaceVec,
 }
 
 impl WaveLine {

@@ -34,8 +34,17 @@ use crate::fv::euler::{
     NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
-use crate::fv::isa::Isa;
-use crate::fv::osmp::{SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius};
+use crate::fv::isa::{AlignedVec, Isa};
+use crate::fv::osmp::{
+    INTERFACE_PAD, SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius,
+};
+
+/// An array over the cells (and faces) of a strip: entry `CARRY`, where the cell pass starts,
+/// and entry 0, where the face loop writes, start cache lines (`isa::AlignedVec`).
+type CellVec = AlignedVec<0>;
+/// An array over the interfaces of a strip: entry `CARRY − 1`, where the interface pass, the
+/// speeds and the products start, starts a cache line (not `CARRY / 2 + R`, where `Ψ` reads).
+type InterfaceVec = AlignedVec<INTERFACE_PAD>;
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
@@ -64,7 +73,7 @@ pub(super) struct Strip {
     speeds: [SpeedLine; 3],
     waves: [WaveLine; NQ],
     /// The regular face fluxes, one array per component.
-    face_q: [Vec<f64>; NQ],
+    face_q: [CellVec; NQ],
     /// Whether each cell is vacuum, each interface's average valid, each face's linearised
     /// star states physical.
     vacuum: Vec<bool>,
@@ -86,7 +95,7 @@ impl Strip {
     fn carry(&mut self, shift: usize, nw: usize, nd: usize) {
         assert!(shift >= CARRY, "strips of {shift} cells (at least {CARRY})");
         const N: usize = CARRY - FIRST_READ;
-        let mv = |v: &mut Vec<f64>| {
+        let mv = |v: &mut [f64]| {
             let (head, tail) = v.split_at_mut(shift);
             let src: &[f64; N] = tail[FIRST_READ..CARRY].try_into().expect("N entries");
             let dst: &mut [f64; N] = (&mut head[FIRST_READ..CARRY])
@@ -94,23 +103,39 @@ impl Strip {
                 .expect("N entries");
             *dst = *src;
         };
+        // NOTE: plain loops: over chained iterators of the arrays the moves were a call of
+        // `Chain::fold` a strip, out of the kernel (168 of 2,626 samples of a 128³ run).
         let c = &mut self.cells;
-        c.q.iter_mut()
-            .chain(&mut c.vel)
-            .chain(&mut c.flux)
-            .for_each(mv);
-        [&mut c.sqrt_rho, &mut c.h, &mut self.roe.h, &mut self.roe.c]
-            .into_iter()
-            .for_each(mv);
-        self.roe.vel.iter_mut().for_each(mv);
+        for v in &mut c.q {
+            mv(v);
+        }
+        for v in &mut c.vel {
+            mv(v);
+        }
+        for v in &mut c.flux {
+            mv(v);
+        }
+        for v in [&mut c.sqrt_rho, &mut c.h] {
+            mv(v);
+        }
+        for v in [&mut self.roe.h, &mut self.roe.c] {
+            mv(v);
+        }
+        for v in &mut self.roe.vel {
+            mv(v);
+        }
         for sp in &mut self.speeds {
-            [&mut sp.lam, &mut sp.nu, &mut sp.inv_nu, &mut sp.inv_lam]
-                .into_iter()
-                .for_each(mv);
+            for v in [&mut sp.lam, &mut sp.nu, &mut sp.inv_nu, &mut sp.inv_lam] {
+                mv(v);
+            }
         }
         for w in &mut self.waves[..nw] {
-            [&mut w.alpha, &mut w.dm4].into_iter().for_each(mv);
-            w.d[..nd].iter_mut().for_each(mv);
+            for v in [&mut w.alpha, &mut w.dm4] {
+                mv(v);
+            }
+            for v in &mut w.d[..nd] {
+                mv(v);
+            }
         }
         for v in [&mut self.vacuum, &mut self.valid] {
             let (head, tail) = v.split_at_mut(shift);
@@ -149,11 +174,11 @@ impl Strip {
 /// other Roe-average side quantities, the physical flux.
 #[derive(Clone, Debug, Default)]
 struct CellLine {
-    q: [Vec<f64>; NQ],
-    vel: [Vec<f64>; 3],
-    sqrt_rho: Vec<f64>,
-    h: Vec<f64>,
-    flux: [Vec<f64>; NQ],
+    q: [CellVec; NQ],
+    vel: [CellVec; 3],
+    sqrt_rho: CellVec,
+    h: CellVec,
+    flux: [CellVec; NQ],
 }
 
 impl CellLine {
@@ -204,9 +229,9 @@ impl CellView<'_> {
 /// the line's [`LineScratch`], which the special faces read).
 #[derive(Clone, Debug, Default)]
 struct RoeLine {
-    vel: [Vec<f64>; 3],
-    h: Vec<f64>,
-    c: Vec<f64>,
+    vel: [InterfaceVec; 3],
+    h: InterfaceVec,
+    c: InterfaceVec,
 }
 
 impl RoeLine {
@@ -255,31 +280,66 @@ fn cell_loop(
     let r = lo..lo + len;
     let q: [&[f64]; NQ] = std::array::from_fn(|k| &c.q[k][r.clone()]);
     let [v0, v1, v2] = &mut c.vel;
-    let vel = [&mut v0[r.clone()], &mut v1[r.clone()], &mut v2[r.clone()]];
     let [f0, f1, f2, f3, f4] = &mut c.flux;
-    let flux_q = [
-        &mut f0[r.clone()],
-        &mut f1[r.clone()],
-        &mut f2[r.clone()],
-        &mut f3[r.clone()],
-        &mut f4[r.clone()],
-    ];
-    let (sqrt_rho, h) = (&mut c.sqrt_rho[r.clone()], &mut c.h[r.clone()]);
-    let vacuum = &mut vacuum[r];
+    cell_pass(
+        q,
+        &mut v0[r.clone()],
+        &mut v1[r.clone()],
+        &mut v2[r.clone()],
+        &mut c.sqrt_rho[r.clone()],
+        &mut c.h[r.clone()],
+        [
+            &mut f0[r.clone()],
+            &mut f1[r.clone()],
+            &mut f2[r.clone()],
+            &mut f3[r.clone()],
+            &mut f4[r.clone()],
+        ],
+        &mut vacuum[r],
+        setup,
+    );
+}
+
+/// The loop of [`cell_loop`] over its cells `q` (their conserved values): velocities, Roe
+/// sides, physical fluxes and vacuum flags. Its outputs are separate `&mut` arguments (see
+/// [`interface_loop`]; the flux's five in one array), each cut to the loop's length.
+///
+/// NOTE: with its outputs cut from one `&mut CellLine` the loop checked them against its
+/// inputs at run time; with the arrays aligned (`CellVec`) it then ran on its scalar copy.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn cell_pass(
+    q: [&[f64]; NQ],
+    vel0: &mut [f64],
+    vel1: &mut [f64],
+    vel2: &mut [f64],
+    sqrt_rho: &mut [f64],
+    h: &mut [f64],
+    [f0, f1, f2, f3, f4]: [&mut [f64]; NQ],
+    vacuum: &mut [bool],
+    setup: &LineSetup,
+) {
+    let len = h.len();
+    let q = cut5(q, len);
+    let (vel0, vel1, vel2) = (&mut vel0[..len], &mut vel1[..len], &mut vel2[..len]);
+    let (sqrt_rho, vacuum) = (&mut sqrt_rho[..len], &mut vacuum[..len]);
+    let (f0, f1, f2, f3, f4) = (
+        &mut f0[..len],
+        &mut f1[..len],
+        &mut f2[..len],
+        &mut f3[..len],
+        &mut f4[..len],
+    );
     for i in 0..len {
         let ui: State = std::array::from_fn(|k| q[k][i]);
         let w = primitive_floored(&ui, setup.gamma, setup.vacuum_rho);
         // NaN or infinite where ρ ≤ 0: such interfaces are marked invalid before use.
         let side = RoeSide::new(&ui, &w);
         let flux = physical_flux(&ui, &w);
-        for k in 0..3 {
-            vel[k][i] = side.vel[k];
-        }
+        [vel0[i], vel1[i], vel2[i]] = side.vel;
         sqrt_rho[i] = side.sqrt_rho;
         h[i] = side.h;
-        for k in 0..NQ {
-            flux_q[k][i] = flux[k];
-        }
+        [f0[i], f1[i], f2[i], f3[i], f4[i]] = flux;
         vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
     }
 }
@@ -352,7 +412,17 @@ fn interface_loop(
     let (a0, a1, a2) = (&mut a0[..nint], &mut a1[..nint], &mut a2[..nint]);
     let (a3, a4) = (&mut a3[..nint], &mut a4[..nint]);
     let vacuum = &vacuum[..nint + 1];
-    let rho = &cells.q[0][..nint + 1];
+    // NOTE: every input cut to the loop's length too (as in `face_loop`): with the cells'
+    // arrays 64-byte aligned (`CellVec`) the loop otherwise ran on its scalar copy with the
+    // bounds checks (6 % of the kernel's samples).
+    let cells = CellView {
+        q: cut5(cells.q, nint + 1),
+        vel: cut3(cells.vel, nint + 1),
+        sqrt_rho: &cells.sqrt_rho[..nint + 1],
+        h: &cells.h[..nint + 1],
+        flux: cells.flux,
+    };
+    let rho = cells.q[0];
     for l in 0..nint {
         let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
         let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
