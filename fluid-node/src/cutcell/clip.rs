@@ -349,7 +349,16 @@ fn slab_range<const N: usize>(grid: &Grid, axis: usize, verts: &[[f64; N]]) -> (
             x_max = x[axis];
         }
     }
-    let range = (slab(grid, axis, x_min), slab(grid, axis, x_max));
+    let lo = slab(grid, axis, x_min);
+    // NOTE: `slab` gives the one slab `s` with `plane(s) <= x < plane(s + 1)` (the planes
+    // increase), so `x_max` below the plane above `x_min`'s slab is in that slab: the same
+    // slab without a second search (most pieces lie within one cell).
+    let hi = if lo < grid.cells[axis] as i32 && x_max < plane(grid, axis, lo + 1) {
+        lo
+    } else {
+        slab(grid, axis, x_max)
+    };
+    let range = (lo, hi);
     // NOTE: a face lying in a side of the domain up to round-off (a box flush against a wall,
     // its vertices turned by its principal axes to ±1e-17 of the plane) is not split across
     // it, nor put wholly beyond it: the part beyond the side was lost to the fluid's flush
