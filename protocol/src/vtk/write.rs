@@ -351,8 +351,9 @@ impl XmlFile {
 /// node's `threads`).
 ///
 /// NOTE: zlib's fastest level (1), not its default (6): on the fluid's outputs (doubles, whose
-/// low bytes hardly repeat) the default spent 4.7 times the CPU for a file 3.5 % smaller
-/// (`cube-mobile-walls` on 50³, its output at t = 0.1 s: 3.20 against 3.31 MB, 2026-12-06).
+/// low bytes hardly repeat) the default spent 3.6–5.4 times the CPU for a file 3.5 % smaller
+/// (`cube-mobile-walls` on 50³, profiles of two runs; its output at t = 0.1 s 3.20 against
+/// 3.31 MB, 2026-12-06).
 /// The decoded arrays are the same at any level.
 fn compress_into(raw: &[u8], out: &mut Vec<u8>) {
     use rayon::prelude::*;
