@@ -22,6 +22,9 @@ pub fn odd_sum(terms: &mut [f64]) -> f64 {
     signed_halves(terms.iter().copied())
 }
 
+/// The bits of an `f64` but its sign: the bits of `|x|`.
+const MAGNITUDE: u64 = !(1 << 63);
+
 /// Sorts `terms` by magnitude, as `sort_unstable_by(|a, b| a.abs().total_cmp(&b.abs()))`.
 ///
 /// NOTE: the key is the bits without the sign: for `|x|` (sign clear, NaNs included) the order
@@ -33,7 +36,6 @@ pub fn odd_sum(terms: &mut [f64]) -> f64 {
 /// `cube-mobile-walls` on 50³).
 #[inline]
 fn sort_by_magnitude(terms: &mut [f64]) {
-    const MAGNITUDE: u64 = !(1 << 63);
     let key = |x: f64| x.to_bits() & MAGNITUDE;
     if terms.len() > 24 {
         terms.sort_unstable_by_key(|&x| key(x));
@@ -132,9 +134,12 @@ impl OddSum {
     }
 
     /// [`OddSum::add_into`] by sorting all the terms by slot, then magnitude.
+    ///
+    /// NOTE: sorted by the slot and the magnitude's bits, the order of [`sort_by_magnitude`]
+    /// within each slot (and the same sums, for the reason given there).
     fn add_sorted(&mut self, out: &mut [f64]) {
         self.terms
-            .sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.abs().total_cmp(&b.1.abs())));
+            .sort_unstable_by_key(|&(slot, x)| (slot, x.to_bits() & MAGNITUDE));
         for run in self.terms.chunk_by(|a, b| a.0 == b.0) {
             out[run[0].0 as usize] += signed_halves(run.iter().map(|t| t.1));
         }
@@ -335,6 +340,23 @@ mod tests {
             let mut new = terms.clone();
             let expected_odd = if len == 1 { terms[0] } else { expected };
             assert_eq!(odd_sum(&mut new).to_bits(), expected_odd.to_bits());
+            // The same terms over three slots, summed by `add_into`'s sort of all the terms
+            // (many more slots than terms) against the sort by slot and `total_cmp`.
+            let slotted: Vec<(u32, f64)> = (terms.iter().enumerate())
+                .map(|(k, &v)| ((k % 3) as u32 * 7, v))
+                .collect();
+            let mut old = slotted.clone();
+            old.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.abs().total_cmp(&b.1.abs())));
+            let mut expected = vec![0.0; 300];
+            for run in old.chunk_by(|a, b| a.0 == b.0) {
+                expected[run[0].0 as usize] += signed_halves(run.iter().map(|t| t.1));
+            }
+            let mut sum = OddSum::default();
+            sum.extend(slotted);
+            let mut got = vec![0.0; 300];
+            sum.add_into(&mut got);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            assert_eq!(bits(&got), bits(&expected), "{terms:?}");
         }
     }
 
