@@ -137,29 +137,56 @@ impl RealFluid {
             .sum()
     }
 
+    /// [`RealFluid::vacuum_cells`] of this rank's cells.
     fn vacuum_cells_here(&self) -> u64 {
         let params = self.solver.params();
         // Λ is the whole grid's; with slabs this rank's cells start at `first` in it.
         let lambda = self.embedded.as_ref().map(Embedded::solid_fraction);
         let slab = self.solver.slab();
         let first = slab.slabs().then(|| slab.global_range().start);
-        let global = |c: usize| first.map_or_else(|| slab.to_global(c), |f| f + c);
         let n_cells = self.solver.grid().n_cells();
         let (state, gamma) = (self.solver.state(), params.gamma);
-        let vacuum = |c: usize| {
-            if lambda.is_some_and(|l| l[global(c)] >= 1.0 - COVERED_TOLERANCE) {
-                return false;
-            }
-            let (rho, _, p) = state.primitive(c, gamma);
+        let empty = |cell: &[f64]| {
+            let (rho, _, p) = crate::fv::state::primitive_of(cell, gamma);
             !(rho >= params.vacuum_rho && p >= params.vacuum_p)
         };
+        let covered = |l: f64| l >= 1.0 - COVERED_TOLERANCE;
         // A count, so the same on any number of threads; on the fluid's pool (every step: a
         // 64³ blast spent 4 % of its run here on one thread).
-        let count =
-            (self.solver).install(|| (0..n_cells).into_par_iter().filter(|&c| vacuum(c)).count());
+        let count = match first {
+            // NOTE: a rank's cells are a range of the global numbering: runs of cells taken
+            // straight from the state's and Λ's slices. Indexing them a cell at a time, with
+            // the global index of each, took about 1.5 times as long (3.9 % of the fluid
+            // node's samples in `clamped-beam-3d`, against 2.7 % now).
+            Some(f) => {
+                let nvar = state.nvar;
+                let lambda = lambda.map(|l| &l[f..f + n_cells]);
+                let run = |(k, u): (usize, &[f64])| {
+                    let cells = u.chunks_exact(nvar);
+                    match lambda {
+                        Some(l) => (cells.zip(&l[k * VACUUM_RUN..]))
+                            .filter(|&(cell, &l)| !covered(l) && empty(cell))
+                            .count(),
+                        None => cells.filter(|&cell| empty(cell)).count(),
+                    }
+                };
+                let u = &state.u[..n_cells * nvar];
+                (self.solver).install(|| u.par_chunks(VACUUM_RUN * nvar).enumerate().map(run).sum())
+            }
+            None => (self.solver).install(|| {
+                (0..n_cells)
+                    .into_par_iter()
+                    .filter(|&c| !lambda.is_some_and(|l| covered(l[slab.to_global(c)])))
+                    .filter(|&c| empty(state.cell(c)))
+                    .count()
+            }),
+        };
         count as u64
     }
 }
+
+/// Cells a task of [`RealFluid::vacuum_cells`] counts.
+const VACUUM_RUN: usize = 4096;
 
 impl NodeModel for RealFluid {
     fn implementation(&self) -> &'static str {

@@ -2,6 +2,8 @@
 //! (XML `.vti`, or legacy ASCII). Writers take any `Write` or return bytes; only binaries open
 //! files.
 
+mod sci;
+
 use std::io::Write;
 
 use rayon::prelude::*;
@@ -54,13 +56,15 @@ fn write_fluid_csv_rows(
     // of its whole run on one thread).
     let n = grid.n_cells();
     let batch = run_rows * batch_runs;
+    let coords = CoordinateTexts::new(grid);
     for start in (0..n).step_by(batch) {
         let runs: Vec<usize> = (start..n.min(start + batch)).step_by(run_rows).collect();
-        let rows =
-            |&lo: &usize| fluid_csv_rows(grid, state, gamma, alpha, lo..n.min(lo + run_rows));
-        let parts: Vec<std::io::Result<Vec<u8>>> = runs.par_iter().map(rows).collect();
+        let rows = |&lo: &usize| {
+            fluid_csv_rows(grid, state, gamma, alpha, &coords, lo..n.min(lo + run_rows))
+        };
+        let parts: Vec<Vec<u8>> = runs.par_iter().map(rows).collect();
         for part in parts {
-            w.write_all(&part?)?;
+            w.write_all(&part)?;
         }
     }
     w.flush()
@@ -73,48 +77,119 @@ const RUN_CELLS: usize = 4096;
 /// Runs formatted before they are written (bounds the memory: about 130 bytes a 3-D row).
 const CSV_BATCH_RUNS: usize = 32;
 
+/// The text of the cell centres' coordinates along each axis (`{:.9e}`), formatted once a file:
+/// a centre's coordinate along an axis depends on its index along that axis alone.
+struct CoordinateTexts {
+    /// For each active axis, the text of every index's coordinate, one after another.
+    text: Vec<Vec<u8>>,
+    /// For each active axis, where each index's text starts in `text` (and the end, last).
+    starts: Vec<Vec<usize>>,
+}
+
+impl CoordinateTexts {
+    fn new(grid: &Grid) -> Self {
+        let (mut text, mut starts) = (Vec::new(), Vec::new());
+        for axis in 0..grid.dim {
+            let (mut t, mut s) = (Vec::new(), vec![0]);
+            for i in 0..grid.cells[axis] {
+                let mut ijk = [0; 3];
+                ijk[axis] = i;
+                let x = grid.cell_center(ijk)[axis];
+                write!(t, "{x:.9e}").expect("writing to a Vec does not fail");
+                s.push(t.len());
+            }
+            text.push(t);
+            starts.push(s);
+        }
+        CoordinateTexts { text, starts }
+    }
+
+    /// The text of index `i`'s coordinate along `axis`.
+    fn get(&self, axis: usize, i: usize) -> &[u8] {
+        &self.text[axis][self.starts[axis][i]..self.starts[axis][i + 1]]
+    }
+}
+
+/// The last value written in one column and its text, reused while the column repeats it
+/// (a uniform region: most of the cells of a scene's first output).
+struct LastField {
+    bits: u64,
+    text: [u8; 32],
+    len: usize,
+}
+
+impl LastField {
+    fn new() -> Self {
+        LastField {
+            bits: u64::MAX,
+            text: [0; 32],
+            len: 0,
+        }
+    }
+
+    /// Appends `v`'s text with `format` (the bytes of `format!("{v:.12e}")` or of `{v}`) to
+    /// `out`, from the last text when `v` has the last value's bits.
+    fn push(&mut self, out: &mut Vec<u8>, v: f64, format: impl Fn(&mut Vec<u8>, f64)) {
+        if self.len > 0 && v.to_bits() == self.bits {
+            out.extend_from_slice(&self.text[..self.len]);
+            return;
+        }
+        let start = out.len();
+        format(out, v);
+        let text = &out[start..];
+        if text.len() <= self.text.len() {
+            self.text[..text.len()].copy_from_slice(text);
+            (self.bits, self.len) = (v.to_bits(), text.len());
+        }
+    }
+}
+
 /// The CSV rows of the cells `cells` ([`write_fluid_csv`]'s columns, no header).
+///
+/// NOTE: written as bytes, not through a `csv` writer: every field is a number's text (digits,
+/// `.`, `e`, `-`, `inf`, `NaN`), which a `csv` writer never quotes, with its `,` and `\n`; so
+/// the bytes are the writer's (test `rows_formatted_in_runs_on_any_pool_are_the_bytes_of_one_writer`
+/// against a `csv` writer of `format!` fields).
 fn fluid_csv_rows(
     grid: &Grid,
     state: &FluidState,
     gamma: f64,
     alpha: Option<&[f64]>,
+    coords: &CoordinateTexts,
     cells: std::ops::Range<usize>,
-) -> std::io::Result<Vec<u8>> {
-    use std::fmt::Write as _;
+) -> Vec<u8> {
     let dim = grid.dim;
-    let mut table = csv::WriterBuilder::new()
-        .has_headers(false)
-        .from_writer(Vec::with_capacity(cells.len() * 16 * (2 * dim + 3)));
-    // One buffer for every field's text (a `format!` a field allocated 2 M strings on 64³).
-    let mut field = String::with_capacity(32);
-    let mut put = |table: &mut csv::Writer<Vec<u8>>, args: std::fmt::Arguments| {
-        field.clear();
-        field
-            .write_fmt(args)
-            .expect("formatting into a String does not fail");
-        table.write_field(&field)
+    let mut out = Vec::with_capacity(cells.len() * 20 * (2 * dim + 3));
+    let sci = |out: &mut Vec<u8>, v: f64| sci::push_sci(out, v, 12);
+    let display = |out: &mut Vec<u8>, v: f64| {
+        write!(out, "{v}").expect("writing to a Vec does not fail");
     };
+    // The columns ρ, the velocity's, p and α.
+    let mut last: [LastField; 6] = std::array::from_fn(|_| LastField::new());
     for idx in cells {
         if alpha.is_some_and(|a| a[idx] <= 0.0) {
             // Covered by the solid: no fluid (the state there is a ghost).
             continue;
         }
-        let x = grid.cell_center(grid.ijk(idx));
+        let ijk = grid.ijk(idx);
+        for (axis, &i) in ijk[..dim].iter().enumerate() {
+            out.extend_from_slice(coords.get(axis, i));
+            out.push(b',');
+        }
         let (rho, vel, p) = state.primitive(idx, gamma);
-        for xa in &x[..dim] {
-            put(&mut table, format_args!("{xa:.9e}"))?;
+        last[0].push(&mut out, rho, sci);
+        out.push(b',');
+        for (a, &v) in vel[..dim].iter().enumerate() {
+            last[1 + a].push(&mut out, v, sci);
+            out.push(b',');
         }
-        put(&mut table, format_args!("{rho:.12e}"))?;
-        for v in &vel[..dim] {
-            put(&mut table, format_args!("{v:.12e}"))?;
-        }
-        put(&mut table, format_args!("{p:.12e}"))?;
+        last[4].push(&mut out, p, sci);
+        out.push(b',');
         let a = alpha.and_then(|a| a.get(idx).copied()).unwrap_or(1.0);
-        put(&mut table, format_args!("{a}"))?;
-        table.write_record(None::<&[u8]>)?;
+        last[5].push(&mut out, a, display);
+        out.push(b'\n');
     }
-    table.into_inner().map_err(|e| e.into_error())
+    out
 }
 
 /// The fluid as VTK XML image data (`.vti` bytes, compressed binary): cell data `rho`

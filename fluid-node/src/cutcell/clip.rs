@@ -62,6 +62,14 @@ impl<const N: usize> Polygon<N> {
         &self.v[..self.n]
     }
 
+    /// Makes `self` hold `other`'s vertices (only those in use are copied: a split copies a
+    /// polygon whole to one side, and the unused capacity is most of its bytes).
+    #[inline]
+    fn copy_from(&mut self, other: &Polygon<N>) {
+        self.v[..other.n].copy_from_slice(other.vertices());
+        self.n = other.n;
+    }
+
     #[inline]
     fn push(&mut self, x: [f64; N]) {
         if self.n < MAX_VERTICES {
@@ -138,11 +146,11 @@ pub(crate) fn split_polygon<const N: usize>(
     let any_below = verts.iter().any(|x| x[axis] < value);
     let any_above = verts.iter().any(|x| x[axis] > value);
     if !any_below {
-        *above = *poly;
+        above.copy_from(poly);
         return;
     }
     if !any_above {
-        *below = *poly;
+        below.copy_from(poly);
         return;
     }
     let side = sides(verts, axis, value);
@@ -245,7 +253,14 @@ fn peel<const N: usize>(
         return;
     }
     let (lo, hi) = slab_range(grid, axis, poly.vertices());
-    let mut rest = *poly;
+    if lo == hi {
+        // Within one slab (most elements, at the scale of a cell): nothing to split or copy.
+        cell[axis] = hi;
+        peel(grid, axis + 1, poly, cell, emit);
+        return;
+    }
+    let mut rest = Polygon::EMPTY;
+    rest.copy_from(poly);
     let mut below = Polygon::EMPTY;
     let mut above = Polygon::EMPTY;
     for s in lo..hi {
@@ -258,7 +273,8 @@ fn peel<const N: usize>(
         );
         cell[axis] = s;
         peel(grid, axis + 1, &below, cell, emit);
-        rest = above;
+        // `above` is the rest; the next split overwrites the old rest.
+        std::mem::swap(&mut rest, &mut above);
     }
     cell[axis] = hi;
     peel(grid, axis + 1, &rest, cell, emit);
@@ -333,7 +349,16 @@ fn slab_range<const N: usize>(grid: &Grid, axis: usize, verts: &[[f64; N]]) -> (
             x_max = x[axis];
         }
     }
-    let range = (slab(grid, axis, x_min), slab(grid, axis, x_max));
+    let lo = slab(grid, axis, x_min);
+    // NOTE: `slab` gives the one slab `s` with `plane(s) <= x < plane(s + 1)` (the planes
+    // increase), so `x_max` below the plane above `x_min`'s slab is in that slab: the same
+    // slab without a second search (most pieces lie within one cell).
+    let hi = if lo < grid.cells[axis] as i32 && x_max < plane(grid, axis, lo + 1) {
+        lo
+    } else {
+        slab(grid, axis, x_max)
+    };
+    let range = (lo, hi);
     // NOTE: a face lying in a side of the domain up to round-off (a box flush against a wall,
     // its vertices turned by its principal axes to ±1e-17 of the plane) is not split across
     // it, nor put wholly beyond it: the part beyond the side was lost to the fluid's flush

@@ -126,16 +126,22 @@ impl FluidState {
 
     /// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure \[Pa\] of cell `idx`.
     pub fn primitive(&self, idx: usize, gamma: f64) -> (f64, [f64; 3], f64) {
-        let dim = self.nvar - 2;
-        let cell = self.cell(idx);
-        let rho = cell[0];
-        let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
-        let mut vel = [0.0; 3];
-        let mut ke = 0.0;
-        for a in 0..dim {
-            vel[a] = cell[1 + a] * inv;
-            ke += 0.5 * cell[1 + a] * vel[a];
-        }
-        (rho, vel, (gamma - 1.0) * (cell[dim + 1] - ke))
+        primitive_of(self.cell(idx), gamma)
     }
+}
+
+/// Density [kg/m³], velocity [m/s] (inactive axes 0) and pressure \[Pa\] of the conserved
+/// `cell` (`dim + 2` values): [`FluidState::primitive`] of a cell already at hand.
+#[inline]
+pub fn primitive_of(cell: &[f64], gamma: f64) -> (f64, [f64; 3], f64) {
+    let dim = cell.len() - 2;
+    let rho = cell[0];
+    let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
+    let mut vel = [0.0; 3];
+    let mut ke = 0.0;
+    for a in 0..dim {
+        vel[a] = cell[1 + a] * inv;
+        ke += 0.5 * cell[1 + a] * vel[a];
+    }
+    (rho, vel, (gamma - 1.0) * (cell[dim + 1] - ke))
 }
