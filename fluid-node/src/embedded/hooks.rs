@@ -26,7 +26,7 @@ use super::near_wall::{
     NW_WET_NORMAL, NearWall,
 };
 use super::{COVERED_TOLERANCE, NEAR_RADIUS, SolidFrame};
-use crate::cutcell::{CellBox, SubFace, compute, compute_block_cells};
+use crate::cutcell::{CellBox, CutGeometry, SubFace, compute, compute_block_cells};
 use crate::fv::line::MAX_FIXES;
 use crate::fv::{GhostFill, Wall, WallRun};
 use crate::grid::Grid;
@@ -73,6 +73,7 @@ pub fn wall_hooks(grid: &Grid, ng: usize, frame: &SolidFrame, block: Option<Cell
             let view = HookGeometry {
                 grid,
                 window: CellBox::whole(grid),
+                held: CellBox::whole(grid),
                 solid_fraction: &geom.solid_fraction,
                 subfaces: &geom.subfaces,
             };
@@ -81,6 +82,46 @@ pub fn wall_hooks(grid: &Grid, ng: usize, frame: &SolidFrame, block: Option<Cell
         }
         Some(block) => block_wall_hooks(grid, ng, frame, block),
     }
+}
+
+/// The [`WallHooks`] of the cells of `block` for the surface and kinematics `frame` on `grid`,
+/// with `ng` ghost cells, from `geom`, the whole grid's geometry of `frame`'s surface
+/// (`cutcell::compute`): only its window of `block` and [`hook_halo`] cells is read (Λ, the
+/// sub-faces and the cut cells there). Bit for bit [`wall_hooks`] with the block, which
+/// computes that window's geometry itself: Λ and the sub-faces of a block's geometry are the
+/// whole grid's on every cell of its window (`cutcell::compute_block_cells`).
+///
+/// What a rank of a decomposed grid does in each predict while it holds the whole grid's
+/// geometry of `F^n` (issue 40 item 1; docs/mpi.md): that geometry is computed once a step, in
+/// the correct before, so the predict need not compute its window again.
+pub fn wall_hooks_in(
+    grid: &Grid,
+    ng: usize,
+    frame: &SolidFrame,
+    geom: &CutGeometry,
+    block: CellBox,
+) -> WallHooks {
+    let window = block.grown(grid, hook_halo(ng));
+    let inside = |c: u32| window.contains(grid.ijk(c as usize));
+    // NOTE: the sub-faces and cut cells of the window's cells, in the whole grid's order (by
+    // cell, then element), which is the order of a block's geometry; with slabs they are one
+    // stretch of the whole lists, with blocks several.
+    let subfaces: Vec<SubFace> = (geom.subfaces.iter())
+        .filter(|s| inside(s.cell))
+        .copied()
+        .collect();
+    let cut_cells: Vec<u32> = (geom.cut_cells.iter().copied())
+        .filter(|&c| inside(c))
+        .collect();
+    let view = HookGeometry {
+        grid,
+        window,
+        held: CellBox::whole(grid),
+        solid_fraction: &geom.solid_fraction,
+        subfaces: &subfaces,
+    };
+    let near = NearOfView::new(&view, &cut_cells);
+    view.wall_hooks(&near.as_ref(), frame, ng, block)
 }
 
 /// The [`WallHooks`] of the cells of `block`, from the geometry of `frame`'s surface on the
@@ -95,6 +136,7 @@ pub(super) fn block_wall_hooks(
     let view = HookGeometry {
         grid,
         window: geom.window,
+        held: geom.window,
         solid_fraction: &geom.solid_fraction,
         subfaces: &geom.subfaces,
     };
@@ -149,9 +191,11 @@ impl WallHooks {
 /// one rank), exact there (Λ and the sub-faces).
 pub(super) struct HookGeometry<'a> {
     pub(super) grid: &'a Grid,
-    /// The cells the arrays hold.
+    /// The cells whose geometry the hooks read (a block's window: beyond it they read Λ as 0).
     pub(super) window: CellBox,
-    /// Λ per cell of the window ([`CellBox::index`]).
+    /// The cells `solid_fraction` holds: the window, or the whole grid around it.
+    pub(super) held: CellBox,
+    /// Λ per cell of `held` ([`CellBox::index`]).
     pub(super) solid_fraction: &'a [f64],
     /// The sub-faces of the window's cells, by cell (global cell indices).
     pub(super) subfaces: &'a [SubFace],
@@ -257,7 +301,7 @@ impl HookGeometry<'_> {
     /// Λ of cell `ijk` (0 beyond the window: only hooks that a rank drops read it).
     fn lambda(&self, ijk: [usize; 3]) -> f64 {
         if self.window.contains(ijk) {
-            self.solid_fraction[self.window.index(ijk)]
+            self.solid_fraction[self.held.index(ijk)]
         } else {
             0.0
         }

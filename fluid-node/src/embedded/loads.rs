@@ -36,7 +36,8 @@ impl Embedded {
     /// ([`EmbeddedError::at_step`]).
     ///
     /// Collective on a decomposed grid: each rank takes the sub-faces of its own block only
-    /// (the trial geometry of the block and one cell around it, `cutcell::compute_block_cells`), and
+    /// (the trial geometry of the block and one cell around it, `cutcell::compute_block_cells`;
+    /// on `F^n`, the whole grid's geometry it holds, as one rank does), and
     /// the terms of every rank are gathered on every rank and added per slot as one rank adds
     /// them ([`OddSum`]: the sums do not depend on the terms' order), so every rank returns
     /// the loads of one rank.
@@ -73,16 +74,27 @@ impl Embedded {
             }
             Some(block) => {
                 let grid = &self.config.grid;
-                let geom = compute_block_cells(grid, &trial.surface(), block, 1);
-                let lambda = |c: usize| geom.solid_fraction_at(grid.ijk(c));
-                let mine = geom
-                    .subfaces
-                    .iter()
-                    .filter(|s| block.contains(grid.ijk(s.cell as usize)))
-                    .find_map(|s| {
-                        let pc = self.push_load(s, trial, &levers, lambda, &mut sum).err()?;
-                        Some((s.cell, s.element, pc))
-                    });
+                let mut terms = |subfaces: &[SubFace], lambda: &dyn Fn(usize) -> f64| {
+                    (subfaces.iter())
+                        .filter(|s| block.contains(grid.ijk(s.cell as usize)))
+                        .find_map(|s| {
+                            let pc = self.push_load(s, trial, &levers, lambda, &mut sum).err()?;
+                            Some((s.cell, s.element, pc))
+                        })
+                };
+                // NOTE: as on one rank, loads on `F^n` take the geometry of `F^n` the last
+                // correct computed, which every rank holds whole: Λ and the sub-faces of the
+                // block and one cell around it, all the terms read, are those of the block's
+                // own geometry, bit for bit (`cutcell::compute_block_cells`). In an explicit
+                // scene every trial surface is `F^n`, and computing it again on every rank
+                // was work one rank does not do.
+                let mine = if same_surface(&trial.surface(), &self.state.current.surface()) {
+                    let geom = &self.state.geom;
+                    terms(&geom.subfaces, &|c| geom.solid_fraction[c])
+                } else {
+                    let geom = compute_block_cells(grid, &trial.surface(), block, 1);
+                    terms(&geom.subfaces, &|c| geom.solid_fraction_at(grid.ijk(c)))
+                };
                 gather_terms(solver, mine, &mut sum).map(|(_, _, pc)| pc)
             }
         };

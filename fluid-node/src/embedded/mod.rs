@@ -95,7 +95,7 @@ mod state;
 pub use correct::CorrectReport;
 pub use error::EmbeddedError;
 pub use frame::SolidFrame;
-pub use hooks::{WallHooks, hook_halo, wall_hooks};
+pub use hooks::{WallHooks, hook_halo, wall_hooks, wall_hooks_in};
 pub use loads::Loads;
 pub use memory::EmbeddedMemory;
 pub use state::{Embedded, InterfaceBudget};

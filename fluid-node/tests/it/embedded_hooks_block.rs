@@ -4,11 +4,12 @@
 //! bit for bit, on every block of the `fv_ranks` process grids, for the moving bodies of the
 //! `fv_ranks` tests and flush plates (vacuum cells), at several positions, for `ng` = 2, 3, 4,
 //! on the `fv_ranks` grids and on grids three times finer (where the windows do not hold the
-//! whole grid). That the restriction gives the sweeps the bits of one rank is what the coupled
+//! whole grid); and so are those a rank takes from the window of the whole grid's geometry
+//! (`embedded::wall_hooks_in`, what the predict on a decomposed grid calls). That the restriction gives the sweeps the bits of one rank is what the coupled
 //! `fv_ranks` tests pin.
 
-use fluid_node::cutcell::CellBox;
-use fluid_node::embedded::{SolidFrame, WallHooks, hook_halo, wall_hooks};
+use fluid_node::cutcell::{CellBox, CutGeometry, compute};
+use fluid_node::embedded::{SolidFrame, WallHooks, hook_halo, wall_hooks, wall_hooks_in};
 use fluid_node::grid::Grid;
 
 use crate::embedded_support::{polygon_2d, translated};
@@ -35,6 +36,8 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
         let frame = translated(solid, k as f64 * dt);
         for ng in [2, 3, 4] {
             let whole = wall_hooks(grid, ng, &frame, None);
+            let mut geom = CutGeometry::new();
+            compute(grid, &frame.surface(), &mut geom);
             for dims in decomps {
                 let ranks: usize = dims.iter().product();
                 for r in 0..ranks {
@@ -43,6 +46,8 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
                     let expected = whole.restricted(grid, ng, block);
                     let got = wall_hooks(grid, ng, &frame, Some(block));
                     assert_same(&expected, &got, &what);
+                    let from_whole = wall_hooks_in(grid, ng, &frame, &geom, block);
+                    assert_same(&expected, &from_whole, &format!("{what}, whole geometry"));
                     tally.blocks += 1;
                     let window = block.grown(grid, hook_halo(ng));
                     tally.windowed += usize::from(window != CellBox::whole(grid));
