@@ -146,12 +146,13 @@ pub(crate) fn sweep_rows_from(
     sink: &mut impl SweepSink,
 ) -> f64 {
     let mut max_defect: f64 = 0.0;
-    // One cluster of adjacent cut cells: (position, summed flux, summed moment), and the running
-    // fraction on each cell's lower face (`below`).
-    let mut cluster: Vec<(i32, f64, f64)> = Vec::new();
-    let mut below: Vec<f64> = Vec::new();
-    let mut terms: Vec<f64> = Vec::new();
-    let mut moments: Vec<f64> = Vec::new();
+    let mut scratch = ROW_SCRATCH.take();
+    let RowScratch {
+        cluster,
+        below,
+        terms,
+        moments,
+    } = &mut scratch;
     let mut i = 0;
     while i < records.len() {
         let row = records[i].row;
@@ -172,7 +173,7 @@ pub(crate) fn sweep_rows_from(
                     moments.push(records[i].moment);
                     i += 1;
                 }
-                cluster.push((pos, odd_sum(&mut terms), odd_sum(&mut moments)));
+                cluster.push((pos, odd_sum(terms), odd_sum(moments)));
             }
             let last = cluster[cluster.len() - 1].0;
             let next_pos = if i < records.len() && records[i].row == row {
@@ -183,7 +184,7 @@ pub(crate) fn sweep_rows_from(
             // Bottom-up running fractions: below[c] on the lower face of cell c, then the exit.
             below.clear();
             let entry = lambda;
-            for c in &cluster {
+            for c in cluster.iter() {
                 below.push(lambda);
                 lambda -= c.1 / area;
             }
@@ -255,5 +256,28 @@ pub(crate) fn sweep_rows_from(
             max_defect = max_defect.max(lambda.abs());
         }
     }
+    ROW_SCRATCH.set(scratch);
     max_defect
+}
+
+/// Buffers of [`sweep_rows_from`]: one cluster of adjacent cut cells (position, summed flux,
+/// summed moment), the running fraction on each of its cells' lower faces, and one cell's
+/// fluxes and moments.
+#[derive(Default)]
+struct RowScratch {
+    cluster: Vec<(i32, f64, f64)>,
+    below: Vec<f64>,
+    terms: Vec<f64>,
+    moments: Vec<f64>,
+}
+
+thread_local! {
+    /// [`RowScratch`] of the calls on this thread, kept from call to call (cleared before use).
+    ///
+    /// NOTE: `sweep_rows_from` runs once per sub-face's prism (`cutcell::prism`), thousands of
+    /// times a step, and took four fresh buffers each time (`malloc`, `realloc` and `free` a
+    /// call). Taken out of the cell for the call (a call from a sink would find it empty and
+    /// use fresh ones), and every buffer is cleared before use: the same values whatever the
+    /// buffers held before.
+    static ROW_SCRATCH: std::cell::Cell<RowScratch> = std::cell::Cell::new(RowScratch::default());
 }

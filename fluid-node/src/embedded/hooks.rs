@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use super::cells::{domain_face, mark_run, marked_cells, touches_gas_with};
 use super::near_wall::{
     NEAR_WALL_SUMS, NW_AREA, NW_FACING, NW_FACING_LEN, NW_NORMAL, NW_VELOCITY, NW_WET_AREA,
-    NW_WET_NORMAL, NearWall,
+    NW_WET_NORMAL, NearWall, NearWalls,
 };
 use super::{COVERED_TOLERANCE, NEAR_RADIUS, SolidFrame};
 use crate::cutcell::{CellBox, CutGeometry, SubFace, compute, compute_block_cells};
@@ -316,7 +316,7 @@ impl HookGeometry<'_> {
     /// summed in parallel on the pool the call runs in and the walls put in place in the runs'
     /// order: the same walls on any number of threads. In `cube-mobile-walls` on 50³ these sums
     /// were 4 % of the fluid node's time, on one thread while the other waited.
-    fn near_walls(&self, near: &NearView, current: &SolidFrame) -> (Vec<NearWall>, Vec<bool>) {
+    fn near_walls(&self, near: &NearView, current: &SolidFrame) -> (NearWalls, Vec<bool>) {
         let grid = self.grid;
         let slot = |c: u32| near.slot_of[self.window.index(grid.ijk(c as usize))] as usize - 1;
         let subfaces = self.subfaces;
@@ -326,21 +326,21 @@ impl HookGeometry<'_> {
             .collect();
         bounds.push(subfaces.len());
         let n_runs = bounds.len() - 1;
-        let summed: Vec<(NearWall, bool)> = (0..n_runs)
+        let (runs, shut): (Vec<NearWall>, Vec<bool>) = (0..n_runs)
             .into_par_iter()
             .with_min_len(RUNS_PER_TASK)
             .map_init(OddSum::default, |sum, r| {
                 self.near_wall(current, &subfaces[bounds[r]..bounds[r + 1]], sum)
             })
-            .collect();
-        let mut walls = vec![NearWall::default(); near.cells.len()];
+            .unzip();
+        let mut run_of = vec![0u32; near.cells.len()];
         let mut closed = vec![false; near.cells.len()];
-        for (r, (wall, shut)) in summed.into_iter().enumerate() {
+        for (r, shut) in shut.into_iter().enumerate() {
             let k = slot(subfaces[bounds[r]].cell);
-            walls[k] = wall;
+            run_of[k] = r as u32 + 1;
             closed[k] |= shut;
         }
-        (walls, closed)
+        (NearWalls { runs, run_of }, closed)
     }
 
     /// The wall of one cell from its run of sub-faces `run` (see [`HookGeometry::near_walls`]),
@@ -396,17 +396,18 @@ impl HookGeometry<'_> {
     /// vacuum (paper 000 §3.2), not ghost states. Where the two faces lie on either side of a
     /// grid plane (pressed walls whose faces were on it), each cell holds one, with the other's
     /// covered cell in front (`closed`). Then the walls' velocities become area averages.
-    fn vacuum_cells(&self, near: &NearView, walls: &mut [NearWall], closed: &[bool]) -> Vec<u32> {
+    fn vacuum_cells(&self, near: &NearView, walls: &mut NearWalls, closed: &[bool]) -> Vec<u32> {
         let grid = self.grid;
         let mut vacuum = Vec::new();
         for (k, &c) in near.cells.iter().enumerate() {
             if self.lambda(grid.ijk(c as usize)) >= 1.0 - COVERED_TOLERANCE
-                && (walls[k].is_crack() || closed[k])
+                && (walls.get(k).is_crack() || closed[k])
             {
                 vacuum.push(c);
             }
         }
-        for nw in walls.iter_mut() {
+        // (A cell's runs but its last are read by no one: their velocities do not matter.)
+        for nw in walls.runs.iter_mut() {
             if nw.area > 0.0 {
                 for x in nw.velocity.iter_mut() {
                     *x /= nw.area;
@@ -423,7 +424,7 @@ impl HookGeometry<'_> {
     fn ghost_fills(
         &self,
         near: &NearView,
-        near_walls: &[NearWall],
+        near_walls: &NearWalls,
         vacuum: &[u32],
         ng: usize,
         axis: usize,
@@ -457,7 +458,7 @@ impl HookGeometry<'_> {
         let wall_seen = |fluid: [usize; 3], covered: [usize; 3], dir: isize| -> Wall {
             let walls = [fluid, covered]
                 .map(slot_of)
-                .map(|k| (k > 0).then(|| &near_walls[k - 1]));
+                .map(|k| (k > 0).then(|| near_walls.get(k - 1)));
             walls
                 .iter()
                 .flatten()

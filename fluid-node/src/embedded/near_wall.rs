@@ -25,6 +25,32 @@ pub(super) struct NearWall {
     pub(super) wet_normal: [f64; 3],
 }
 
+/// The [`NearWall`]s of a window's near cells, by slot (the near cells' order): stored only for
+/// the cells that hold sub-faces, a wall of no area for the others.
+///
+/// NOTE: a dense vector of one `NearWall` (472 bytes) per near cell was allocated and zeroed
+/// by every call of the hooks, though most near cells hold no sub-face. The cells without
+/// sub-faces read [`NearWall::NONE`], the value they held there, so the hooks see the same
+/// walls.
+#[derive(Clone, Debug, Default)]
+pub(super) struct NearWalls {
+    /// The walls of the cells' runs of sub-faces, in the runs' order.
+    pub(super) runs: Vec<NearWall>,
+    /// Per slot: 1 + the index in `runs` of the cell's wall (its last run), 0 without one.
+    pub(super) run_of: Vec<u32>,
+}
+
+impl NearWalls {
+    /// The wall of the near cell in slot `k`.
+    #[inline]
+    pub(super) fn get(&self, k: usize) -> &NearWall {
+        match self.run_of[k] {
+            0 => &NearWall::NONE,
+            r => &self.runs[r as usize - 1],
+        }
+    }
+}
+
 /// The sub-faces of a near cell turned one way along one axis (see [`NearWall::facing`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(super) struct Facing {
@@ -45,6 +71,20 @@ pub(super) const NW_WET_NORMAL: usize = NW_WET_AREA + 1;
 pub(super) const NEAR_WALL_SUMS: usize = NW_WET_NORMAL + 3;
 
 impl NearWall {
+    /// The wall of a near cell without sub-faces: `NearWall::default()`.
+    pub(super) const NONE: NearWall = NearWall {
+        area: 0.0,
+        velocity: [0.0; 3],
+        normal: [[0.0; 3]; 3],
+        facing: [[Facing {
+            area: 0.0,
+            velocity: [0.0; 3],
+            normal: [0.0; 3],
+        }; 2]; 3],
+        wet_area: 0.0,
+        wet_normal: [0.0; 3],
+    };
+
     /// From its sums: `Σ A w` (3), `Σ A |ν_a| ν_b` (9, `a` major), `Σ A`, then per axis `a` and
     /// side `(2 a + side)` the facing sums `Σ A`, `Σ A w` (3), `Σ A |ν_a| ν` (3), then the wet
     /// area and `Σ A ν` over the wet sub-faces (3).
@@ -109,5 +149,31 @@ impl NearWall {
             wall.normal = n.map(|x| x / len);
         }
         wall
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{NearWall, NearWalls};
+
+    /// The cells without sub-faces read `NONE`: it must be the dense vector's old fill value,
+    /// to the bit (a `-0.0` would compare equal and change a sign downstream).
+    #[test]
+    fn a_cell_without_sub_faces_reads_the_default_wall_to_the_bit() {
+        assert_eq!(
+            format!("{:?}", NearWall::NONE),
+            format!("{:?}", NearWall::default())
+        );
+        let wall = NearWall {
+            area: 2.0,
+            ..NearWall::default()
+        };
+        let walls = NearWalls {
+            runs: vec![NearWall::default(), wall],
+            run_of: vec![0, 2, 0],
+        };
+        assert_eq!(walls.get(0), &NearWall::NONE);
+        assert_eq!(walls.get(1).area, 2.0);
+        assert_eq!(walls.get(2), &NearWall::NONE);
     }
 }
