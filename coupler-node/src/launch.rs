@@ -637,8 +637,11 @@ async fn supervise(
         if exits.iter().any(|(n, _)| n == node) {
             continue;
         }
-        let mpi = rank_reports.iter().any(|(n, _)| n == node);
-        let info = match tokio::time::timeout(grace, child.wait()).await {
+        let report = rank_reports.iter().find(|(n, _)| n == node).map(|(_, r)| r);
+        let mpi = report.is_some();
+        let waited = tokio::time::timeout(grace, child.wait()).await;
+        let ended_itself = matches!(waited, Ok(Ok(_)));
+        let mut info = match waited {
             Ok(Ok(status)) => describe(status),
             Ok(Err(e)) => ExitInfo {
                 success: false,
@@ -656,6 +659,16 @@ async fn supervise(
                 }
             }
         };
+        // NOTE: a rank that dies can end the run two ways: the watch above sees mpirun exit, or
+        // the coupler first finds the fluid gone on the bus and says stop. The launcher's line
+        // naming the rank is wanted on both (issue_16_mpi's killed rank went unnamed in one CI
+        // run of four, when the bus spoke first).
+        if let Some(report) = report
+            && ended_itself
+            && !info.success
+        {
+            crate::mpi_launch::name_rank(&mut info.text, report).await;
+        }
         exits.push((*node, info));
     }
     exits
