@@ -185,7 +185,7 @@ fn mpi_rank(pid: u32) -> Option<u32> {
 
 #[test]
 fn a_killed_rank_is_named_and_no_rank_is_left() {
-    killed_rank_is_named(&out_dir("mpi-kill"), None);
+    killed_rank_is_named(out_dir("mpi-kill"), None);
 }
 
 /// The same kill, with a launcher that reports its exit 1 s late: the coupler finds the fluid
@@ -201,18 +201,14 @@ fn a_killed_rank_is_named_when_the_bus_sees_it_gone_first() {
         "#!/bin/sh\nmpirun \"$@\"; rc=$?; sleep 1; exit $rc\n",
     )
     .expect("launcher");
-    let mut perms = std::fs::metadata(&launcher)
-        .expect("launcher")
-        .permissions();
-    std::os::unix::fs::PermissionsExt::set_mode(&mut perms, 0o755);
-    std::fs::set_permissions(&launcher, perms).expect("chmod");
-    killed_rank_is_named(&dir, Some(&launcher));
+    let executable = std::os::unix::fs::PermissionsExt::from_mode(0o755);
+    std::fs::set_permissions(&launcher, executable).expect("chmod");
+    killed_rank_is_named(dir, Some(&launcher));
 }
 
 /// Kills rank 1 of a 2-rank blast a few steps in (through `launcher` as `COSIM_MPIRUN` when
 /// given) and checks the summary names the rank and no process of the run is left.
-fn killed_rank_is_named(dir: &Path, launcher: Option<&Path>) {
-    let dir = dir.to_path_buf();
+fn killed_rank_is_named(dir: PathBuf, launcher: Option<&Path>) {
     let scene = blast_scene(&dir, 1_000_000, 1e6, "times = [1e6]");
     // A million steps of checkpoints would not fit the disk (issue 38 warns of it, or refuses
     // an uncompressed record): capped; the run is killed after a few steps anyway.
