@@ -1,7 +1,8 @@
 //! The regular (OSMP) faces of a line, strip by strip, and the special faces after them.
 //!
-//! A line longer than [`SHORT_LINE`] faces is cut into strips of [`STRIP_FACES`] faces. Each
-//! strip runs every pass of the scheme over its part of the line in a [`Strip`]'s buffers,
+//! A line longer than [`SHORT_LINE`] faces is cut into strips of [`STRIP_FACES`] or
+//! [`LONG_STRIP_FACES`] faces. Each strip runs every pass of the scheme over its part of the
+//! line in a [`Strip`]'s buffers,
 //! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
 //! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
 //! speeds' and waves' coefficients, OSMP's `Ψ` per wave (into an array on the stack of the
@@ -29,9 +30,9 @@
 //! machine's noise, ±5 %): lines whose arrays fit the L2 stream them from there as fast, so
 //! the kernel was not bound by its scratch traffic except beyond the L2.
 
-use super::{FaceFlux, LineScratch, LineSetup, n_waves, vacuum_face};
+use super::{LineScratch, LineSetup, n_waves, special_faces};
 use crate::fv::euler::{
-    NQ, RoeAverage, RoeSide, State, flux_hlle, physical_flux, primitive_floored, roe_eigenvector,
+    NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
 use crate::fv::isa::{AlignedVec, Isa};
@@ -49,9 +50,19 @@ type InterfaceVec = AlignedVec<INTERFACE_PAD>;
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
 pub(super) const STRIP_FACES: usize = 48;
+/// Faces a long strip computes: a line's strips are all of `STRIP_FACES` or all of
+/// `LONG_STRIP_FACES` faces, whichever computes fewer faces in all (the long ones on a tie).
+///
+/// NOTE: a 3-D line of 128 cells (137 faces counted from `CARRY / 2` before its first) takes
+/// two strips of 72 faces, not three of 48 (144 faces either way): one carry and one set-up of
+/// every pass less a line. On the 2-core Zen 4 machine, 128³ OSMP5, 1 thread, AVX-512: CPU
+/// time a step 317 → 307 ms (medians of 12 alternated pairs, under load; within the noise).
+/// A 2-D line of 518 cells keeps strips of 48 (528 faces against 576).
+const LONG_STRIP_FACES: usize = 72;
 /// The most faces a strip computes, counted from its first entry (`j0 + count` of `strip_faces`:
 /// `STRIP_FACES` a strip of a long line, up to `SHORT_LINE` for a short line).
 const PSI_FACES: usize = SHORT_LINE;
+const _: () = assert!(LONG_STRIP_FACES <= PSI_FACES && STRIP_FACES <= LONG_STRIP_FACES);
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
@@ -60,7 +71,7 @@ const CARRY: usize = 16;
 /// interface and curvature passes start at `CARRY − 1`, `CARRY − 1` and `CARRY − 3`.
 const FIRST_READ: usize = CARRY / 2;
 /// The length of every buffer of a strip (its cells).
-const STRIP_CELLS: usize = STRIP_FACES + CARRY;
+const STRIP_CELLS: usize = LONG_STRIP_FACES + CARRY;
 /// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
 /// they are, and strips of fixed length would compute up to a strip's faces more than it has.
 const SHORT_LINE: usize = 80;
@@ -465,12 +476,20 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
         s.strip.reserve(todo + CARRY);
         strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
     } else {
-        // Strips of STRIP_FACES faces (the last one's beyond the line's end computed on what
-        // is there, and not kept).
+        // Strips of STRIP_FACES or LONG_STRIP_FACES faces (the last one's beyond the line's
+        // end computed on what is there, and not kept).
         s.strip.reserve(STRIP_CELLS);
-        for k in 0..todo.div_ceil(STRIP_FACES) {
-            let a = k * STRIP_FACES;
-            strip_faces::<ORDER>(s, setup, a, STRIP_FACES, (0, STRIP_FACES), &mut psi);
+        let (short, long) = (todo.div_ceil(STRIP_FACES), todo.div_ceil(LONG_STRIP_FACES));
+        if long * LONG_STRIP_FACES <= short * STRIP_FACES {
+            for k in 0..long {
+                let (a, nc) = (k * LONG_STRIP_FACES, LONG_STRIP_FACES);
+                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), &mut psi);
+            }
+        } else {
+            for k in 0..short {
+                let (a, nc) = (k * STRIP_FACES, STRIP_FACES);
+                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), &mut psi);
+            }
         }
     }
     special_faces(s, setup, radius);
@@ -567,54 +586,6 @@ fn strip_faces<const ORDER: u32>(
     let face_q: [&[f64]; NQ] = std::array::from_fn(|q| &st.face_q[q][first..first + faces.len()]);
     for (j, face) in s.face[faces].iter_mut().enumerate() {
         *face = std::array::from_fn(|q| face_q[q][j]);
-    }
-}
-
-/// The special faces, over the regular flux: beside vacuum, Lax–Friedrichs (local between two
-/// vacuum cells); an invalid average in the stencil (`radius` interfaces either side) or
-/// non-physical star states, HLLE.
-///
-/// NOTE: the usual line has no invalid average and no vacuum cell; it then skips the
-/// prefix count and the per-face calls (the same choice for every face, made faster: the
-/// two were 3 % of a 3-D step).
-#[inline(always)]
-fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
-    let LineSetup { n, ng, gamma, .. } = *setup;
-    let all_valid = s.valid.iter().fold(true, |acc, &v| acc & v);
-    // NOTE: the usual line has no special face at all: one pass without a branch a face says
-    // so (the vacuum flags of each face's two cells and its star-state check), and every face
-    // is regular.
-    let (vacuum, star_ok) = (&s.vacuum[ng - 1..ng + n + 1], &s.star_ok[..n + 1]);
-    let all_regular = (0..=n).fold(all_valid, |all, fi| {
-        all & !(vacuum[fi] | vacuum[fi + 1]) & star_ok[fi]
-    });
-    if all_regular {
-        s.kind[..=n].fill(FaceFlux::Regular);
-        return;
-    }
-    if !all_valid {
-        s.bad_prefix[0] = 0;
-        for l in 0..s.valid.len() {
-            s.bad_prefix[l + 1] = s.bad_prefix[l] + u32::from(!s.valid[l]);
-        }
-    }
-    for fi in 0..=n {
-        let f = ng - 1 + fi;
-        let regular = !(s.vacuum[f] | s.vacuum[f + 1]) & s.star_ok[fi];
-        if regular && all_valid {
-            s.kind[fi] = FaceFlux::Regular;
-            continue;
-        }
-        if vacuum_face(s, setup, fi, f) {
-            continue;
-        }
-        let bad_stencil = !all_valid && s.bad_prefix[f + radius + 1] > s.bad_prefix[f - radius];
-        if bad_stencil || !s.star_ok[fi] {
-            s.face[fi] = flux_hlle(&s.u[f], &s.u[f + 1], gamma);
-            s.kind[fi] = FaceFlux::Hlle;
-        } else {
-            s.kind[fi] = FaceFlux::Regular;
-        }
     }
 }
 
