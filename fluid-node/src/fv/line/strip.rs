@@ -55,9 +55,9 @@ pub(super) const STRIP_FACES: usize = 48;
 ///
 /// NOTE: a 3-D line of 128 cells (137 faces counted from `CARRY / 2` before its first) takes
 /// two strips of 72 faces, not three of 48 (144 faces either way): one carry and one set-up of
-/// every pass less a line. On the 2-core Zen 4 machine, 128³ OSMP5, 1 thread, AVX-512: CPU
-/// time a step 317 → 307 ms (medians of 12 alternated pairs, under load; within the noise).
-/// A 2-D line of 518 cells keeps strips of 48 (528 faces against 576).
+/// every pass less a line: 3.8 % fewer kernel instructions on 128³ (AVX2, callgrind), the CPU
+/// time a step within the 2-core Zen 4 machine's noise (docs/performance.md, hP). A 2-D line
+/// of 518 cells keeps strips of 48 (528 faces against 576).
 const LONG_STRIP_FACES: usize = 72;
 /// The most faces a strip computes, counted from its first entry (`j0 + count` of `strip_faces`:
 /// `STRIP_FACES` a strip of a long line, up to `SHORT_LINE` for a short line).
