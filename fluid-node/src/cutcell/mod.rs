@@ -18,6 +18,8 @@
 //! 6. [`compute_block`]: Λ, λ and the sub-faces of one block of a decomposed grid and a halo,
 //!    from the elements that reach them only, with the bits of [`compute`] on the block's cells
 //!    (issue 40, docs/mpi.md).
+//! 7. [`block_part`] and [`CutGeometry::assemble`]: the whole grid's geometry put together, bit
+//!    for bit, from every block's own cells (issue 40 item 1, step 4 (a), docs/mpi.md).
 //!
 //! # Method
 //!
@@ -70,6 +72,7 @@
 //! assert_eq!(geometry.solid_fraction[grid.index(1, 1, 0)], 1.0);
 //! ```
 
+mod assemble;
 mod block;
 pub(crate) mod clip;
 mod geometry;
@@ -83,6 +86,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
+pub use assemble::block_part;
 pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,

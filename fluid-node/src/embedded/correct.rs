@@ -20,7 +20,8 @@ use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{
-    SubFace, Surface, compute, face_index, subface_swept_volumes, subface_swept_volumes_of,
+    SubFace, Surface, block_part, compute, compute_block, face_index, subface_swept_volumes,
+    subface_swept_volumes_of,
 };
 use crate::fv::euler::NQ;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -115,11 +116,16 @@ impl Embedded {
     /// The geometry of `F^{n+1}` and the prisms its sub-faces sweep back to `F^n`, checked
     /// against identity (3). On the fluid's pool.
     ///
-    /// Collective on a decomposed grid: each rank clips the prisms of the sub-faces of its own
-    /// cells only (`subface_swept_volumes_of`), and the entries of every rank are gathered on
-    /// every rank in sub-face order ([`gather_swept`]), so every rank holds the entries of one
-    /// rank. The geometry itself is still the whole grid's: it becomes `F^n`'s, which the next
-    /// predict's near cells, the totals and the outputs read on the whole grid.
+    /// Collective on a decomposed grid: each rank computes the geometry of its own block only
+    /// (`compute_block`, no halo) and one all-gather of every block's share (`block_part`: Λ
+    /// and λ as runs of equal values, the sub-faces of its cells) gives every rank the whole
+    /// grid's geometry, bit for bit (`CutGeometry::assemble`), so that no rank clips the whole
+    /// surface; each rank clips the prisms of the sub-faces of its own cells only
+    /// (`subface_swept_volumes_of`), and the entries of every rank are gathered on every rank
+    /// in sub-face order ([`gather_swept`]), so every rank holds the entries of one rank. The
+    /// geometry every rank holds is still the whole grid's: it becomes `F^n`'s, which the next
+    /// predict's near cells, the totals and the outputs read on the whole grid (docs/mpi.md,
+    /// step 4 (a)).
     fn sweep(
         &mut self,
         solver: &FluidSolver,
@@ -150,8 +156,17 @@ impl Embedded {
             .map_err(|e| e.at_step(step))?;
         let scratch = &mut self.scratch;
         let block = self.config.block;
+        match block {
+            None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial)),
+            Some(block) => {
+                let part = solver.install(|| {
+                    block_part(grid, &compute_block(grid, &accepted.surface(), block, 0))
+                });
+                let parts = solver.comm().all_gather(&part);
+                solver.install(|| scratch.trial.assemble(grid, &parts));
+            }
+        }
         solver.install(|| {
-            compute(grid, &accepted.surface(), &mut scratch.trial);
             let (after, geom) = (&accepted.surface(), &scratch.trial);
             match block {
                 None => subface_swept_volumes(grid, &before, after, geom, &mut scratch.swept),
