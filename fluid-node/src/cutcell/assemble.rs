@@ -21,6 +21,7 @@
 use crate::cutcell::block::{BlockGeometry, CellBox};
 use crate::cutcell::geometry::{CutGeometry, SubFace, face_index};
 use crate::grid::Grid;
+use crate::memory::vec_bytes;
 
 /// The share of `b` (computed by `compute_block` for its block, any halo) in the whole grid's
 /// geometry, as bytes for [`CutGeometry::assemble`]: Λ of the block's cells, λ of the faces it
@@ -96,7 +97,7 @@ fn runs(cells: CellBox, value: impl Fn([usize; 3]) -> (u32, f64)) -> Vec<Run> {
 }
 
 /// A run of equal bits.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Run {
     at: u32,
     len: u32,
@@ -147,6 +148,77 @@ impl Reader<'_> {
     }
 }
 
+/// What one part's runs and sub-faces go into.
+trait Sink {
+    fn cells(&mut self, run: Run);
+    fn faces(&mut self, axis: usize, run: Run);
+}
+
+/// The whole grid's dense arrays (and their written ranges, for the sparse reset).
+struct Dense<'a>(&'a mut CutGeometry);
+
+impl Sink for Dense<'_> {
+    fn cells(&mut self, run: Run) {
+        let (at, len) = (run.at as usize, run.len as usize);
+        self.0.solid_fraction[at..at + len].fill(f64::from_bits(run.bits));
+        self.0.written_cells.push((run.at, run.len));
+    }
+
+    fn faces(&mut self, axis: usize, run: Run) {
+        let (at, len) = (run.at as usize, run.len as usize);
+        self.0.face_fraction[axis][at..at + len].fill(f64::from_bits(run.bits));
+        self.0.written_faces[axis].push((run.at, run.len));
+    }
+}
+
+impl Sink for HeldFractions {
+    fn cells(&mut self, run: Run) {
+        self.cell_runs.push(run);
+        let held = self.held;
+        let shape = self.cells;
+        write_row(
+            run,
+            shape,
+            |ijk| held.contains(ijk).then(|| held.index(ijk)),
+            &mut self.solid_fraction,
+        );
+    }
+
+    fn faces(&mut self, axis: usize, run: Run) {
+        self.face_runs[axis].push(run);
+        let held = self.held;
+        let mut shape = self.cells;
+        shape[axis] += 1;
+        write_row(
+            run,
+            shape,
+            |ijk| held.has_face(axis, ijk).then(|| held.face_index(axis, ijk)),
+            &mut self.face_fraction[axis],
+        );
+    }
+}
+
+/// Writes the values of `run` (one row along x of an array of `shape`, x fastest) at the
+/// places `at` gives them in `out`.
+fn write_row(
+    run: Run,
+    shape: [usize; 3],
+    at: impl Fn([usize; 3]) -> Option<usize>,
+    out: &mut [f64],
+) {
+    let first = run.at as usize;
+    let (i, j, k) = (
+        first % shape[0],
+        (first / shape[0]) % shape[1],
+        first / (shape[0] * shape[1]),
+    );
+    for x in i..i + run.len as usize {
+        if let Some(p) = at([x, j, k]) {
+            out[p] = f64::from_bits(run.bits);
+        }
+    }
+}
+
 impl CutGeometry {
     /// The whole grid's geometry from the [`block_part`]s of every block of a partition of the
     /// grid, in block order (buffers reused): Λ, λ, the sub-faces and the cut cells of
@@ -156,48 +228,249 @@ impl CutGeometry {
     /// Pure. Cost: the runs and sub-faces of the parts, and the sort of the sub-faces by cell.
     pub fn assemble(&mut self, grid: &Grid, parts: &[Vec<u8>]) {
         self.reset(grid);
-        let mut subfaces: Vec<SubFace> = Vec::new();
-        for part in parts {
-            let mut r = Reader { bytes: part, at: 0 };
-            for run in r.runs() {
-                let (at, len) = (run.at as usize, run.len as usize);
-                self.solid_fraction[at..at + len].fill(f64::from_bits(run.bits));
-                self.written_cells.push((run.at, run.len));
-            }
-            for axis in 0..3 {
-                for run in r.runs() {
-                    let (at, len) = (run.at as usize, run.len as usize);
-                    self.face_fraction[axis][at..at + len].fill(f64::from_bits(run.bits));
-                    self.written_faces[axis].push((run.at, run.len));
-                }
-            }
-            for _ in 0..r.u64() {
-                let (cell, element, particle, n_vertices) = (r.u32(), r.u32(), r.u32(), r.u32());
-                let area = r.f64();
-                let normal = [r.f64(), r.f64(), r.f64()];
-                let centroid = [r.f64(), r.f64(), r.f64()];
-                let first_vertex = self.subface_vertices.len() as u32;
-                for _ in 0..n_vertices {
-                    let v = [r.f64(), r.f64(), r.f64()];
-                    self.subface_vertices.push(v);
-                }
-                subfaces.push(SubFace {
-                    cell,
-                    element,
-                    particle,
-                    area,
-                    normal,
-                    centroid,
-                    first_vertex,
-                    n_vertices,
-                });
-            }
-            assert_eq!(r.at, part.len(), "a block part read to its end");
-        }
+        let mut vertices = std::mem::take(&mut self.subface_vertices);
+        let subfaces = read_parts(parts, &mut vertices, &mut Dense(self));
+        self.subface_vertices = vertices;
+        self.put_subfaces(subfaces);
+    }
+
+    /// [`CutGeometry::assemble`] without the whole grid's dense arrays (left empty): the
+    /// sub-faces and cut cells of the whole grid here, Λ and λ in `held` (dense in its box, as
+    /// runs elsewhere), with the same bits.
+    pub fn assemble_held(&mut self, grid: &Grid, parts: &[Vec<u8>], held: &mut HeldFractions) {
+        self.release_dense();
+        self.subfaces.clear();
+        self.subface_vertices.clear();
+        self.cut_cells.clear();
+        self.diagnostics = Default::default();
+        held.clear(grid);
+        let subfaces = read_parts(parts, &mut self.subface_vertices, held);
+        held.sort_runs();
+        self.put_subfaces(subfaces);
+    }
+
+    /// Frees Λ and λ of the whole grid (what [`HeldFractions`] holds instead); a later
+    /// [`crate::cutcell::compute`] allocates them again.
+    pub fn release_dense(&mut self) {
+        self.solid_fraction = Vec::new();
+        self.face_fraction = Default::default();
+        self.written_cells.clear();
+        self.written_faces = Default::default();
+    }
+
+    fn put_subfaces(&mut self, mut subfaces: Vec<SubFace>) {
         // Stable: a cell's sub-faces come from one block, in the whole surface's order.
         subfaces.sort_by_key(|s| s.cell);
         self.subfaces = subfaces;
         self.cut_cells.extend(self.subfaces.iter().map(|s| s.cell));
         self.cut_cells.dedup();
     }
+}
+
+/// Reads every part: its runs into `sink`, its sub-faces' vertices onto `vertices`; returns
+/// the sub-faces, in the parts' order.
+fn read_parts(
+    parts: &[Vec<u8>],
+    vertices: &mut Vec<[f64; 3]>,
+    sink: &mut impl Sink,
+) -> Vec<SubFace> {
+    let mut subfaces: Vec<SubFace> = Vec::new();
+    for part in parts {
+        let mut r = Reader { bytes: part, at: 0 };
+        for run in r.runs() {
+            sink.cells(run);
+        }
+        for axis in 0..3 {
+            for run in r.runs() {
+                sink.faces(axis, run);
+            }
+        }
+        for _ in 0..r.u64() {
+            let (cell, element, particle, n_vertices) = (r.u32(), r.u32(), r.u32(), r.u32());
+            let area = r.f64();
+            let normal = [r.f64(), r.f64(), r.f64()];
+            let centroid = [r.f64(), r.f64(), r.f64()];
+            let first_vertex = vertices.len() as u32;
+            for _ in 0..n_vertices {
+                vertices.push([r.f64(), r.f64(), r.f64()]);
+            }
+            subfaces.push(SubFace {
+                cell,
+                element,
+                particle,
+                area,
+                normal,
+                centroid,
+                first_vertex,
+                n_vertices,
+            });
+        }
+        assert_eq!(r.at, part.len(), "a block part read to its end");
+    }
+    subfaces
+}
+
+/// Λ and λ of a surface as one rank of a decomposed grid holds them (issue 40 item 1, step 4
+/// (a)): dense in a box of cells (a block and the halo its readers need), and as runs of equal
+/// values over the whole grid, so that a value anywhere can still be read (slower).
+#[derive(Clone, Debug, Default)]
+pub struct HeldFractions {
+    /// The cells held dense.
+    pub held: CellBox,
+    /// The grid's cells per axis.
+    cells: [usize; 3],
+    /// Λ per cell of `held` ([`CellBox::index`]).
+    pub solid_fraction: Vec<f64>,
+    /// λ per face of `held`'s cells and axis ([`CellBox::face_index`]).
+    pub face_fraction: [Vec<f64>; 3],
+    /// Λ of the whole grid: runs of equal, non-zero values, by first cell.
+    cell_runs: Vec<Run>,
+    /// λ of the whole grid per axis, the same way (by face index, [`face_index`]).
+    face_runs: [Vec<Run>; 3],
+}
+
+impl HeldFractions {
+    /// Empty, for the box `held` of `grid`'s cells.
+    pub fn new(grid: &Grid, held: CellBox) -> HeldFractions {
+        let mut out = HeldFractions {
+            held,
+            ..HeldFractions::default()
+        };
+        out.clear(grid);
+        out
+    }
+
+    /// Zeroes the arrays: sparsely, where the runs wrote (each within a row), when they have
+    /// the box's size.
+    fn clear(&mut self, grid: &Grid) {
+        let fits = self.cells == grid.cells
+            && self.solid_fraction.len() == self.held.n_cells()
+            && (0..3).all(|a| self.face_fraction[a].len() == self.held.n_faces(grid, a));
+        if fits {
+            for run in std::mem::take(&mut self.cell_runs) {
+                self.cells(Run { bits: 0, ..run });
+            }
+            for axis in 0..3 {
+                for run in std::mem::take(&mut self.face_runs[axis]) {
+                    self.faces(axis, Run { bits: 0, ..run });
+                }
+            }
+        } else {
+            self.cells = grid.cells;
+            self.solid_fraction.clear();
+            self.solid_fraction.resize(self.held.n_cells(), 0.0);
+            for axis in 0..3 {
+                self.face_fraction[axis].clear();
+                self.face_fraction[axis].resize(self.held.n_faces(grid, axis), 0.0);
+            }
+        }
+        self.cell_runs.clear();
+        for runs in &mut self.face_runs {
+            runs.clear();
+        }
+    }
+
+    fn sort_runs(&mut self) {
+        self.cell_runs.sort_unstable_by_key(|r| r.at);
+        for runs in &mut self.face_runs {
+            runs.sort_unstable_by_key(|r| r.at);
+        }
+    }
+
+    /// The same from the whole grid's geometry `whole` (its dense arrays).
+    pub fn from_whole(grid: &Grid, whole: &CutGeometry, held: CellBox) -> HeldFractions {
+        let mut out = HeldFractions::new(grid, held);
+        out.cell_runs = whole_runs(&whole.solid_fraction, grid.cells[0]);
+        for k in held.lo[2]..held.hi[2] {
+            for j in held.lo[1]..held.hi[1] {
+                for i in held.lo[0]..held.hi[0] {
+                    let c = grid.index(i, j, k);
+                    out.solid_fraction[held.index([i, j, k])] = whole.solid_fraction[c];
+                }
+            }
+        }
+        for axis in 0..grid.dim {
+            let row = grid.cells[0] + usize::from(axis == 0);
+            out.face_runs[axis] = whole_runs(&whole.face_fraction[axis], row);
+            let mut faces = held;
+            faces.hi[axis] += 1;
+            for k in faces.lo[2]..faces.hi[2] {
+                for j in faces.lo[1]..faces.hi[1] {
+                    for i in faces.lo[0]..faces.hi[0] {
+                        let f = face_index(grid, axis, [i, j, k]);
+                        let p = held.face_index(axis, [i, j, k]);
+                        out.face_fraction[axis][p] = whole.face_fraction[axis][f];
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Λ of cell `c` (linear index of the whole grid).
+    #[inline]
+    pub fn solid_fraction_of(&self, c: usize) -> f64 {
+        let n = self.cells;
+        let ijk = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
+        if self.held.contains(ijk) {
+            return self.solid_fraction[self.held.index(ijk)];
+        }
+        run_value(&self.cell_runs, c)
+    }
+
+    /// λ of face `f` along `axis` ([`face_index`] of the whole grid).
+    #[inline]
+    pub fn face_fraction_of(&self, axis: usize, f: usize) -> f64 {
+        let mut n = self.cells;
+        n[axis] += 1;
+        let ijk = [f % n[0], (f / n[0]) % n[1], f / (n[0] * n[1])];
+        if self.held.has_face(axis, ijk) {
+            return self.face_fraction[axis][self.held.face_index(axis, ijk)];
+        }
+        run_value(&self.face_runs[axis], f)
+    }
+
+    /// Heap bytes of the dense arrays (capacities).
+    pub fn dense_bytes(&self) -> usize {
+        vec_bytes(&self.solid_fraction) + self.face_fraction.iter().map(vec_bytes).sum::<usize>()
+    }
+
+    /// Heap bytes of the runs (capacities).
+    pub fn run_bytes(&self) -> usize {
+        vec_bytes(&self.cell_runs) + self.face_runs.iter().map(vec_bytes).sum::<usize>()
+    }
+}
+
+/// The value at `at` of sorted, disjoint `runs` (0 outside them).
+fn run_value(runs: &[Run], at: usize) -> f64 {
+    let p = runs.partition_point(|r| r.at as usize <= at);
+    match p.checked_sub(1).map(|p| runs[p]) {
+        Some(r) if at < (r.at + r.len) as usize => f64::from_bits(r.bits),
+        _ => 0.0,
+    }
+}
+
+/// Runs of equal, non-zero bits of a whole array of rows of `row` values, each within a row.
+fn whole_runs(values: &[f64], row: usize) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
+    let mut open = false;
+    for (i, v) in values.iter().enumerate() {
+        let bits = v.to_bits();
+        if i % row == 0 {
+            open = false;
+        }
+        match out.last_mut() {
+            Some(r) if open && r.bits == bits => r.len += 1,
+            _ if bits == 0 => open = false,
+            _ => {
+                out.push(Run {
+                    at: i as u32,
+                    len: 1,
+                    bits,
+                });
+                open = true;
+            }
+        }
+    }
+    out
 }

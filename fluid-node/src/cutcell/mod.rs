@@ -86,7 +86,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
-pub use assemble::block_part;
+pub use assemble::{HeldFractions, block_part};
 pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,

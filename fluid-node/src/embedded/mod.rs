@@ -82,6 +82,7 @@ mod crack;
 mod error;
 mod frame;
 mod gather;
+mod held;
 mod hooks;
 mod levers;
 mod loads;
