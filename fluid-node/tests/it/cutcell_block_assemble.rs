@@ -6,11 +6,14 @@
 //! `fv_ranks` tests at several positions, on their process grids, with and without a halo, and
 //! into buffers that held another geometry (the sparse reset). And the prisms of each block's
 //! sub-faces taken from it (`subface_swept_volumes_of`, whose vertices it finds by cell), put
-//! together as the correct gathers them, are the whole surface's.
+//! together as the correct gathers them, are the whole surface's. And what a rank holds of it
+//! (`CutGeometry::assemble_held`: Λ and λ dense in its block and a halo, as runs elsewhere,
+//! `HeldFractions`; the same from the whole grid's, `HeldFractions::from_whole`) reads the
+//! whole grid's bits at every cell and face, into buffers that held another surface.
 
 use fluid_node::cutcell::{
-    CellBox, CutGeometry, SubFace, SubfaceSwept, SubfaceSweptEntry, block_part, compute,
-    compute_block, subface_swept_volumes, subface_swept_volumes_of,
+    CellBox, CutGeometry, HeldFractions, SubFace, SubfaceSwept, SubfaceSweptEntry, block_part,
+    compute, compute_block, n_faces, subface_swept_volumes, subface_swept_volumes_of,
 };
 use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
@@ -171,4 +174,100 @@ fn the_whole_geometry_put_together_from_the_blocks_is_computes_3d() {
     ];
     let other = check("3-D", &grid, &moving_bodies_3d(), 0.012, &decomps);
     assert!(other > 0, "3-D: some vertices in another layout");
+}
+
+/// Asserts `held` reads the whole grid's Λ and λ of `whole` at every cell and face, bit for bit.
+fn assert_held(grid: &Grid, whole: &CutGeometry, held: &HeldFractions, what: &str) {
+    for c in 0..grid.n_cells() {
+        assert_eq!(
+            whole.solid_fraction[c].to_bits(),
+            held.solid_fraction_of(c).to_bits(),
+            "{what}: Λ of cell {:?} (held {:?})",
+            grid.ijk(c),
+            held.held
+        );
+    }
+    for axis in 0..grid.dim {
+        for f in 0..n_faces(grid, axis) {
+            assert_eq!(
+                whole.face_fraction[axis][f].to_bits(),
+                held.face_fraction_of(axis, f).to_bits(),
+                "{what}: λ along {axis} of face {f} (held {:?})",
+                held.held
+            );
+        }
+    }
+}
+
+/// Every block of every process grid of `decomps`, held with halos 0, 2 and 15, over 3 moves
+/// of `dt` into the same buffers: `assemble_held` and `from_whole` read the whole grid's bits,
+/// and the sub-faces and cut cells are the whole grid's, its dense arrays left empty. Returns
+/// the blocks whose dense arrays are smaller than the whole grid's.
+fn check_held(grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize; 3]]) -> usize {
+    let dx = grid.dx[0];
+    let moves: Vec<(SolidFrame, CutGeometry)> = (0..3)
+        .map(|k| {
+            let frame = deformed(&translated(solid, k as f64 * dt), dt, dx);
+            let mut whole = CutGeometry::new();
+            compute(grid, &frame.surface(), &mut whole);
+            (frame, whole)
+        })
+        .collect();
+    let mut smaller = 0;
+    for dims in decomps {
+        let ranks: usize = dims.iter().product();
+        for r in 0..ranks {
+            for halo in [0, 2, 15] {
+                let block = CellBox::of_rank(grid, *dims, r);
+                let mut held = HeldFractions::new(grid, block.grown(grid, halo));
+                let mut cut = CutGeometry::new();
+                compute(grid, &moves[2].0.surface(), &mut cut);
+                for (k, (frame, whole)) in moves.iter().enumerate() {
+                    let what = format!("move {k}, {dims:?} rank {r}, halo {halo}");
+                    let parts: Vec<Vec<u8>> = (0..ranks)
+                        .map(|q| {
+                            let b = CellBox::of_rank(grid, *dims, q);
+                            block_part(grid, &compute_block(grid, &frame.surface(), b, 0))
+                        })
+                        .collect();
+                    cut.assemble_held(grid, &parts, &mut held);
+                    assert_held(grid, whole, &held, &what);
+                    assert!(cut.solid_fraction.is_empty(), "{what}: no whole Λ");
+                    assert_eq!(cut.cut_cells, whole.cut_cells, "{what}: cut cells");
+                    let bits = |g: &CutGeometry| -> Vec<Vec<u64>> {
+                        (g.subfaces.iter())
+                            .map(|s| subface_bits(s, &g.subface_vertices))
+                            .collect()
+                    };
+                    assert_eq!(bits(&cut), bits(whole), "{what}: sub-faces");
+                    let from = HeldFractions::from_whole(grid, whole, held.held);
+                    assert_held(grid, whole, &from, &format!("{what}, from the whole grid"));
+                }
+                smaller += usize::from(held.dense_bytes() < whole_dense(grid));
+            }
+        }
+    }
+    smaller
+}
+
+/// Bytes of the whole grid's Λ and λ.
+fn whole_dense(grid: &Grid) -> usize {
+    8 * (grid.n_cells() + (0..grid.dim).map(|a| n_faces(grid, a)).sum::<usize>())
+}
+
+#[test]
+fn what_a_rank_holds_reads_the_whole_grids_fractions_2d() {
+    let (grid, _) = blast(&[40, 48]);
+    let solid = bodies(&[moving_bodies_2d(), seam_plate_2d()]);
+    let decomps = [[1, 2, 1], [2, 2, 1], [3, 1, 1], [2, 4, 1]];
+    let smaller = check_held(&grid, &solid, 0.006, &decomps);
+    assert!(smaller > 0, "2-D: some ranks hold less than the whole grid");
+}
+
+#[test]
+fn what_a_rank_holds_reads_the_whole_grids_fractions_3d() {
+    let (grid, _) = blast(&[16, 16, 24]);
+    let decomps = [[1, 1, 2], [1, 2, 2], [1, 1, 3], [1, 2, 4]];
+    let smaller = check_held(&grid, &moving_bodies_3d(), 0.012, &decomps);
+    assert!(smaller > 0, "3-D: some ranks hold less than the whole grid");
 }
