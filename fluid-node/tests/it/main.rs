@@ -15,6 +15,7 @@ mod embedded_boundary;
 mod embedded_crack;
 mod embedded_hooks_block;
 mod embedded_memory;
+mod embedded_memory_ranks;
 mod embedded_particles;
 mod embedded_piston;
 mod embedded_rest;
