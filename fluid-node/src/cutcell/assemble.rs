@@ -32,9 +32,11 @@ use crate::memory::vec_bytes;
 pub fn block_part(grid: &Grid, b: &BlockGeometry) -> Vec<u8> {
     let mut out = Vec::new();
     let block = b.block;
-    let cells = runs(block, |ijk| {
-        let c = grid.index(ijk[0], ijk[1], ijk[2]) as u32;
-        (c, b.solid_fraction_at(ijk))
+    let (w, n0) = (b.window, block.size(0));
+    let cells = runs(block, |j, k| {
+        let at = w.index([block.lo[0], j, k]);
+        let first = grid.index(block.lo[0], j, k) as u32;
+        (first, &b.solid_fraction[at..at + n0])
     });
     put_runs(&mut out, &cells);
     for axis in 0..3 {
@@ -47,9 +49,11 @@ pub fn block_part(grid: &Grid, b: &BlockGeometry) -> Vec<u8> {
         if block.hi[axis] == grid.cells[axis] {
             faces.hi[axis] += 1;
         }
-        let runs = runs(faces, |ijk| {
-            let f = face_index(grid, axis, ijk) as u32;
-            (f, b.face_fraction_at(axis, ijk))
+        let n0 = faces.size(0);
+        let runs = runs(faces, |j, k| {
+            let at = w.face_index(axis, [faces.lo[0], j, k]);
+            let first = face_index(grid, axis, [faces.lo[0], j, k]) as u32;
+            (first, &b.face_fraction[axis][at..at + n0])
         });
         put_runs(&mut out, &runs);
     }
@@ -71,15 +75,20 @@ pub fn block_part(grid: &Grid, b: &BlockGeometry) -> Vec<u8> {
     out
 }
 
-/// Runs `(first index, length, bits)` of equal, non-zero bits of `value` over the cells (or
-/// faces) of `cells`, x fastest; a run never leaves its row, whose indices are consecutive.
-fn runs(cells: CellBox, value: impl Fn([usize; 3]) -> (u32, f64)) -> Vec<Run> {
+/// Runs `(first index, length, bits)` of equal, non-zero bits over the rows along x of
+/// `cells` (`row(j, k)`: the global index of the row's first value, and its values); a run
+/// never leaves its row, whose indices are consecutive.
+fn runs<'a>(cells: CellBox, row: impl Fn(usize, usize) -> (u32, &'a [f64])) -> Vec<Run> {
     let mut out: Vec<Run> = Vec::new();
     for k in cells.lo[2]..cells.hi[2] {
         for j in cells.lo[1]..cells.hi[1] {
+            let (first, values) = row(j, k);
+            // NOTE: most rows hold no solid; they are skipped at the speed of a scan.
+            if values.iter().all(|v| v.to_bits() == 0) {
+                continue;
+            }
             let mut open = false;
-            for i in cells.lo[0]..cells.hi[0] {
-                let (at, v) = value([i, j, k]);
+            for (i, v) in values.iter().enumerate() {
                 let bits = v.to_bits();
                 match out.last_mut() {
                     Some(r) if open && r.bits == bits => r.len += 1,
@@ -87,7 +96,11 @@ fn runs(cells: CellBox, value: impl Fn([usize; 3]) -> (u32, f64)) -> Vec<Run> {
                         open = false;
                         continue;
                     }
-                    _ => out.push(Run { at, len: 1, bits }),
+                    _ => out.push(Run {
+                        at: first + i as u32,
+                        len: 1,
+                        bits,
+                    }),
                 }
                 open = true;
             }
@@ -411,6 +424,18 @@ impl HeldFractions {
     #[inline]
     pub fn solid_fraction_of(&self, c: usize) -> f64 {
         let n = self.cells;
+        // NOTE: a box that spans x and y (slabs) holds one range of the global numbering.
+        if self.held.lo[0] == 0
+            && self.held.hi[0] == n[0]
+            && self.held.lo[1] == 0
+            && self.held.hi[1] == n[1]
+        {
+            let first = n[0] * n[1] * self.held.lo[2];
+            return match c.checked_sub(first) {
+                Some(at) if at < self.solid_fraction.len() => self.solid_fraction[at],
+                _ => run_value(&self.cell_runs, c),
+            };
+        }
         let ijk = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])];
         if self.held.contains(ijk) {
             return self.solid_fraction[self.held.index(ijk)];
@@ -423,6 +448,15 @@ impl HeldFractions {
     pub fn face_fraction_of(&self, axis: usize, f: usize) -> f64 {
         let mut n = self.cells;
         n[axis] += 1;
+        let h = self.held;
+        if h.lo[0] == 0 && h.hi[0] == self.cells[0] && h.lo[1] == 0 && h.hi[1] == self.cells[1] {
+            // The box's faces along `axis` are one range of the faces' numbering too.
+            let first = n[0] * n[1] * h.lo[2];
+            return match f.checked_sub(first) {
+                Some(at) if at < self.face_fraction[axis].len() => self.face_fraction[axis][at],
+                _ => run_value(&self.face_runs[axis], f),
+            };
+        }
         let ijk = [f % n[0], (f / n[0]) % n[1], f / (n[0] * n[1])];
         if self.held.has_face(axis, ijk) {
             return self.face_fraction[axis][self.held.face_index(axis, ijk)];
