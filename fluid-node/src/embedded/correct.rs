@@ -119,13 +119,12 @@ impl Embedded {
     /// Collective on a decomposed grid: each rank computes the geometry of its own block only
     /// (`compute_block`, no halo) and one all-gather of every block's share (`block_part`: Λ
     /// and λ as runs of equal values, the sub-faces of its cells) gives every rank the whole
-    /// grid's geometry, bit for bit (`CutGeometry::assemble`), so that no rank clips the whole
-    /// surface; each rank clips the prisms of the sub-faces of its own cells only
-    /// (`subface_swept_volumes_of`), and the entries of every rank are gathered on every rank
-    /// in sub-face order ([`gather_swept`]), so every rank holds the entries of one rank. The
-    /// geometry every rank holds is still the whole grid's: it becomes `F^n`'s, which the next
-    /// predict's near cells, the totals and the outputs read on the whole grid (docs/mpi.md,
-    /// step 4 (a)).
+    /// grid's sub-faces and cut cells, and Λ and λ dense in its block and the hooks' halo and
+    /// as runs elsewhere (`CutGeometry::assemble_held`, `held.rs`): the bits of one rank, read
+    /// anywhere, without the whole grid's dense arrays; each rank clips the prisms of the
+    /// sub-faces of its own cells only (`subface_swept_volumes_of`), and the entries of every
+    /// rank are gathered on every rank in sub-face order ([`gather_swept`]), so every rank
+    /// holds the entries of one rank (docs/mpi.md, step 4 (a)).
     fn sweep(
         &mut self,
         solver: &FluidSolver,

@@ -168,8 +168,8 @@ impl NearCells {
 impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
-        // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16; the loads, the
+        // NOTE: every rank of a decomposed fluid holds the whole surface and runs the correct
+        // on the whole grid (replicated, issue 16; the geometry by block, held by window, the loads, the
         // sweeps' ghost fills, wall runs and vacuum cells, and the correct's prisms and cell
         // updates are taken by block, issue 40): the
         // cut-cell data are surface-sized, and the same inputs give every rank the bits of one
