@@ -74,6 +74,7 @@
 
 mod assemble;
 mod block;
+mod chain;
 pub(crate) mod clip;
 mod geometry;
 mod measure;
@@ -88,6 +89,7 @@ mod tests;
 
 pub use assemble::{HeldFractions, block_part};
 pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
+pub use chain::{BlockSweep, compute_blocks, pass_messages};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };

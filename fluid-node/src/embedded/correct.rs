@@ -13,15 +13,15 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, gather_swept, gather_updates};
+use super::gather::{CellUpdate, chained_block_part, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{
-    HeldFractions, SubFace, Surface, block_part, compute, compute_block, face_index,
-    subface_swept_volumes, subface_swept_volumes_of,
+    HeldFractions, SubFace, Surface, compute, face_index, subface_swept_volumes,
+    subface_swept_volumes_of,
 };
 use crate::fv::euler::NQ;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -117,7 +117,8 @@ impl Embedded {
     /// against identity (3). On the fluid's pool.
     ///
     /// Collective on a decomposed grid: each rank computes the geometry of its own block only
-    /// (`compute_block`, no halo) and one all-gather of every block's share (`block_part`: Λ
+    /// (`chained_block_part`: no halo, the running sums of the cut axes passed along the pencils
+    /// of blocks, no row swept whole) and one all-gather of every block's share (`block_part`: Λ
     /// and λ as runs of equal values, the sub-faces of its cells) gives every rank the whole
     /// grid's sub-faces and cut cells, and Λ and λ dense in its block and the hooks' halo and
     /// as runs elsewhere (`CutGeometry::assemble_held`, `held.rs`): the bits of one rank, read
@@ -159,9 +160,7 @@ impl Embedded {
         match block {
             None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
             Some(block) => {
-                let part = solver.install(|| {
-                    block_part(grid, &compute_block(grid, &accepted.surface(), block, 0))
-                });
+                let part = chained_block_part(solver, &accepted.surface(), block);
                 let parts = solver.comm().all_gather(&part);
                 let trial = &mut scratch.trial;
                 let fractions = trial

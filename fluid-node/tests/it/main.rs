@@ -5,6 +5,7 @@
 mod cutcell_2d;
 mod cutcell_block;
 mod cutcell_block_assemble;
+mod cutcell_block_chain;
 mod cutcell_cmd;
 mod cutcell_degenerate;
 mod cutcell_geometry;
