@@ -30,6 +30,31 @@ use crate::memory::vec_bytes;
 /// Pure. Size: 16 bytes per run of equal values along x (a covered run is one), 68 bytes and
 /// 24 per vertex for each sub-face.
 pub fn block_part(grid: &Grid, b: &BlockGeometry) -> Vec<u8> {
+    block_part_with(grid, b, true)
+}
+
+/// [`block_part`] without the sub-faces' vertices (what other ranks do not read: each rank
+/// clips the prisms of its own cells' sub-faces only), and those vertices apart, in the order of
+/// the block's own sub-faces: the share a rank sends to the others, and what
+/// [`CutGeometry::assemble_held_own`] puts back for its own part. Pure. Size: 72 bytes per
+/// sub-face instead of 72 + 24 per vertex.
+pub fn block_part_shared(grid: &Grid, b: &BlockGeometry) -> (Vec<u8>, Vec<[f64; 3]>) {
+    let vertices = (b.subfaces.iter())
+        .filter(|s| b.block.contains(grid.ijk(s.cell as usize)))
+        .flat_map(|s| {
+            let first = s.first_vertex as usize;
+            b.subface_vertices[first..first + s.n_vertices as usize]
+                .iter()
+                .copied()
+        })
+        .collect();
+    (block_part_with(grid, b, false), vertices)
+}
+
+/// Set in a part's sub-face count when the part carries no vertices.
+const NO_VERTICES: u64 = 1 << 63;
+
+fn block_part_with(grid: &Grid, b: &BlockGeometry, with_vertices: bool) -> Vec<u8> {
     let mut out = Vec::new();
     let block = b.block;
     let (w, n0) = (b.window, block.size(0));
@@ -60,14 +85,20 @@ pub fn block_part(grid: &Grid, b: &BlockGeometry) -> Vec<u8> {
     let own: Vec<&SubFace> = (b.subfaces.iter())
         .filter(|s| block.contains(grid.ijk(s.cell as usize)))
         .collect();
-    out.extend((own.len() as u64).to_le_bytes());
+    let flag = if with_vertices { 0 } else { NO_VERTICES };
+    out.extend((own.len() as u64 | flag).to_le_bytes());
     for s in own {
         for x in [s.cell, s.element, s.particle, s.n_vertices] {
             out.extend(x.to_le_bytes());
         }
         let reals = std::iter::once(s.area).chain(s.normal).chain(s.centroid);
         let first = s.first_vertex as usize;
-        let vertices = &b.subface_vertices[first..first + s.n_vertices as usize];
+        let n = if with_vertices {
+            s.n_vertices as usize
+        } else {
+            0
+        };
+        let vertices = &b.subface_vertices[first..first + n];
         for x in reals.chain(vertices.iter().flatten().copied()) {
             out.extend(x.to_bits().to_le_bytes());
         }
@@ -242,7 +273,7 @@ impl CutGeometry {
     pub fn assemble(&mut self, grid: &Grid, parts: &[Vec<u8>]) {
         self.reset(grid);
         let mut vertices = std::mem::take(&mut self.subface_vertices);
-        let subfaces = read_parts(parts, &mut vertices, &mut Dense(self));
+        let subfaces = read_parts(parts, &mut vertices, &mut Dense(self), None);
         self.subface_vertices = vertices;
         self.put_subfaces(subfaces);
     }
@@ -257,7 +288,29 @@ impl CutGeometry {
         self.cut_cells.clear();
         self.diagnostics = Default::default();
         held.clear(grid);
-        let subfaces = read_parts(parts, &mut self.subface_vertices, held);
+        let subfaces = read_parts(parts, &mut self.subface_vertices, held, None);
+        held.sort_runs();
+        self.put_subfaces(subfaces);
+    }
+
+    /// [`CutGeometry::assemble_held`] of parts from [`block_part_shared`] (or [`block_part`]):
+    /// part `own.0` is this rank's, whose sub-faces take their vertices from `own.1`; the other
+    /// parts' sub-faces without vertices have none (`first_vertex` `u32::MAX`, `n_vertices`
+    /// kept). The same bits otherwise.
+    pub fn assemble_held_own(
+        &mut self,
+        grid: &Grid,
+        parts: &[Vec<u8>],
+        held: &mut HeldFractions,
+        own: (usize, &[[f64; 3]]),
+    ) {
+        self.release_dense();
+        self.subfaces.clear();
+        self.subface_vertices.clear();
+        self.cut_cells.clear();
+        self.diagnostics = Default::default();
+        held.clear(grid);
+        let subfaces = read_parts(parts, &mut self.subface_vertices, held, Some(own));
         held.sort_runs();
         self.put_subfaces(subfaces);
     }
@@ -280,15 +333,17 @@ impl CutGeometry {
     }
 }
 
-/// Reads every part: its runs into `sink`, its sub-faces' vertices onto `vertices`; returns
-/// the sub-faces, in the parts' order.
+/// Reads every part: its runs into `sink`, its sub-faces' vertices onto `vertices` (part
+/// `own.0`'s from `own.1` where it carries none); returns the sub-faces, in the parts' order.
 fn read_parts(
     parts: &[Vec<u8>],
     vertices: &mut Vec<[f64; 3]>,
     sink: &mut impl Sink,
+    own: Option<(usize, &[[f64; 3]])>,
 ) -> Vec<SubFace> {
     let mut subfaces: Vec<SubFace> = Vec::new();
-    for part in parts {
+    for (p, part) in parts.iter().enumerate() {
+        let mut own_vertices = own.filter(|o| o.0 == p).map(|o| o.1.iter());
         let mut r = Reader { bytes: part, at: 0 };
         for run in r.runs() {
             sink.cells(run);
@@ -298,14 +353,20 @@ fn read_parts(
                 sink.faces(axis, run);
             }
         }
-        for _ in 0..r.u64() {
+        let count = r.u64();
+        let carried = count & NO_VERTICES == 0;
+        for _ in 0..count & !NO_VERTICES {
             let (cell, element, particle, n_vertices) = (r.u32(), r.u32(), r.u32(), r.u32());
             let area = r.f64();
             let normal = [r.f64(), r.f64(), r.f64()];
             let centroid = [r.f64(), r.f64(), r.f64()];
-            let first_vertex = vertices.len() as u32;
+            let mut first_vertex = vertices.len() as u32;
             for _ in 0..n_vertices {
-                vertices.push([r.f64(), r.f64(), r.f64()]);
+                match (carried, own_vertices.as_mut()) {
+                    (true, _) => vertices.push([r.f64(), r.f64(), r.f64()]),
+                    (false, Some(from)) => vertices.push(*from.next().expect("own vertices")),
+                    (false, None) => first_vertex = u32::MAX,
+                }
             }
             subfaces.push(SubFace {
                 cell,
@@ -319,6 +380,9 @@ fn read_parts(
             });
         }
         assert_eq!(r.at, part.len(), "a block part read to its end");
+        if let Some(mut rest) = own_vertices {
+            assert!(rest.next().is_none(), "own vertices read to their end");
+        }
     }
     subfaces
 }

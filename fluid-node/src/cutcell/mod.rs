@@ -87,7 +87,7 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
-pub use assemble::{HeldFractions, block_part};
+pub use assemble::{HeldFractions, block_part, block_part_shared};
 pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
 pub use chain::{BlockSweep, compute_blocks, pass_messages};
 pub use geometry::{

@@ -160,13 +160,14 @@ impl Embedded {
         match block {
             None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
             Some(block) => {
-                let part = chained_block_part(solver, &accepted.surface(), block);
+                let (part, vertices) = chained_block_part(solver, &accepted.surface(), block);
                 let parts = solver.comm().all_gather(&part);
                 let trial = &mut scratch.trial;
                 let fractions = trial
                     .fractions
                     .get_or_insert_with(|| HeldFractions::new(grid, held));
-                solver.install(|| trial.cut.assemble_held(grid, &parts, fractions));
+                let own = (solver.comm().rank(), &vertices[..]);
+                solver.install(|| trial.cut.assemble_held_own(grid, &parts, fractions, own));
             }
         }
         solver.install(|| {

@@ -6,7 +6,9 @@
 
 use super::cells::CellKind;
 use super::{Embedded, EmbeddedError};
-use crate::cutcell::{BlockSweep, CellBox, SubfaceSwept, SubfaceSweptEntry, Surface, block_part};
+use crate::cutcell::{
+    BlockSweep, CellBox, SubfaceSwept, SubfaceSweptEntry, Surface, block_part_shared,
+};
 use crate::fv::FluidSolver;
 use crate::fv::comm::HaloExchange;
 use crate::fv::euler::NQ;
@@ -248,7 +250,7 @@ pub(super) fn chained_block_part(
     solver: &FluidSolver,
     surface: &Surface,
     block: CellBox,
-) -> Vec<u8> {
+) -> (Vec<u8>, Vec<[f64; 3]>) {
     let slab = solver.slab();
     let grid = &slab.global;
     debug_assert_eq!(block, CellBox::of_rank(grid, slab.dims, slab.rank));
@@ -295,5 +297,5 @@ pub(super) fn chained_block_part(
         let down = sweep.down(axis, &from_above);
         transfer(axis, false, &mut [], Some(&down));
     }
-    block_part(grid, &sweep.finish())
+    block_part_shared(grid, &sweep.finish())
 }

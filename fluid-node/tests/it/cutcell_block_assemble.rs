@@ -22,7 +22,7 @@ use crate::embedded_support::translated;
 use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
 
 /// A sub-face and its vertices as bits (its place in `subface_vertices` left out).
-fn subface_bits(s: &SubFace, vertices: &[[f64; 3]]) -> Vec<u64> {
+pub(crate) fn subface_bits(s: &SubFace, vertices: &[[f64; 3]]) -> Vec<u64> {
     let v = &vertices[s.first_vertex as usize..(s.first_vertex + s.n_vertices) as usize];
     let mut x = vec![s.cell as u64, s.element as u64, s.particle as u64];
     x.push(s.area.to_bits());
@@ -177,7 +177,7 @@ fn the_whole_geometry_put_together_from_the_blocks_is_computes_3d() {
 }
 
 /// Asserts `held` reads the whole grid's Λ and λ of `whole` at every cell and face, bit for bit.
-fn assert_held(grid: &Grid, whole: &CutGeometry, held: &HeldFractions, what: &str) {
+pub(crate) fn assert_held(grid: &Grid, whole: &CutGeometry, held: &HeldFractions, what: &str) {
     for c in 0..grid.n_cells() {
         assert_eq!(
             whole.solid_fraction[c].to_bits(),

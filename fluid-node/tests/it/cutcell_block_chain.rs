@@ -5,12 +5,14 @@
 //! passed at a boundary (one bit off, up or down) shows in the faces.
 
 use fluid_node::cutcell::{
-    BlockGeometry, BlockSweep, CellBox, CutGeometry, compute, compute_blocks, pass_messages,
+    BlockGeometry, BlockSweep, CellBox, CutGeometry, HeldFractions, block_part_shared, compute,
+    compute_blocks, pass_messages,
 };
 use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
 
 use crate::cutcell_block::assert_block_is_whole;
+use crate::cutcell_block_assemble::{assert_held, subface_bits};
 use crate::embedded_support::translated;
 use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
 
@@ -104,6 +106,58 @@ fn a_wrong_boundary_running_sum_shows() {
             });
             assert!(changed > 0, "{dims:?}: messages (up {up}) to change");
             assert_ne!(right, face_bits(&wrong), "{dims:?}: up {up} one bit off");
+        }
+    }
+}
+
+/// The shares without the vertices (`block_part_shared`), put together on each rank with its own
+/// vertices (`assemble_held_own`): Λ, λ and the sub-faces of the whole grid, every sub-face of the
+/// rank's own cells with its vertices' bits, the others' without vertices.
+#[test]
+fn shares_without_vertices_give_the_whole_grid_and_each_ranks_own_vertices() {
+    let (grid, _) = blast(&[16, 16, 24]);
+    let solid = moving_bodies_3d();
+    for k in 0..3 {
+        let frame = translated(&solid, k as f64 * 0.012);
+        let surface = frame.surface();
+        let mut whole = CutGeometry::new();
+        compute(&grid, &surface, &mut whole);
+        for dims in [[1, 1, 2], [1, 2, 2], [1, 1, 3]] {
+            let shares: Vec<_> = (compute_blocks(&grid, &surface, dims).iter())
+                .map(|b| block_part_shared(&grid, b))
+                .collect();
+            let parts: Vec<Vec<u8>> = shares.iter().map(|s| s.0.clone()).collect();
+            for (r, (_, vertices)) in shares.iter().enumerate() {
+                let what = format!("position {k}, {dims:?} rank {r}");
+                let block = CellBox::of_rank(&grid, dims, r);
+                let mut held = HeldFractions::new(&grid, block);
+                let mut cut = CutGeometry::new();
+                cut.assemble_held_own(&grid, &parts, &mut held, (r, vertices));
+                assert_held(&grid, &whole, &held, &what);
+                assert_eq!(cut.cut_cells, whole.cut_cells, "{what}: cut cells");
+                assert_eq!(cut.subfaces.len(), whole.subfaces.len(), "{what}");
+                for (s, t) in cut.subfaces.iter().zip(&whole.subfaces) {
+                    if block.contains(grid.ijk(s.cell as usize)) {
+                        assert_eq!(
+                            subface_bits(s, &cut.subface_vertices),
+                            subface_bits(t, &whole.subface_vertices),
+                            "{what}: own sub-face"
+                        );
+                    } else {
+                        assert_eq!(s.first_vertex, u32::MAX, "{what}: no vertices");
+                        let head = |s: &fluid_node::cutcell::SubFace| {
+                            let mut x = vec![s.cell, s.element, s.particle, s.n_vertices];
+                            let reals = [s.area].into_iter().chain(s.normal).chain(s.centroid);
+                            x.extend(reals.flat_map(|y| {
+                                let b = y.to_bits();
+                                [b as u32, (b >> 32) as u32]
+                            }));
+                            x
+                        };
+                        assert_eq!(head(s), head(t), "{what}: sub-face");
+                    }
+                }
+            }
         }
     }
 }
