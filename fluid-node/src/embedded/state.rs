@@ -289,6 +289,15 @@ impl Embedded {
     pub fn solid_fraction(&self) -> Cow<'_, [f64]> {
         let geom = &self.state.geom;
         match (self.config.block, &geom.fractions) {
+            // NOTE: a held box with the block's x and y ranges (slabs along z) holds the block's
+            // cells as one range, in their order: lent, not copied (4 MB a step at 100³ on 2
+            // ranks).
+            (Some(b), Some(f))
+                if (0..2).all(|a| f.held.lo[a] == b.lo[a] && f.held.hi[a] == b.hi[a]) =>
+            {
+                let first = f.held.index(b.lo);
+                Cow::Borrowed(&f.solid_fraction[first..first + b.n_cells()])
+            }
             (Some(b), Some(f)) => {
                 let mut own = Vec::with_capacity(b.n_cells());
                 for k in b.lo[2]..b.hi[2] {
