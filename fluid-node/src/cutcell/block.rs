@@ -18,7 +18,8 @@
 //!   block's own cells are not inside that stretch (a run of cut cells from beyond the window into
 //!   the block: a wall along the axis), the row is swept whole from the elements that meet it.
 //!   In the halo, λ along a cut axis is exact only within that stretch (a neighbour's block:
-//!   the neighbour has it).
+//!   the neighbour has it). [`crate::cutcell::BlockSweep`] (no halo) sweeps no row whole: it
+//!   takes the running sums at the block's boundary faces from its neighbours along the axis.
 //!
 //! Assumption: the surface is closed, so that every running sum at an uncut cell is within
 //! [`SNAP_TOLERANCE`] of its integer (an open surface shows in [`CutDiagnostics`] of the whole

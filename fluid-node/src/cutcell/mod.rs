@@ -17,9 +17,13 @@
 //! 5. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
 //! 6. [`compute_block`]: Λ, λ and the sub-faces of one block of a decomposed grid and a halo,
 //!    from the elements that reach them only, with the bits of [`compute`] on the block's cells
-//!    (issue 40, docs/mpi.md).
+//!    (issue 40, docs/mpi.md); [`BlockSweep`] (no halo): the same without sweeping any row whole,
+//!    the running sums along the cut axes passed along the pencils of blocks ([`compute_blocks`]
+//!    passes them in one process), what the embedded part calls on a decomposed grid.
 //! 7. [`block_part`] and [`CutGeometry::assemble`]: the whole grid's geometry put together, bit
-//!    for bit, from every block's own cells (issue 40 item 1, step 4 (a), docs/mpi.md).
+//!    for bit, from every block's own cells (issue 40 item 1, step 4 (a), docs/mpi.md);
+//!    [`block_part_shared`] and [`CutGeometry::assemble_held_own`]: the same without the other
+//!    ranks' sub-face vertices.
 //!
 //! # Method
 //!
