@@ -24,7 +24,8 @@ use std::time::Instant;
 mod cutcell_support;
 
 use fluid_node::cutcell::{
-    CellBox, CutGeometry, Surface, compute, compute_block, compute_block_cells,
+    BlockSweep, CellBox, CutGeometry, Surface, compute, compute_block, compute_block_cells,
+    compute_blocks,
 };
 use fluid_node::embedded::{SolidFrame, hook_halo, wall_hooks};
 use fluid_node::grid::Grid;
@@ -97,7 +98,33 @@ fn run(name: &str, grid: &Grid, mesh: &cutcell_support::Mesh, reps: usize) {
                     b.memory_bytes() as f64 / 1e6
                 );
             }
+            // The embedded part's geometry of F^(n+1) (no halo): with rows swept whole, and the
+            // local part of the chained one (`BlockSweep::new`, before the messages).
+            let b = compute_block(grid, &surface, block, 0);
+            let t = timed(reps, || {
+                std::hint::black_box(compute_block(grid, &surface, block, 0));
+            });
+            let t_local = timed(reps, || {
+                std::hint::black_box(BlockSweep::new(grid, &surface, block));
+            });
+            println!(
+                "| {k} | {dims:?} | {r} | all, 0 / chained local | {} | {} | {} | {:.2} / {:.2} | {:.1} |",
+                b.clipped_elements,
+                b.whole_rows,
+                b.n_pieces,
+                1e3 * t,
+                1e3 * t_local,
+                b.memory_bytes() as f64 / 1e6
+            );
         }
+        // Every block chained in this one process (local parts, messages, finish), per rank.
+        let t = timed(reps, || {
+            std::hint::black_box(compute_blocks(grid, &surface, dims));
+        });
+        println!(
+            "| {k} | {dims:?} | all | chained, 0, per rank | | | | {:.2} | |",
+            1e3 * t / k as f64
+        );
     }
 }
 

@@ -18,7 +18,8 @@
 //!   block's own cells are not inside that stretch (a run of cut cells from beyond the window into
 //!   the block: a wall along the axis), the row is swept whole from the elements that meet it.
 //!   In the halo, λ along a cut axis is exact only within that stretch (a neighbour's block:
-//!   the neighbour has it).
+//!   the neighbour has it). [`crate::cutcell::BlockSweep`] (no halo) sweeps no row whole: it
+//!   takes the running sums at the block's boundary faces from its neighbours along the axis.
 //!
 //! Assumption: the surface is closed, so that every running sum at an uncut cell is within
 //! [`SNAP_TOLERANCE`] of its integer (an open surface shows in [`CutDiagnostics`] of the whole
@@ -205,6 +206,28 @@ fn block_geometry(
     halo: usize,
     cut_axes: bool,
 ) -> BlockGeometry {
+    let (mut out, pieces, covered_runs) = block_cells(grid, surface, block, halo);
+    if cut_axes {
+        for axis in 1..grid.dim {
+            sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
+        }
+        fill_covered_faces(grid, &covered_runs, &mut out);
+    }
+    out
+}
+
+/// A run of covered cells of the x sweep, `(row, from, to, Λ)`.
+pub(crate) type CoveredRun = (u64, i32, i32, f64);
+
+/// The part of a block's geometry that needs no other block: the pieces clipped (of the
+/// window's cells and one cell around them), Λ, λ along x and the sub-faces of the window, its
+/// cut cells, and the covered runs of the x sweep.
+pub(crate) fn block_cells(
+    grid: &Grid,
+    surface: &Surface,
+    block: CellBox,
+    halo: usize,
+) -> (BlockGeometry, Vec<Piece>, Vec<CoveredRun>) {
     assert!(
         grid.dim == surface.dim,
         "grid dimension {} differs from surface dimension {}",
@@ -258,15 +281,9 @@ fn block_geometry(
     out.clipped_elements = n_kept;
     out.n_pieces = pieces.len();
     let covered_runs = sweep_x(grid, &rows, &pieces, &piece_subface, &mut out);
-    if cut_axes {
-        for axis in 1..dim {
-            sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
-        }
-        fill_covered_faces(grid, &covered_runs, &mut out);
-    }
     out.cut_cells.extend(out.subfaces.iter().map(|s| s.cell));
     out.cut_cells.dedup();
-    out
+    (out, pieces, covered_runs)
 }
 
 /// Extended slabs `(lowest, highest)` along `axis` of an element's vertices.
@@ -527,7 +544,7 @@ fn sweep_whole_rows(
 }
 
 /// A record of a sweep along an axis other than x (no moment).
-fn record(row: u64, pos: i32, order: usize, flux: f64) -> Record {
+pub(crate) fn record(row: u64, pos: i32, order: usize, flux: f64) -> Record {
     Record {
         row,
         pos,
@@ -539,7 +556,11 @@ fn record(row: u64, pos: i32, order: usize, flux: f64) -> Record {
 
 /// Sets the faces along y (and z) of the covered runs of the x sweep that bound the window's
 /// cells, as [`crate::cutcell::compute`] does last.
-fn fill_covered_faces(grid: &Grid, covered_runs: &[(u64, i32, i32, f64)], out: &mut BlockGeometry) {
+pub(crate) fn fill_covered_faces(
+    grid: &Grid,
+    covered_runs: &[CoveredRun],
+    out: &mut BlockGeometry,
+) {
     let window = out.window;
     for &(row, from, to, value) in covered_runs {
         let ijk = row_ijk(grid, 0, row, from);

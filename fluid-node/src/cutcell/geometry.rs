@@ -69,9 +69,9 @@ pub struct CutGeometry {
     pieces: Vec<Piece>,
     records: Vec<Record>,
     /// Written ranges `(first, len)` of `solid_fraction`, for the sparse reset.
-    written_cells: Vec<(u32, u32)>,
+    pub(super) written_cells: Vec<(u32, u32)>,
     /// Written ranges `(first, len)` of each `face_fraction`.
-    written_faces: [Vec<(u32, u32)>; 3],
+    pub(super) written_faces: [Vec<(u32, u32)>; 3],
     /// Covered runs of the x sweep `(row, from, to, λ)`, whose y and z faces are filled last.
     covered_runs: Vec<(u64, i32, i32, f64)>,
     /// Scratch of the counting sort.
@@ -186,7 +186,7 @@ impl CutGeometry {
                 .sum::<usize>()
     }
 
-    fn reset(&mut self, grid: &Grid) {
+    pub(super) fn reset(&mut self, grid: &Grid) {
         let shape = (grid.dim, grid.cells);
         if self.shape != shape || self.solid_fraction.len() != grid.n_cells() {
             self.shape = shape;

@@ -17,7 +17,13 @@
 //! 5. [`stl`]: a small STL (ASCII and binary) and 2-D loop-CSV reader over bytes.
 //! 6. [`compute_block`]: Λ, λ and the sub-faces of one block of a decomposed grid and a halo,
 //!    from the elements that reach them only, with the bits of [`compute`] on the block's cells
-//!    (issue 40, docs/mpi.md).
+//!    (issue 40, docs/mpi.md); [`BlockSweep`] (no halo): the same without sweeping any row whole,
+//!    the running sums along the cut axes passed along the pencils of blocks ([`compute_blocks`]
+//!    passes them in one process), what the embedded part calls on a decomposed grid.
+//! 7. [`block_part`] and [`CutGeometry::assemble`]: the whole grid's geometry put together, bit
+//!    for bit, from every block's own cells (issue 40 item 1, step 4 (a), docs/mpi.md);
+//!    [`block_part_shared`] and [`CutGeometry::assemble_held_own`]: the same without the other
+//!    ranks' sub-face vertices.
 //!
 //! # Method
 //!
@@ -70,7 +76,9 @@
 //! assert_eq!(geometry.solid_fraction[grid.index(1, 1, 0)], 1.0);
 //! ```
 
+mod assemble;
 mod block;
+mod chain;
 pub(crate) mod clip;
 mod geometry;
 mod measure;
@@ -83,7 +91,9 @@ mod swept;
 #[cfg(test)]
 mod tests;
 
+pub use assemble::{HeldFractions, block_part, block_part_shared};
 pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
+pub use chain::{BlockSweep, compute_blocks, pass_messages};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };

@@ -151,8 +151,8 @@ pub fn subface_swept_volumes(
 /// [`subface_swept_volumes`] of the sub-faces `keep` accepts only (a rank's share of a
 /// decomposed grid, issue 40): the entries of those sub-faces, with their bits and in their order,
 /// and the count of those skipped; the others have no entries and are not counted. The
-/// preimages are lifted from the elements of the kept sub-faces only (each element clipped again
-/// from the first of its sub-faces' vertices, `lift_preimages_of`), so the cost is that of the
+/// preimages are lifted from the elements of the kept sub-faces only (each element clipped again,
+/// its pieces' vertices put at its kept sub-faces' by cell, `lift_preimages_of`), so the cost is that of the
 /// kept sub-faces' prisms and of their elements' second clip.
 ///
 /// The entries of a partition of the sub-faces, put together in sub-face order (a stable sort by
@@ -260,14 +260,16 @@ fn clip_prisms(
 }
 
 /// [`lift_preimages`] for the vertices of the sub-faces `keep` accepts (NaN elsewhere): only
-/// their elements are clipped again, each from the first vertex of its own sub-faces.
+/// their elements are clipped again, and each piece in the domain gives its vertices' preimages
+/// to the kept sub-face of its element in its cell (the `n`-th piece of an element in a cell to
+/// the `n`-th such sub-face in the order of their first vertices).
 ///
-/// NOTE: `compute` stores the vertices of an element's domain pieces one after the other, in
-/// the elements' order, and every domain piece is a sub-face; so an element's vertices start at
-/// the least `first_vertex` of its sub-faces, and clipping it again from there stores the same
-/// preimages at the same places as the walk over every element (for a geometry computed from
-/// `after`; for another one the walk's cursor drifts from the first element that differs, this
-/// one's from no element, and either skips the sub-faces whose vertices do not match).
+/// NOTE: by cell, not by the layout of `subface_vertices`: the whole grid's geometry put
+/// together from the blocks' (`CutGeometry::assemble`) stores a sub-face's vertices where its
+/// block's part put them, not where `compute` does (an element's pieces one after the other).
+/// Within a cell an element's pieces are stored in their clip order by both, so the `n`-th
+/// piece is the `n`-th sub-face; a vertex whose stored bits differ from the clip's is left NaN
+/// (a geometry computed from another surface), and its sub-face skipped.
 fn lift_preimages_of(
     grid: &Grid,
     before: &Surface,
@@ -279,33 +281,39 @@ fn lift_preimages_of(
     let stored = &geometry.subface_vertices;
     preimages.clear();
     preimages.resize(stored.len(), [f64::NAN; 3]);
-    // The elements of the kept sub-faces, and the first vertex of each (`u32::MAX`: not
-    // clipped).
-    let mut wanted = vec![false; after.n_elements()];
-    for s in &geometry.subfaces {
-        if keep(s)
-            && let Some(w) = wanted.get_mut(s.element as usize)
-        {
-            *w = true;
-        }
-    }
-    let mut start = vec![u32::MAX; after.n_elements()];
-    for s in &geometry.subfaces {
-        let e = s.element as usize;
-        if wanted.get(e) == Some(&true) {
-            start[e] = start[e].min(s.first_vertex);
-        }
-    }
+    // `(element, cell, first vertex, vertices)` of the kept sub-faces.
+    let mut targets: Vec<(u32, u32, u32, u32)> = (geometry.subfaces.iter())
+        .filter(|s| keep(s) && (s.element as usize) < after.n_elements())
+        .map(|s| (s.element, s.cell, s.first_vertex, s.n_vertices))
+        .collect();
+    targets.sort_unstable();
     let mut n_pieces = 0;
-    for (e, &first) in start.iter().enumerate() {
-        if first == u32::MAX {
-            continue;
-        }
-        let mut cursor = first as usize;
-        n_pieces += clip_lifted(grid, before, after, e, &mut |x| {
-            put_preimage(stored, preimages, cursor, x);
-            cursor += 1;
+    let mut used = vec![false; targets.len()];
+    let mut from = 0;
+    while from < targets.len() {
+        let e = targets[from].0;
+        let to = from + targets[from..].partition_point(|t| t.0 == e);
+        let (mine, taken) = (&targets[from..to], &mut used[from..to]);
+        // The target of the piece being stored: its first vertex and count.
+        let mut at: Option<(usize, usize)> = None;
+        n_pieces += clip_lifted(grid, before, after, e as usize, &mut |cell, i, x| {
+            if i == 0 {
+                let first = mine.partition_point(|t| t.1 < cell);
+                at = (first..mine.len())
+                    .take_while(|&k| mine[k].1 == cell)
+                    .find(|&k| !taken[k])
+                    .map(|k| {
+                        taken[k] = true;
+                        (mine[k].2 as usize, mine[k].3 as usize)
+                    });
+            }
+            if let Some((first, n)) = at
+                && i < n
+            {
+                put_preimage(stored, preimages, first + i, x);
+            }
         });
+        from = to;
     }
     n_pieces
 }
@@ -322,13 +330,14 @@ fn put_preimage(stored: &[[f64; 3]], preimages: &mut [[f64; 3]], at: usize, x: &
 
 /// Clips element `e` of `after` again (none when `compute` skips it), each vertex carrying its
 /// position in `before` (NaN where `before` has none), and hands the vertices of its pieces in
-/// the domain to `store` in the order `compute` stores them. Returns the pieces clipped.
+/// the domain to `store` in the order `compute` stores them, each with its piece's cell and its
+/// place in the piece. Returns the pieces clipped.
 fn clip_lifted(
     grid: &Grid,
     before: &Surface,
     after: &Surface,
     e: usize,
-    store: &mut impl FnMut(&[f64; 6]),
+    store: &mut impl FnMut(u32, usize, &[f64; 6]),
 ) -> usize {
     let Some(t1) = after.element(e) else {
         return 0;
@@ -340,18 +349,18 @@ fn clip_lifted(
         let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
         clip_polygon(grid, &poly, &mut |cell, piece| {
             n_pieces += 1;
-            if domain_cell(grid, cell).is_some() {
-                for x in piece.vertices() {
-                    store(x);
+            if let Some(c) = domain_cell(grid, cell) {
+                for (i, x) in piece.vertices().iter().enumerate() {
+                    store(c, i, x);
                 }
             }
         });
     } else {
         clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
             n_pieces += 1;
-            if domain_cell(grid, cell).is_some() {
-                store(&a);
-                store(&b);
+            if let Some(c) = domain_cell(grid, cell) {
+                store(c, 0, &a);
+                store(c, 1, &b);
             }
         });
     }
@@ -373,7 +382,7 @@ fn lift_preimages(
     preimages.resize(stored.len(), [f64::NAN; 3]);
     let mut cursor = 0;
     let mut n_pieces = 0;
-    let mut store = |x: &[f64; 6]| {
+    let mut store = |_: u32, _: usize, x: &[f64; 6]| {
         put_preimage(stored, preimages, cursor, x);
         cursor += 1;
     };

@@ -4,6 +4,7 @@
 use protocol::sum::odd_sum;
 
 use super::COVERED_TOLERANCE;
+use super::held::Held;
 use crate::cutcell::SubFace;
 use crate::fv::BoundaryKind;
 use crate::fv::euler::NQ;
@@ -127,8 +128,8 @@ pub(super) fn oriented(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> [isize; 3
 /// cell with no fluid to mix it into (the flush cube at 100^3), and once the faces fell on two
 /// sides of a grid plane, all of it. Such faces take no gas pressure, on either side of the
 /// exchange; the contact carries the bodies' push.
-pub(super) fn touches_gas(grid: &Grid, lambda: &[f64], s: &SubFace) -> bool {
-    touches_gas_with(grid, |c| lambda[c], s)
+pub(super) fn touches_gas(grid: &Grid, lambda: &Held, s: &SubFace) -> bool {
+    touches_gas_with(grid, |c| lambda.lambda(c), s)
 }
 
 /// [`touches_gas`] with the solid fractions read through `lambda` (cell index to Λ: a block's
@@ -169,13 +170,13 @@ fn faced(grid: &Grid, s: &SubFace) -> Option<usize> {
 /// front, the load is continuous across the plane; for a thick body the ghost already mirrors
 /// that neighbour, and its pressure is the neighbour's to round-off (the mirror's kinetic
 /// energy change).
-pub(super) fn pressure_cell(grid: &Grid, lambda_n: &[f64], s: &SubFace) -> usize {
+pub(super) fn pressure_cell(grid: &Grid, lambda_n: &Held, s: &SubFace) -> usize {
     let c = s.cell as usize;
-    if fluid_part(lambda_n[c]) > COVERED_TOLERANCE {
+    if fluid_part(lambda_n.lambda(c)) > COVERED_TOLERANCE {
         return c;
     }
     match faced(grid, s) {
-        Some(q) if fluid_part(lambda_n[q]) > COVERED_TOLERANCE => q,
+        Some(q) if fluid_part(lambda_n.lambda(q)) > COVERED_TOLERANCE => q,
         _ => c,
     }
 }

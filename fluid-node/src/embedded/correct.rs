@@ -13,14 +13,15 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, gather_swept, gather_updates};
+use super::gather::{CellUpdate, chained_block_part, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{
-    SubFace, Surface, compute, face_index, subface_swept_volumes, subface_swept_volumes_of,
+    HeldFractions, SubFace, Surface, compute, face_index, subface_swept_volumes,
+    subface_swept_volumes_of,
 };
 use crate::fv::euler::NQ;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -115,11 +116,16 @@ impl Embedded {
     /// The geometry of `F^{n+1}` and the prisms its sub-faces sweep back to `F^n`, checked
     /// against identity (3). On the fluid's pool.
     ///
-    /// Collective on a decomposed grid: each rank clips the prisms of the sub-faces of its own
-    /// cells only (`subface_swept_volumes_of`), and the entries of every rank are gathered on
-    /// every rank in sub-face order ([`gather_swept`]), so every rank holds the entries of one
-    /// rank. The geometry itself is still the whole grid's: it becomes `F^n`'s, which the next
-    /// predict's near cells, the totals and the outputs read on the whole grid.
+    /// Collective on a decomposed grid: each rank computes the geometry of its own block only
+    /// (`chained_block_part`: no halo, the running sums of the cut axes passed along the pencils
+    /// of blocks, no row swept whole) and one all-gather of every block's share (`block_part`: Λ
+    /// and λ as runs of equal values, the sub-faces of its cells) gives every rank the whole
+    /// grid's sub-faces and cut cells, and Λ and λ dense in its block and the hooks' halo and
+    /// as runs elsewhere (`CutGeometry::assemble_held`, `held.rs`): the bits of one rank, read
+    /// anywhere, without the whole grid's dense arrays; each rank clips the prisms of the
+    /// sub-faces of its own cells only (`subface_swept_volumes_of`), and the entries of every
+    /// rank are gathered on every rank in sub-face order ([`gather_swept`]), so every rank
+    /// holds the entries of one rank (docs/mpi.md, step 4 (a)).
     fn sweep(
         &mut self,
         solver: &FluidSolver,
@@ -148,11 +154,24 @@ impl Embedded {
         };
         outside_domain(grid, &self.config.boundary, &accepted.surface())
             .map_err(|e| e.at_step(step))?;
+        let held = self.config.held_box();
         let scratch = &mut self.scratch;
         let block = self.config.block;
+        match block {
+            None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
+            Some(block) => {
+                let (part, vertices) = chained_block_part(solver, &accepted.surface(), block);
+                let parts = solver.comm().all_gather(&part);
+                let trial = &mut scratch.trial;
+                let fractions = trial
+                    .fractions
+                    .get_or_insert_with(|| HeldFractions::new(grid, held));
+                let own = (solver.comm().rank(), &vertices[..]);
+                solver.install(|| trial.cut.assemble_held_own(grid, &parts, fractions, own));
+            }
+        }
         solver.install(|| {
-            compute(grid, &accepted.surface(), &mut scratch.trial);
-            let (after, geom) = (&accepted.surface(), &scratch.trial);
+            let (after, geom) = (&accepted.surface(), &scratch.trial.cut);
             match block {
                 None => subface_swept_volumes(grid, &before, after, geom, &mut scratch.swept),
                 Some(block) => {
@@ -204,21 +223,19 @@ impl Embedded {
             }
         }
         let sums = &self.scratch.content;
-        let (new, old) = (
-            &self.scratch.trial.solid_fraction,
-            &self.state.geom.solid_fraction,
-        );
+        let (new, old) = (&self.scratch.trial, &self.state.geom);
         for (k, &c) in self.near.cells.iter().enumerate() {
             let c = c as usize;
-            let defect = (new[c] - old[c]) * volume - sums[k][0];
-            if defect.abs() > SWEPT_TOLERANCE * volume || new[c] < -SWEPT_TOLERANCE {
+            let (new_c, old_c) = (new.lambda(c), old.lambda(c));
+            let defect = (new_c - old_c) * volume - sums[k][0];
+            if defect.abs() > SWEPT_TOLERANCE * volume || new_c < -SWEPT_TOLERANCE {
                 let ijk = grid.ijk(c);
                 return Err(EmbeddedError::Folded {
                     step,
                     cell: ijk,
                     center: grid.cell_center(ijk),
-                    from: old[c],
-                    to: new[c],
+                    from: old_c,
+                    to: new_c,
                     swept: sums[k][0] / volume,
                     defect: defect / volume,
                 });
@@ -232,14 +249,11 @@ impl Embedded {
     fn displaced(&self) -> (f64, Vec<f64>) {
         let volume = self.config.grid.cell_volume();
         let nvar = self.config.grid.dim + 2;
-        let (new_lambda, old_lambda) = (
-            &self.scratch.trial.solid_fraction,
-            &self.state.geom.solid_fraction,
-        );
+        let (new, old) = (&self.scratch.trial, &self.state.geom);
         let mut swept_mass = 0.0;
         let mut source_scale = Vec::with_capacity(self.near.cells.len());
         for (k, &c) in self.near.cells.iter().enumerate() {
-            let (l0, l1) = (old_lambda[c as usize], new_lambda[c as usize]);
+            let (l0, l1) = (old.lambda(c as usize), new.lambda(c as usize));
             let gained = l1.min(1.0) - l0.min(1.0);
             if gained > 0.0 {
                 swept_mass += gained * volume * self.near.saved[k * nvar];
@@ -347,8 +361,8 @@ impl Embedded {
         };
         let ijk = grid.ijk(c);
         let nvar = grid.dim + 2;
-        let alpha = fluid_part(self.scratch.trial.solid_fraction[c]);
-        let covered_at_n = self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE;
+        let alpha = fluid_part(self.scratch.trial.lambda(c));
+        let covered_at_n = self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE;
         let u0 = self.near.saved(k, nvar);
         let acc = &mut update.content;
         for q in 0..nvar {
@@ -456,15 +470,12 @@ impl Embedded {
         let volume = grid.cell_volume();
         let c = self.near.cells[k] as usize;
         let ijk = grid.ijk(c);
-        let (new_lambda, old_lambda) = (
-            &self.scratch.trial.solid_fraction,
-            &self.state.geom.solid_fraction,
-        );
+        let (new, old) = (&self.scratch.trial, &self.state.geom);
         // (A cell holding a piece of a prism beyond the domain is `Updated` already, see
         // `mark_surface_cells`: a wall or an open side, the same leak.)
         let mut touched = self.scratch.kind[k] == CellKind::Updated
-            || new_lambda[c] > 0.0
-            || old_lambda[c] >= 1.0 - COVERED_TOLERANCE;
+            || new.lambda(c) > 0.0
+            || old.lambda(c) >= 1.0 - COVERED_TOLERANCE;
         let mut faces = [[0.0f64; 2]; 3];
         for a in 0..grid.dim {
             let face_area = volume / grid.dx[a];
@@ -472,8 +483,7 @@ impl Embedded {
             let mut up = ijk;
             up[a] += 1;
             let hi = face_index(grid, a, up);
-            let fraction = &self.scratch.trial.face_fraction[a];
-            faces[a] = [fraction[lo], fraction[hi]];
+            faces[a] = [new.face(a, lo), new.face(a, hi)];
             // A domain face under a solid face flush against it is solid where that face
             // is (the tie rule gives it λ = 0 on the low side); its sub-face is left out.
             for side in 0..2 {
@@ -545,8 +555,8 @@ impl Embedded {
         // faces carry nothing. Otherwise they keep the sweeps' flux, which keeps a
         // uniform flow past a moving body uniform to round-off (zero there moved the
         // swept mass of a carried box by 2e-8).
-        let old_lambda = &self.state.geom.solid_fraction;
-        let covered_at_n = |q: usize| old_lambda[q] >= 1.0 - COVERED_TOLERANCE;
+        let old = &self.state.geom;
+        let covered_at_n = |q: usize| old.lambda(q) >= 1.0 - COVERED_TOLERANCE;
         let shut = self.config.fracture && covered_at_n(c);
         let fl = match below {
             Some(q) if shut && covered_at_n(q) => [0.0; NQ],
@@ -603,16 +613,14 @@ impl Embedded {
             if !flux_frame.wet[s.element as usize]
                 || domain_face(grid, s).is_some()
                 || self.opening(s, flux_frame)
-                || !touches_gas(grid, &flux_geom.solid_fraction, s)
+                || !touches_gas(grid, flux_geom, s)
             {
                 continue;
             }
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
             let own = self.own_slot(k);
             // The neighbour a face takes `p̄` from is near: one of the two holds F^n's wall.
-            let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom.solid_fraction, s)]
-                as usize
-                - 1;
+            let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom, s)] as usize - 1;
             let mut pi = [0.0; 3];
             let p_bar = self.near.wall_pressure[kp];
             for a in 0..dim {
@@ -665,13 +673,13 @@ impl Embedded {
         let nvar = grid.dim + 2;
         let volume = grid.cell_volume();
         let (near, kind) = (&self.near, &self.scratch.kind);
-        let old_lambda = &self.state.geom.solid_fraction;
+        let old = &self.state.geom;
         let mut entry = 0;
         let entries = &self.scratch.swept.entries;
         for (s_idx, s) in self.scratch.trial.subfaces.iter().enumerate() {
             let k = near.slot_of[s.cell as usize] as usize - 1;
             let inside = source_scale[k] == 0.0
-                || (self.config.fracture && old_lambda[s.cell as usize] >= 1.0 - COVERED_TOLERANCE);
+                || (self.config.fracture && old.lambda(s.cell as usize) >= 1.0 - COVERED_TOLERANCE);
             while entry < entries.len() && (entries[entry].subface as usize) < s_idx {
                 entry += 1;
             }
@@ -722,10 +730,10 @@ impl Embedded {
             }
             WrittenCheck::Whole => &mixed.written,
         };
-        let new_lambda = &self.scratch.trial.solid_fraction;
+        let new = &self.scratch.trial;
         for (k, &c) in self.near.cells.iter().enumerate() {
             if self.scratch.kind[k] == CellKind::Predicted
-                || new_lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
+                || new.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
             {
                 continue;
             }
@@ -750,7 +758,7 @@ impl Embedded {
             step,
             cell: ijk,
             center: grid.cell_center(ijk),
-            fluid_fraction: 1.0 - self.scratch.trial.solid_fraction[c],
+            fluid_fraction: 1.0 - self.scratch.trial.lambda(c),
             rho: w.rho,
             p: w.p,
             velocity: w.vel,

@@ -19,7 +19,7 @@ impl Embedded {
         self.sealed(c)
             || (frame.wet[e]
                 && !self.state.current.wet.get(e).copied().unwrap_or(true)
-                && self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE)
+                && self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE)
     }
 
     /// Whether cell `c` was covered at t^n with no gas beside it: each face neighbour (across a
@@ -29,8 +29,8 @@ impl Embedded {
     /// against, or uncovering a cell of its interior). Its ghost state mirrors gas it has no
     /// contact with, and carries no pressure.
     pub(super) fn sealed(&self, c: usize) -> bool {
-        let lambda = &self.state.geom.solid_fraction;
-        let covered = |q: usize| lambda[q] >= 1.0 - COVERED_TOLERANCE;
+        let geom = &self.state.geom;
+        let covered = |q: usize| geom.lambda(q) >= 1.0 - COVERED_TOLERANCE;
         let grid = &self.config.grid;
         covered(c)
             && (0..grid.dim).all(|a| {
@@ -66,8 +66,8 @@ impl Embedded {
             for (k, &c) in self.near.cells.iter().enumerate() {
                 let c = c as usize;
                 if crack[k]
-                    && self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
-                    && fluid_part(self.scratch.trial.solid_fraction[c]) > COVERED_TOLERANCE
+                    && self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE
+                    && fluid_part(self.scratch.trial.lambda(c)) > COVERED_TOLERANCE
                 {
                     opening[k] = true;
                 }
@@ -77,7 +77,7 @@ impl Embedded {
         for (k, &c) in self.near.cells.iter().enumerate() {
             let c = c as usize;
             if !opening[k]
-                && fluid_part(self.scratch.trial.solid_fraction[c]) > COVERED_TOLERANCE
+                && fluid_part(self.scratch.trial.lambda(c)) > COVERED_TOLERANCE
                 && self.sealed(c)
             {
                 opening[k] = true;
@@ -149,7 +149,7 @@ impl Embedded {
             return None;
         }
         let empty = |c: usize, k: usize| {
-            opening[k - 1] || self.state.geom.solid_fraction[c] >= 1.0 - COVERED_TOLERANCE
+            opening[k - 1] || self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE
         };
         if empty(left, kl) && empty(right, kr) {
             return Some([0.0; NQ]);

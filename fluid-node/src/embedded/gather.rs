@@ -6,9 +6,13 @@
 
 use super::cells::CellKind;
 use super::{Embedded, EmbeddedError};
-use crate::cutcell::{SubfaceSwept, SubfaceSweptEntry};
+use crate::cutcell::{
+    BlockSweep, CellBox, SubfaceSwept, SubfaceSweptEntry, Surface, block_part_shared,
+};
 use crate::fv::FluidSolver;
+use crate::fv::comm::HaloExchange;
 use crate::fv::euler::NQ;
+use crate::fv::slab::rank_of;
 
 /// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
 /// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
@@ -233,4 +237,65 @@ pub(super) fn gather_roots(
         }
     }
     all
+}
+
+/// The geometry of `surface` on this rank's `block` (no halo), with the whole grid's bits on
+/// every cell and face of the block, as its share for [`crate::cutcell::CutGeometry::assemble`]
+/// (collective along the pencils of blocks): the block's local part on the fluid's pool, then,
+/// for each cut axis, the running sums passed up the pencil of blocks along it in rank order and
+/// `above` passed down (`cutcell::BlockSweep`, module `chain`). No rank clips an element beyond
+/// its cells and one cell around them. Traffic: 8 bytes per row whose cut cells cross a block
+/// boundary, up, and as many down.
+pub(super) fn chained_block_part(
+    solver: &FluidSolver,
+    surface: &Surface,
+    block: CellBox,
+) -> (Vec<u8>, Vec<[f64; 3]>) {
+    let slab = solver.slab();
+    let grid = &slab.global;
+    debug_assert_eq!(block, CellBox::of_rank(grid, slab.dims, slab.rank));
+    let mut sweep = solver.install(|| BlockSweep::new(grid, surface, block));
+    let neighbour = |axis: usize, up: bool| {
+        let c = slab.coords[axis];
+        let to = if up {
+            (c + 1 < slab.dims[axis]).then_some(c + 1)?
+        } else {
+            c.checked_sub(1)?
+        };
+        let mut coords = slab.coords;
+        coords[axis] = to;
+        Some(rank_of(slab.dims, coords))
+    };
+    let comm = solver.comm();
+    let transfer = |axis: usize, up: bool, buf: &mut [f64], send: Option<&[f64]>| {
+        // `up`: receive from below, send above; else receive from above, send below.
+        let (from, to) = (neighbour(axis, !up), neighbour(axis, up));
+        let from = from.filter(|_| !buf.is_empty());
+        let to = to.zip(send).filter(|(_, m)| !m.is_empty());
+        if from.is_none() && to.is_none() {
+            return;
+        }
+        let (mut from_lo, mut from_hi, mut to_lo, mut to_hi) = (None, None, None, None);
+        match up {
+            true => (from_lo, to_hi) = (from.map(|r| (r, buf)), to),
+            false => (from_hi, to_lo) = (from.map(|r| (r, buf)), to),
+        }
+        comm.exchange_halo(HaloExchange {
+            to_lo,
+            to_hi,
+            from_lo,
+            from_hi,
+        });
+    };
+    for axis in 1..grid.dim {
+        let mut from_below = vec![0.0; sweep.up_in(axis)];
+        transfer(axis, true, &mut from_below, None);
+        let up = sweep.up(axis, &from_below);
+        transfer(axis, true, &mut [], Some(&up));
+        let mut from_above = vec![0.0; sweep.down_in(axis)];
+        transfer(axis, false, &mut from_above, None);
+        let down = sweep.down(axis, &from_above);
+        transfer(axis, false, &mut [], Some(&down));
+    }
+    block_part_shared(grid, &sweep.finish())
 }

@@ -26,7 +26,7 @@ use super::near_wall::{
     NW_WET_NORMAL, NearWall, NearWalls,
 };
 use super::{COVERED_TOLERANCE, NEAR_RADIUS, SolidFrame};
-use crate::cutcell::{CellBox, CutGeometry, SubFace, compute, compute_block_cells};
+use crate::cutcell::{CellBox, CutGeometry, HeldFractions, SubFace, compute, compute_block_cells};
 use crate::fv::line::MAX_FIXES;
 use crate::fv::{GhostFill, Wall, WallRun};
 use crate::grid::Grid;
@@ -118,6 +118,42 @@ pub fn wall_hooks_in(
         window,
         held: CellBox::whole(grid),
         solid_fraction: &geom.solid_fraction,
+        subfaces: &subfaces,
+    };
+    let near = NearOfView::new(&view, &cut_cells);
+    view.wall_hooks(&near.as_ref(), frame, ng, block)
+}
+
+/// [`wall_hooks_in`] from the Λ a rank of a decomposed grid holds (`embedded::held`: dense in
+/// its block and the halo of [`hook_halo`] cells, the window the hooks read) and the whole
+/// grid's sub-faces and cut cells of `geom` (its dense arrays unused): the same bits.
+pub(super) fn wall_hooks_held(
+    grid: &Grid,
+    ng: usize,
+    frame: &SolidFrame,
+    fractions: &HeldFractions,
+    geom: &CutGeometry,
+    block: CellBox,
+) -> WallHooks {
+    let window = block.grown(grid, hook_halo(ng));
+    assert!(
+        (0..3)
+            .all(|a| fractions.held.lo[a] <= window.lo[a] && window.hi[a] <= fractions.held.hi[a]),
+        "the hooks' window is held dense"
+    );
+    let inside = |c: u32| window.contains(grid.ijk(c as usize));
+    let subfaces: Vec<SubFace> = (geom.subfaces.iter())
+        .filter(|s| inside(s.cell))
+        .copied()
+        .collect();
+    let cut_cells: Vec<u32> = (geom.cut_cells.iter().copied())
+        .filter(|&c| inside(c))
+        .collect();
+    let view = HookGeometry {
+        grid,
+        window,
+        held: fractions.held,
+        solid_fraction: &fractions.solid_fraction,
         subfaces: &subfaces,
     };
     let near = NearOfView::new(&view, &cut_cells);

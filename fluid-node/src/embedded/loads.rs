@@ -63,11 +63,11 @@ impl Embedded {
                 let geom = if same_surface(&trial.surface(), &self.state.current.surface()) {
                     &self.state.geom
                 } else {
-                    let geom = &mut self.scratch.trial;
+                    let geom = &mut self.scratch.trial.cut;
                     solver.install(|| compute(grid, &trial.surface(), geom));
                     &self.scratch.trial
                 };
-                let lambda = |c: usize| geom.solid_fraction[c];
+                let lambda = |c: usize| geom.lambda(c);
                 geom.subfaces
                     .iter()
                     .find_map(|s| self.push_load(s, trial, &levers, lambda, &mut sum).err())
@@ -90,7 +90,7 @@ impl Embedded {
                 // was work one rank does not do.
                 let mine = if same_surface(&trial.surface(), &self.state.current.surface()) {
                     let geom = &self.state.geom;
-                    terms(&geom.subfaces, &|c| geom.solid_fraction[c])
+                    terms(&geom.subfaces, &|c| geom.lambda(c))
                 } else {
                     let geom = compute_block_cells(grid, &trial.surface(), block, 1);
                     terms(&geom.subfaces, &|c| geom.solid_fraction_at(grid.ijk(c)))
@@ -133,7 +133,7 @@ impl Embedded {
             return Ok(());
         }
         let mut f = [0.0; 3];
-        let pc = pressure_cell(grid, &self.state.geom.solid_fraction, s) as u32;
+        let pc = pressure_cell(grid, &self.state.geom, s) as u32;
         let p = self.near.pressure_of(pc).ok_or(pc)?;
         for a in 0..d {
             f[a] = -p * s.normal[a] * s.area;

@@ -10,9 +10,10 @@ use super::cells::{
     CellKind, cell_bits, face_neighbours, fluid_part, mark_around, marked_cells, max_abs, offsets,
     oriented, part_of, shifted,
 };
+use super::held::Held;
 use super::state::{Config, NearCells};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MIX_BELOW, WIDEN_RINGS};
-use crate::cutcell::{CutGeometry, face_index};
+use crate::cutcell::face_index;
 use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 use crate::grid::Grid;
@@ -61,9 +62,9 @@ struct Mixing<'a> {
     grid: &'a Grid,
     slot_of: &'a [u32],
     near: &'a [u32],
-    new_lambda: &'a [f64],
-    old_lambda: &'a [f64],
-    face_fraction: &'a [Vec<f64>; 3],
+    /// The geometry of `F^{n+1}` (Λ, λ) and of `F^n` (Λ).
+    new: &'a Held,
+    old: &'a Held,
     content: &'a [[f64; NQ]],
     /// Near slots to mix, ascending.
     sources: &'a [usize],
@@ -243,9 +244,8 @@ impl Embedded {
         let uncovered_before = report.uncovered_cells;
         let nvar = self.config.grid.dim + 2;
         let (grid, block) = (&self.config.grid, self.config.block);
-        let new_lambda = &self.scratch.trial.solid_fraction;
-        let old_lambda = &self.state.geom.solid_fraction;
-        let alpha = |c: usize| fluid_part(new_lambda[c]);
+        let (new, old) = (&self.scratch.trial, &self.state.geom);
+        let alpha = |c: usize| fluid_part(new.lambda(c));
         let saved = &self.near.saved;
         let content = &mut self.scratch.content;
         let mut sources: Vec<usize> = Vec::new();
@@ -257,7 +257,7 @@ impl Embedded {
                 continue;
             }
             let a = alpha(c);
-            let uncovered = old_lambda[c] >= 1.0 - COVERED_TOLERANCE && a > COVERED_TOLERANCE;
+            let uncovered = old.lambda(c) >= 1.0 - COVERED_TOLERANCE && a > COVERED_TOLERANCE;
             if uncovered {
                 report.uncovered_cells += 1;
             }
@@ -333,8 +333,8 @@ impl<'a> Mixing<'a> {
     fn new(
         config: &'a Config,
         near: &'a NearCells,
-        trial: &'a CutGeometry,
-        old: &'a CutGeometry,
+        trial: &'a Held,
+        old: &'a Held,
         content: &'a [[f64; NQ]],
         sources: &'a [usize],
         normal: &'a [[f64; 3]],
@@ -345,9 +345,8 @@ impl<'a> Mixing<'a> {
             grid,
             slot_of: &near.slot_of,
             near: &near.cells,
-            new_lambda: &trial.solid_fraction,
-            old_lambda: &old.solid_fraction,
-            face_fraction: &trial.face_fraction,
+            new: trial,
+            old,
             content,
             sources,
             normal,
@@ -359,7 +358,7 @@ impl<'a> Mixing<'a> {
 
 impl Mixing<'_> {
     fn alpha(&self, c: usize) -> f64 {
-        fluid_part(self.new_lambda[c])
+        fluid_part(self.new.lambda(c))
     }
 
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
@@ -374,7 +373,7 @@ impl Mixing<'_> {
 
     /// Large enough to take others in, and holding fluid at t^n.
     fn big(&self, c: usize) -> bool {
-        self.alpha(c) >= MIX_BELOW && self.old_lambda[c] < 1.0 - COVERED_TOLERANCE
+        self.alpha(c) >= MIX_BELOW && self.old.lambda(c) < 1.0 - COVERED_TOLERANCE
     }
 
     /// The near slot of `c` if it is a source.
@@ -419,7 +418,7 @@ impl Mixing<'_> {
             if self.alpha(qi) <= COVERED_TOLERANCE {
                 continue;
             }
-            let aperture = fluid_part(self.face_fraction[a][face_index(grid, a, f)]);
+            let aperture = fluid_part(self.new.face(a, face_index(grid, a, f)));
             if best.is_none_or(|(b, _)| aperture > b) {
                 best = Some((aperture, qi));
             }
@@ -464,7 +463,7 @@ impl Mixing<'_> {
             next += 1;
             for (a, q, f) in face_neighbours(grid, ijk) {
                 let qi = grid.index(q[0], q[1], q[2]);
-                let shut = self.face_fraction[a][face_index(grid, a, f)] >= 1.0
+                let shut = self.new.face(a, face_index(grid, a, f)) >= 1.0
                     || self.alpha(qi) <= COVERED_TOLERANCE;
                 if (shut && !across) || !seen.insert(qi) {
                     continue;

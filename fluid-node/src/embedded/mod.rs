@@ -22,7 +22,9 @@
 //!    state is already eq. (12): all weights are 1 and the per-sweep increments add up.
 //!
 //! On a grid decomposed over ranks ([`crate::fv::Slab`], a block) every rank holds the whole
-//! surface and runs all of this on the whole grid but the loads (each rank takes the sub-faces
+//! surface, the whole grid's sub-faces and cut cells, and Λ and λ dense in its block and the
+//! hooks' halo only (the geometry of `F^{n+1}` computed by block and put together, `held.rs`),
+//! and runs all of this on the whole grid but the loads (each rank takes the sub-faces
 //! of its own block, and the terms of all are added as one rank adds them, `loads.rs`), the
 //! ghost fills, wall runs and vacuum cells the sweeps write into its cells (derived from the
 //! geometry of its block and a halo, `hooks.rs`, with the `U^n` and `p̄` of its near cells), and the
@@ -82,6 +84,7 @@ mod crack;
 mod error;
 mod frame;
 mod gather;
+mod held;
 mod hooks;
 mod levers;
 mod loads;

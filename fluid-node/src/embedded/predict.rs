@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::cells::{cell_bits, full_state, mark_around, marked_cells};
-use super::hooks::{HookGeometry, NearView, wall_hooks_in};
+use super::hooks::{HookGeometry, NearView, wall_hooks_held, wall_hooks_in};
 use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::{CellBox, face_index};
@@ -16,8 +16,8 @@ impl Embedded {
     /// Step 1 of paper 003 §3.4: the split sweeps, keeping what the correct needs.
     pub fn predict(&mut self, solver: &mut FluidSolver, dt: f64) -> StepReport {
         self.prepare(solver);
-        let lambda = &self.state.geom.solid_fraction;
-        let covered = |c: usize| lambda[c] >= 1.0 - COVERED_TOLERANCE;
+        let geom = &self.state.geom;
+        let covered = |c: usize| geom.lambda(c) >= 1.0 - COVERED_TOLERANCE;
         let report = solver.predict(dt, &mut self.near.hooks, &covered);
         self.wall_pressures(solver, report.sweeps[0]);
         report
@@ -49,7 +49,7 @@ impl Embedded {
     fn wall_pressures(&mut self, solver: &FluidSolver, first: usize) {
         let (dim, nvar) = (self.config.grid.dim, self.config.grid.dim + 2);
         let (gamma, (vr, _)) = (self.config.gamma, self.config.vacuum);
-        let lambda = &self.state.geom.solid_fraction;
+        let geom = &self.state.geom;
         let own: Vec<usize> = (0..self.near.cells.len())
             .filter(|&k| self.own_slot(k))
             .collect();
@@ -60,7 +60,7 @@ impl Embedded {
         for (i, &k) in own.iter().enumerate() {
             let start = near.hooks.pressures[first][k];
             let c = near.cells[k] as usize;
-            let p = if lambda[c] >= 1.0 - COVERED_TOLERANCE {
+            let p = if geom.lambda(c) >= 1.0 - COVERED_TOLERANCE {
                 start
             } else if self.vacuum_wall(k) {
                 0.0
@@ -129,7 +129,10 @@ impl Embedded {
                 };
                 view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
-            Some(block) => wall_hooks_in(grid, ng, current, geom, block),
+            Some(block) => match &geom.fractions {
+                Some(f) => wall_hooks_held(grid, ng, current, f, &geom.cut, block),
+                None => wall_hooks_in(grid, ng, current, geom, block),
+            },
         });
         let h = &mut self.near.hooks;
         (h.ghosts, h.walls, h.vacuum) = (hooks.ghosts, hooks.walls, hooks.vacuum);
@@ -269,11 +272,11 @@ impl Embedded {
         } else {
             self.later_ghosts(solver, &order[1..], &ghosted)
         };
-        let lambda = &self.state.geom.solid_fraction;
+        let geom = &self.state.geom;
         let mut mine = Vec::with_capacity(u.len());
         for (k, &c) in own.iter().enumerate() {
-            let stale =
-                lambda[c as usize] >= 1.0 - COVERED_TOLERANCE && ghosted.binary_search(&c).is_err();
+            let stale = geom.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
+                && ghosted.binary_search(&c).is_err();
             if !stale {
                 mine.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
             } else if let Ok(i) = later.binary_search_by_key(&c, |g| g.0) {
@@ -295,9 +298,9 @@ impl Embedded {
         ghosted: &[u32],
     ) -> Vec<(u32, [f64; NQ])> {
         let dim = self.config.grid.dim;
-        let lambda = &self.state.geom.solid_fraction;
+        let geom = &self.state.geom;
         let stale = |c: u32| {
-            lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
+            geom.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 && self.near.slot_of[c as usize] > 0
                 && ghosted.binary_search(&c).is_err()
         };

@@ -7,7 +7,10 @@ use serde::{Deserialize, Serialize};
 use super::beyond::outside_domain;
 use super::cells::{CellKind, fluid_part, full_state};
 use super::{EmbeddedError, Loads, SolidFrame};
-use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
+use std::borrow::Cow;
+
+use super::held::Held;
+use crate::cutcell::{CellBox, CutGeometry, HeldFractions, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver, SplitHooks};
@@ -66,8 +69,8 @@ pub(super) struct Config {
 pub(super) struct State {
     /// The accepted surface and kinematics `F^n`.
     pub(super) current: SolidFrame,
-    /// Its geometry.
-    pub(super) geom: CutGeometry,
+    /// Its geometry, as this rank holds it (`held.rs`).
+    pub(super) geom: Held,
     pub(super) budget: InterfaceBudget,
     /// Loads of the accepted surface of the last step (outputs).
     pub(super) last_loads: Loads,
@@ -95,8 +98,9 @@ pub(super) struct NearCells {
 
 /// Buffers of the stages, kept between steps only to reuse their allocations.
 pub(super) struct Scratch {
-    /// Geometry of the trial (loads) or accepted (correct) surface.
-    pub(super) trial: CutGeometry,
+    /// Geometry of the trial (loads, on one rank) or accepted (correct) surface, as this rank
+    /// holds it.
+    pub(super) trial: Held,
     pub(super) swept: SubfaceSwept,
     /// Pieces `(cell, volume)` of the prisms of the parts of elements beyond the domain that
     /// lie in domain cells (see [`super::beyond`]); empty while the surface stays in.
@@ -112,6 +116,15 @@ pub(super) struct Scratch {
 }
 
 impl Config {
+    /// The cells whose Λ and λ this rank holds dense (`held.rs`): its block and the halo the
+    /// hooks read ([`super::hook_halo`]); the whole grid on one rank.
+    pub(super) fn held_box(&self) -> CellBox {
+        match self.block {
+            None => CellBox::whole(&self.grid),
+            Some(b) => b.grown(&self.grid, super::hook_halo(self.ng)),
+        }
+    }
+
     /// Whether the state `content / alpha` is acceptable (see [`state_ok`]).
     pub(super) fn physical(&self, content: &[f64; NQ], alpha: f64) -> bool {
         let full = full_state(&content[..self.grid.dim + 2], self.grid.dim, alpha);
@@ -155,8 +168,8 @@ impl NearCells {
 impl Embedded {
     /// The embedded solid on `solver`'s grid, with the surface and kinematics at `t^0`.
     pub fn new(solver: &FluidSolver, solid: SolidFrame) -> Result<Embedded, EmbeddedError> {
-        // NOTE: every rank of a decomposed fluid holds the whole surface and computes the
-        // geometry and the correct on the whole grid (replicated, issue 16; the loads, the
+        // NOTE: every rank of a decomposed fluid holds the whole surface and runs the correct
+        // on the whole grid (replicated, issue 16; the geometry by block, held by window, the loads, the
         // sweeps' ghost fills, wall runs and vacuum cells, and the correct's prisms and cell
         // updates are taken by block, issue 40): the
         // cut-cell data are surface-sized, and the same inputs give every rank the bits of one
@@ -197,12 +210,12 @@ impl Embedded {
             },
             state: State {
                 current: SolidFrame::default(),
-                geom: CutGeometry::new(),
+                geom: Held::default(),
                 budget: InterfaceBudget::default(),
                 last_loads: Loads::default(),
             },
             scratch: Scratch {
-                trial: CutGeometry::new(),
+                trial: Held::default(),
                 swept: SubfaceSwept::new(),
                 beyond: Vec::new(),
                 beyond_geom: CutGeometry::new(),
@@ -252,7 +265,16 @@ impl Embedded {
             });
         }
         outside_domain(grid, &self.config.boundary, &solid.surface())?;
-        compute(grid, &solid.surface(), &mut self.state.geom);
+        // NOTE: at the start and after a restore only: a decomposed grid's rank computes the
+        // whole grid's geometry once and keeps its share (`held.rs`); the steps put it
+        // together from the blocks' (`Embedded::correct`).
+        let geom = &mut self.state.geom;
+        compute(grid, &solid.surface(), &mut geom.cut);
+        if self.config.block.is_some() {
+            let held = self.config.held_box();
+            geom.fractions = Some(HeldFractions::from_whole(grid, &geom.cut, held));
+            geom.cut.release_dense();
+        }
         self.state.current = solid;
         Ok(())
     }
@@ -262,22 +284,45 @@ impl Embedded {
         &self.state.current
     }
 
-    /// Solid fraction Λ of every cell for the accepted surface.
-    pub fn solid_fraction(&self) -> &[f64] {
-        &self.state.geom.solid_fraction
+    /// Solid fraction Λ of this rank's cells for the accepted surface, in the order of its
+    /// cells (`fv::Slab`: x fastest over its block; every cell of the grid on one rank).
+    pub fn solid_fraction(&self) -> Cow<'_, [f64]> {
+        let geom = &self.state.geom;
+        match (self.config.block, &geom.fractions) {
+            // NOTE: a held box with the block's x and y ranges (slabs along z) holds the block's
+            // cells as one range, in their order: lent, not copied (4 MB a step at 100³ on 2
+            // ranks).
+            (Some(b), Some(f))
+                if (0..2).all(|a| f.held.lo[a] == b.lo[a] && f.held.hi[a] == b.hi[a]) =>
+            {
+                let first = f.held.index(b.lo);
+                Cow::Borrowed(&f.solid_fraction[first..first + b.n_cells()])
+            }
+            (Some(b), Some(f)) => {
+                let mut own = Vec::with_capacity(b.n_cells());
+                for k in b.lo[2]..b.hi[2] {
+                    for j in b.lo[1]..b.hi[1] {
+                        let row = f.held.index([b.lo[0], j, k]);
+                        own.extend_from_slice(&f.solid_fraction[row..row + b.size(0)]);
+                    }
+                }
+                Cow::Owned(own)
+            }
+            _ => Cow::Borrowed(&geom.solid_fraction),
+        }
     }
 
-    /// Fluid fraction `1 − Λ` of every cell (outputs).
+    /// Fluid fraction `1 − Λ` of every cell of the grid (outputs; on a decomposed grid read
+    /// from the runs this rank holds, `held.rs`).
     pub fn fluid_fraction(&self) -> Vec<f64> {
-        self.state
-            .geom
-            .solid_fraction
-            .iter()
-            .map(|&l| fluid_part(l))
+        let geom = &self.state.geom;
+        (0..self.config.grid.n_cells())
+            .map(|c| fluid_part(geom.lambda(c)))
             .collect()
     }
 
-    /// Geometry of the accepted surface.
+    /// Geometry of the accepted surface: the whole grid's sub-faces and cut cells; its dense
+    /// Λ and λ on one rank only (empty on a decomposed grid, see [`Embedded::solid_fraction`]).
     pub fn geometry(&self) -> &CutGeometry {
         &self.state.geom
     }
@@ -320,6 +365,6 @@ impl Embedded {
 
     /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
-        solver.totals_with_solid(&self.state.geom.solid_fraction)
+        solver.totals_with_own_solid(&self.solid_fraction())
     }
 }

@@ -34,7 +34,7 @@ struct Tally {
 /// block's cells (λ along every axis) as the whole grid has them.
 ///
 /// `cells_only`: the geometry of `compute_block_cells`, λ along x only.
-fn assert_block_is_whole(
+pub(crate) fn assert_block_is_whole(
     grid: &Grid,
     whole: &CutGeometry,
     b: &BlockGeometry,

@@ -4,6 +4,8 @@
 
 mod cutcell_2d;
 mod cutcell_block;
+mod cutcell_block_assemble;
+mod cutcell_block_chain;
 mod cutcell_cmd;
 mod cutcell_degenerate;
 mod cutcell_geometry;
@@ -14,6 +16,7 @@ mod embedded_boundary;
 mod embedded_crack;
 mod embedded_hooks_block;
 mod embedded_memory;
+mod embedded_memory_ranks;
 mod embedded_particles;
 mod embedded_piston;
 mod embedded_rest;

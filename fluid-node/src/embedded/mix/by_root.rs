@@ -225,7 +225,7 @@ impl Mixing<'_> {
         roots.dedup();
         for (k, &c) in self.near.iter().enumerate() {
             if kind[k] == CellKind::Predicted
-                || self.new_lambda[c as usize] >= 1.0 - COVERED_TOLERANCE
+                || self.new.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 || !self.own(k)
                 || self.sources.binary_search(&k).is_ok()
                 || roots.binary_search(&(c as usize)).is_ok()

@@ -74,7 +74,7 @@ impl Mixing<'_> {
                 }
                 for (a, q, f) in face_neighbours(grid, grid.ijk(c)) {
                     let qi = grid.index(q[0], q[1], q[2]);
-                    if self.face_fraction[a][face_index(grid, a, f)] >= 1.0 {
+                    if self.new.face(a, face_index(grid, a, f)) >= 1.0 {
                         continue;
                     }
                     if let Ok(i) = group_of.binary_search_by_key(&qi, |o| o.0) {

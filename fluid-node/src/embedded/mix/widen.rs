@@ -22,7 +22,7 @@ impl Mixing<'_> {
         let mut ring = self.border(members, extra, crossed);
         ring.retain(|&q| {
             self.alpha(q) > COVERED_TOLERANCE
-                && self.old_lambda[q] < 1.0 - COVERED_TOLERANCE
+                && self.old.lambda(q) < 1.0 - COVERED_TOLERANCE
                 && self.is_source(q).is_none()
                 && roots.binary_search(&q).is_err()
                 && claimed.binary_search(&q).is_err()

@@ -45,6 +45,21 @@ impl FluidSolver {
         self.totals_by(Some(solid_fraction))
     }
 
+    /// [`FluidSolver::totals_with_solid`] from the solid fractions of this rank's cells only,
+    /// in the order of its cells (x fastest over its block; every cell on one rank): the same
+    /// bits, without the whole grid's Λ on every rank (issue 40 item 1, `embedded::held`).
+    pub fn totals_with_own_solid(&self, own: &[f64]) -> Totals {
+        assert_eq!(
+            own.len(),
+            self.grid.n_cells(),
+            "one Λ per cell of this rank"
+        );
+        if self.slab.ranks == 1 {
+            return self.totals_by(Some(own));
+        }
+        self.totals_of_own(Some(own), false).0
+    }
+
     /// Adds `amount` (mass, momentum per axis, energy) to what left through the open sides
     /// since the start: the embedded solid's correct applies the sweeps' flux through a domain
     /// face of a cut cell times the face's fluid part, and counts the difference here. Every
@@ -89,9 +104,6 @@ impl FluidSolver {
         // in the one-rank order of the plane (x is not cut in 3-D, `protocol::decomp`), and
         // the blocks along axis `dim − 2` take turns in that order: each continues the running
         // sums of the block below it, so every plane's sum takes the one-rank steps.
-        let n_planes = self.grid.cells[dim - 1];
-        let mut partial = vec![[CompensatedSum::default(); NQ]; n_planes];
-        let mut fast: Vec<(f64, usize)> = vec![(0.0, usize::MAX); n_planes];
         let lambda_block;
         let solid_fraction = match solid_fraction {
             Some(l) if self.slab.ranks > 1 => {
@@ -101,6 +113,16 @@ impl FluidSolver {
             }
             other => other,
         };
+        self.totals_of_own(solid_fraction, rate)
+    }
+
+    /// [`FluidSolver::totals_with_rate`] with the solid fractions of this rank's cells, in
+    /// their order.
+    fn totals_of_own(&self, solid_fraction: Option<&[f64]>, rate: bool) -> (Totals, (f64, usize)) {
+        let dim = self.grid.dim;
+        let n_planes = self.grid.cells[dim - 1];
+        let mut partial = vec![[CompensatedSum::default(); NQ]; n_planes];
+        let mut fast: Vec<(f64, usize)> = vec![(0.0, usize::MAX); n_planes];
         let (below, above) = (self.row_neighbour(false), self.row_neighbour(true));
         // NOTE: in chunks of planes along a chain, so that the block above starts on a chunk
         // while this block sums the next: it then waits for one chunk of each block below, not
