@@ -282,15 +282,7 @@ impl CutGeometry {
     /// sub-faces and cut cells of the whole grid here, Λ and λ in `held` (dense in its box, as
     /// runs elsewhere), with the same bits.
     pub fn assemble_held(&mut self, grid: &Grid, parts: &[Vec<u8>], held: &mut HeldFractions) {
-        self.release_dense();
-        self.subfaces.clear();
-        self.subface_vertices.clear();
-        self.cut_cells.clear();
-        self.diagnostics = Default::default();
-        held.clear(grid);
-        let subfaces = read_parts(parts, &mut self.subface_vertices, held, None);
-        held.sort_runs();
-        self.put_subfaces(subfaces);
+        self.assemble_held_from(grid, parts, held, None);
     }
 
     /// [`CutGeometry::assemble_held`] of parts from [`block_part_shared`] (or [`block_part`]):
@@ -304,13 +296,24 @@ impl CutGeometry {
         held: &mut HeldFractions,
         own: (usize, &[[f64; 3]]),
     ) {
+        self.assemble_held_from(grid, parts, held, Some(own));
+    }
+
+    /// [`CutGeometry::assemble_held`] (`own`: `None`) and [`CutGeometry::assemble_held_own`].
+    fn assemble_held_from(
+        &mut self,
+        grid: &Grid,
+        parts: &[Vec<u8>],
+        held: &mut HeldFractions,
+        own: Option<(usize, &[[f64; 3]])>,
+    ) {
         self.release_dense();
         self.subfaces.clear();
         self.subface_vertices.clear();
         self.cut_cells.clear();
         self.diagnostics = Default::default();
         held.clear(grid);
-        let subfaces = read_parts(parts, &mut self.subface_vertices, held, Some(own));
+        let subfaces = read_parts(parts, &mut self.subface_vertices, held, own);
         held.sort_runs();
         self.put_subfaces(subfaces);
     }

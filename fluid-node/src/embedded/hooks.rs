@@ -101,27 +101,15 @@ pub fn wall_hooks_in(
     geom: &CutGeometry,
     block: CellBox,
 ) -> WallHooks {
-    let window = block.grown(grid, hook_halo(ng));
-    let inside = |c: u32| window.contains(grid.ijk(c as usize));
-    // NOTE: the sub-faces and cut cells of the window's cells, in the whole grid's order (by
-    // cell, then element), which is the order of a block's geometry; with slabs they are one
-    // stretch of the whole lists, with blocks several.
-    let subfaces: Vec<SubFace> = (geom.subfaces.iter())
-        .filter(|s| inside(s.cell))
-        .copied()
-        .collect();
-    let cut_cells: Vec<u32> = (geom.cut_cells.iter().copied())
-        .filter(|&c| inside(c))
-        .collect();
-    let view = HookGeometry {
+    window_hooks(
         grid,
-        window,
-        held: CellBox::whole(grid),
-        solid_fraction: &geom.solid_fraction,
-        subfaces: &subfaces,
-    };
-    let near = NearOfView::new(&view, &cut_cells);
-    view.wall_hooks(&near.as_ref(), frame, ng, block)
+        ng,
+        frame,
+        geom,
+        block,
+        CellBox::whole(grid),
+        &geom.solid_fraction,
+    )
 }
 
 /// [`wall_hooks_in`] from the Λ a rank of a decomposed grid holds (`embedded::held`: dense in
@@ -141,7 +129,34 @@ pub(super) fn wall_hooks_held(
             .all(|a| fractions.held.lo[a] <= window.lo[a] && window.hi[a] <= fractions.held.hi[a]),
         "the hooks' window is held dense"
     );
+    window_hooks(
+        grid,
+        ng,
+        frame,
+        geom,
+        block,
+        fractions.held,
+        &fractions.solid_fraction,
+    )
+}
+
+/// The hooks of `block` from the sub-faces and cut cells of `geom` in the window of
+/// [`hook_halo`] cells around it and Λ of the cells of `held` (`solid_fraction`, by
+/// [`CellBox::index`]), which holds that window.
+fn window_hooks(
+    grid: &Grid,
+    ng: usize,
+    frame: &SolidFrame,
+    geom: &CutGeometry,
+    block: CellBox,
+    held: CellBox,
+    solid_fraction: &[f64],
+) -> WallHooks {
+    let window = block.grown(grid, hook_halo(ng));
     let inside = |c: u32| window.contains(grid.ijk(c as usize));
+    // NOTE: the sub-faces and cut cells of the window's cells, in the whole grid's order (by
+    // cell, then element), which is the order of a block's geometry; with slabs they are one
+    // stretch of the whole lists, with blocks several.
     let subfaces: Vec<SubFace> = (geom.subfaces.iter())
         .filter(|s| inside(s.cell))
         .copied()
@@ -152,8 +167,8 @@ pub(super) fn wall_hooks_held(
     let view = HookGeometry {
         grid,
         window,
-        held: fractions.held,
-        solid_fraction: &fractions.solid_fraction,
+        held,
+        solid_fraction,
         subfaces: &subfaces,
     };
     let near = NearOfView::new(&view, &cut_cells);

@@ -15,7 +15,10 @@ use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
 
 use crate::embedded_support::translated;
-use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
+use crate::fv_ranks::{
+    PROCESS_GRIDS_2D, PROCESS_GRIDS_3D, blast, bodies, moving_bodies_2d, moving_bodies_3d,
+    seam_plate_2d,
+};
 
 /// Halos checked: none, one and two cells (rows swept whole where a wall along a cut axis
 /// enters the block), and wider ones.
@@ -143,14 +146,7 @@ fn block_geometry_2d_is_the_whole_grids_on_every_process_grid() {
     let (grid, _) = blast(&[40, 48]);
     let solid = bodies(&[moving_bodies_2d(), seam_plate_2d()]);
     // 0.006 s moves the fastest body (2.7 m/s) 0.8 cells of 1/48 m.
-    let decomps = [
-        [1, 2, 1],
-        [1, 4, 1],
-        [2, 2, 1],
-        [3, 1, 1],
-        [2, 4, 1],
-        [1, 3, 1],
-    ];
+    let decomps = PROCESS_GRIDS_2D;
     let tally = check("2-D", &grid, &solid, 0.006, &decomps);
     assert!(tally.whole_rows > 0, "rows swept whole");
     assert!(tally.fewer > tally.blocks / 2, "blocks clip fewer elements");
@@ -161,14 +157,7 @@ fn block_geometry_3d_is_the_whole_grids_on_every_process_grid() {
     let (grid, _) = blast(&[16, 16, 24]);
     let solid = moving_bodies_3d();
     // 0.012 s moves the fastest body (2.7 m/s) 0.8 cells of 1/24 m.
-    let decomps = [
-        [1, 1, 2],
-        [1, 1, 4],
-        [1, 2, 2],
-        [1, 2, 1],
-        [1, 1, 3],
-        [1, 2, 4],
-    ];
+    let decomps = PROCESS_GRIDS_3D;
     let tally = check("3-D", &grid, &solid, 0.012, &decomps);
     assert!(tally.whole_rows > 0, "rows swept whole");
     // The bodies span 7 of the 24 cells along z and 8 of 16 along y: only the blocks of the

@@ -19,7 +19,10 @@ use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
 
 use crate::embedded_support::translated;
-use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
+use crate::fv_ranks::{
+    PROCESS_GRIDS_2D, PROCESS_GRIDS_3D, blast, bodies, moving_bodies_2d, moving_bodies_3d,
+    seam_plate_2d,
+};
 
 /// A sub-face and its vertices as bits (its place in `subface_vertices` left out).
 pub(crate) fn subface_bits(s: &SubFace, vertices: &[[f64; 3]]) -> Vec<u64> {
@@ -149,14 +152,7 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
 fn the_whole_geometry_put_together_from_the_blocks_is_computes_2d() {
     let (grid, _) = blast(&[40, 48]);
     let solid = bodies(&[moving_bodies_2d(), seam_plate_2d()]);
-    let decomps = [
-        [1, 2, 1],
-        [1, 4, 1],
-        [2, 2, 1],
-        [3, 1, 1],
-        [2, 4, 1],
-        [1, 3, 1],
-    ];
+    let decomps = PROCESS_GRIDS_2D;
     let other = check("2-D", &grid, &solid, 0.006, &decomps);
     assert!(other > 0, "2-D: some vertices in another layout");
 }
@@ -164,14 +160,7 @@ fn the_whole_geometry_put_together_from_the_blocks_is_computes_2d() {
 #[test]
 fn the_whole_geometry_put_together_from_the_blocks_is_computes_3d() {
     let (grid, _) = blast(&[16, 16, 24]);
-    let decomps = [
-        [1, 1, 2],
-        [1, 1, 4],
-        [1, 2, 2],
-        [1, 2, 1],
-        [1, 1, 3],
-        [1, 2, 4],
-    ];
+    let decomps = PROCESS_GRIDS_3D;
     let other = check("3-D", &grid, &moving_bodies_3d(), 0.012, &decomps);
     assert!(other > 0, "3-D: some vertices in another layout");
 }

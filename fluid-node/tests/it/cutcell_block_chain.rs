@@ -14,7 +14,9 @@ use fluid_node::grid::Grid;
 use crate::cutcell_block::assert_block_is_whole;
 use crate::cutcell_block_assemble::{assert_held, subface_bits};
 use crate::embedded_support::translated;
-use crate::fv_ranks::{blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
+use crate::fv_ranks::{
+    PROCESS_GRIDS_3D, blast, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d,
+};
 
 /// Every block of every process grid in `decomps` at 4 positions `dt` apart, against `compute`;
 /// returns how many blocks clipped fewer elements than the surface holds, and how many blocks.
@@ -50,14 +52,7 @@ fn chained_block_geometry_2d_is_the_whole_grids() {
 fn chained_block_geometry_3d_is_the_whole_grids() {
     let (grid, _) = blast(&[16, 16, 24]);
     let solid = moving_bodies_3d();
-    let decomps = [
-        [1, 1, 2],
-        [1, 1, 4],
-        [1, 2, 2],
-        [1, 2, 1],
-        [1, 1, 3],
-        [1, 2, 4],
-    ];
+    let decomps = PROCESS_GRIDS_3D;
     assert!(check("3-D", &grid, &solid, 0.012, &decomps) > 0);
 }
 

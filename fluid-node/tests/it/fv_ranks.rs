@@ -28,6 +28,27 @@ pub(crate) fn on_thread_ranks<T: Send>(ranks: usize, f: impl Fn(ThreadComm) -> T
     })
 }
 
+/// The 2-D process grids (`[kx, ky, 1]`) the block tests run on: slabs along each axis, a
+/// split in three, and blocks.
+pub(crate) const PROCESS_GRIDS_2D: [[usize; 3]; 6] = [
+    [1, 2, 1],
+    [1, 4, 1],
+    [2, 2, 1],
+    [3, 1, 1],
+    [2, 4, 1],
+    [1, 3, 1],
+];
+
+/// The 3-D process grids the block tests run on (x is never cut in 3-D).
+pub(crate) const PROCESS_GRIDS_3D: [[usize; 3]; 6] = [
+    [1, 1, 2],
+    [1, 1, 4],
+    [1, 2, 2],
+    [1, 2, 1],
+    [1, 1, 3],
+    [1, 2, 4],
+];
+
 /// A blast off-centre with a swirl on `cells`: the ball sits across the middle of the last
 /// axis, where 2 and 4 ranks cut it.
 pub(crate) fn blast(cells: &[usize]) -> (Grid, FluidState) {
@@ -655,14 +676,7 @@ fn a_moving_body_across_the_cuts_3d_is_bit_identical_on_slabs_and_blocks() {
         [BoundaryKind::Outflow, BoundaryKind::Wall],
     ];
     let p = params(5, open);
-    let decomps = [
-        [1, 1, 2],
-        [1, 1, 4],
-        [1, 2, 2],
-        [1, 2, 1],
-        [1, 1, 3],
-        [1, 2, 4],
-    ];
+    let decomps = PROCESS_GRIDS_3D;
     assert_coupled_same_for_ranks("3-D osmp5", &grid, &state, &p, &solid, 8, &decomps);
 }
 
