@@ -7,6 +7,10 @@
 //! updates it makes), the work of the correct that is shared out by rank, the steps whose mixing
 //! groups merged or widened (the mixing then merges and mixes every group on every rank), and
 //! the heap bytes its `Embedded` holds after the last step, by part (`Embedded::memory`).
+//! Each rank also counts the CPU time of its predicts and corrects: its own thread's and its
+//! solver pool's thread's (`/proc/self/task/TID/schedstat`, Linux), which leaves out the
+//! waits at the collectives (the thread ranks block in a channel's `recv`) and the waits for a
+//! core, so with more ranks than cores it is still each rank's own work.
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
@@ -87,11 +91,24 @@ fn moved(frame: &SolidFrame, dt: f64) -> SolidFrame {
     next
 }
 
+/// CPU time \[s\] a thread of this process has run (`/proc/self/task/TID/schedstat`, its
+/// first field, nanoseconds on a CPU); 0 where the file cannot be read (not Linux).
+fn thread_cpu(tid: i32) -> f64 {
+    std::fs::read_to_string(format!("/proc/self/task/{tid}/schedstat"))
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .map_or(0.0, |ns| ns as f64 * 1e-9)
+}
+
 /// What one rank measured over the steps.
 struct RankTimes {
     /// Predict and correct times \[s\], one per step.
     predict: Vec<f64>,
     correct: Vec<f64>,
+    /// CPU time of the predicts and corrects \[s\], one per step: the rank's thread and its
+    /// solver pool's thread together.
+    predict_cpu: Vec<f64>,
+    correct_cpu: Vec<f64>,
     /// Sub-faces of the accepted surface in the rank's cells, after the last step.
     subfaces: usize,
     /// Cells of the rank's block.
@@ -113,9 +130,17 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                     .expect("solver");
                 let mut e = Embedded::new(&s, boxes()).expect("embedded");
                 e.set_fracture(true);
+                // SAFETY: `gettid` has no preconditions.
+                let tids = [
+                    unsafe { libc::gettid() },
+                    s.install(|| unsafe { libc::gettid() }),
+                ];
+                let cpu = || tids.iter().map(|&tid| thread_cpu(tid)).sum::<f64>();
                 let mut times = RankTimes {
                     predict: Vec::new(),
                     correct: Vec::new(),
+                    predict_cpu: Vec::new(),
+                    correct_cpu: Vec::new(),
                     subfaces: 0,
                     cells: 0,
                     merged_or_widened: 0,
@@ -123,14 +148,16 @@ fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<
                 };
                 for n in 0..steps {
                     let dt = s.max_dt().min(0.5 * e.one_cell_dt());
-                    let t = Instant::now();
+                    let (t, c) = (Instant::now(), cpu());
                     let report = e.predict(&mut s, dt);
                     times.predict.push(t.elapsed().as_secs_f64());
+                    times.predict_cpu.push(cpu() - c);
                     assert!(report.ok(), "step {n}: {:?}", report.troubles);
                     let next = moved(e.surface(), dt);
-                    let t = Instant::now();
+                    let (t, c) = (Instant::now(), cpu());
                     let report = e.correct(&mut s, dt, next, n, false).expect("correct");
                     times.correct.push(t.elapsed().as_secs_f64());
+                    times.correct_cpu.push(cpu() - c);
                     if report.merged_groups + report.widened_groups > 0 {
                         times.merged_or_widened += 1;
                     }
@@ -171,7 +198,7 @@ fn main() {
         state.set_primitive(c, 1.2, [0.0; 3], 1e5, 1.4);
     }
     println!(
-        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict and correct per rank, ms (median of the steps after the first); sub-faces of F^(n+1) in the rank's cells"
+        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict and correct per rank, ms (median of the steps after the first; wall, and CPU of the rank's threads); sub-faces of F^(n+1) in the rank's cells"
     );
     println!("| K | part | rank 0 | rank 1 | rank 2 | rank 3 |");
     println!("| --- | --- | --- | --- | --- | --- |");
@@ -183,6 +210,8 @@ fn main() {
         let ms = |t: &[f64]| format!("{:.2}", 1e3 * median(&t[1..]));
         println!("| {k} | predict | {} |", row(&|t| ms(&t.predict)));
         println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
+        println!("| {k} | predict, CPU | {} |", row(&|t| ms(&t.predict_cpu)));
+        println!("| {k} | correct, CPU | {} |", row(&|t| ms(&t.correct_cpu)));
         println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
         println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
         let merged = |t: &RankTimes| t.merged_or_widened.to_string();
