@@ -1,7 +1,7 @@
 //! The embedded part's predict and correct per rank (issue 40 item 1, steps 2 and 4):
 //! `Embedded::predict` and `Embedded::correct` on K = 1, 2, 4 thread ranks
 //! (`fluid_node::ranks::threads`, one rayon thread each, cut as `protocol::decomp::choose` cuts
-//! the grid), each rank timing its own predicts and corrects (a rank's time includes its waits
+//! the grid, and K = 4 also as `1 × 2 × 2`), each rank timing its own predicts and corrects (a rank's time includes its waits
 //! for the others at the collectives, and with more ranks than cores, for a core), and counting
 //! the sub-faces of `F^{n+1}` in its own cells (whose prisms it clips) and its near cells (whose
 //! updates it makes), the work of the correct that is shared out by rank, the steps whose mixing
@@ -91,6 +91,9 @@ fn moved(frame: &SolidFrame, dt: f64) -> SolidFrame {
     next
 }
 
+/// Steps of the fluid alone that each rank times before the coupled steps.
+const FLUID_STEPS: usize = 6;
+
 /// CPU time \[s\] a thread of this process has run (`/proc/self/task/TID/schedstat`, its
 /// first field, nanoseconds on a CPU); 0 where the file cannot be read (not Linux).
 fn thread_cpu(tid: i32) -> f64 {
@@ -109,6 +112,9 @@ struct RankTimes {
     /// solver pool's thread together.
     predict_cpu: Vec<f64>,
     correct_cpu: Vec<f64>,
+    /// CPU time of the fluid's step alone \[s\] (`FluidSolver::advance`, no body), one per
+    /// step, taken before the coupled steps.
+    fluid_cpu: Vec<f64>,
     /// Sub-faces of the accepted surface in the rank's cells, after the last step.
     subfaces: usize,
     /// Cells of the rank's block.
@@ -120,23 +126,41 @@ struct RankTimes {
 }
 
 /// Each rank's predict and correct times over `steps` coupled steps on `ranks` thread ranks.
-fn rank_times(grid: &Grid, state: &FluidState, ranks: usize, steps: u64) -> Vec<RankTimes> {
+/// `dims`: the process grid (`None`: `protocol::decomp::choose`'s).
+fn rank_times(
+    grid: &Grid,
+    state: &FluidState,
+    ranks: usize,
+    dims: Option<[usize; 3]>,
+    steps: u64,
+) -> Vec<RankTimes> {
     let handles: Vec<_> = ThreadRanks::new(ranks)
         .into_iter()
         .map(|comm| {
             let (grid, state) = (grid.clone(), state.clone());
             std::thread::spawn(move || {
-                let mut s = FluidSolver::decomposed(grid, params(), state, 1, Box::new(comm))
-                    .expect("solver");
-                let mut e = Embedded::new(&s, boxes()).expect("embedded");
-                e.set_fracture(true);
+                let mut s =
+                    FluidSolver::decomposed_as(grid, params(), state, 1, Box::new(comm), dims)
+                        .expect("solver");
                 // SAFETY: `gettid` has no preconditions.
                 let tids = [
                     unsafe { libc::gettid() },
                     s.install(|| unsafe { libc::gettid() }),
                 ];
                 let cpu = || tids.iter().map(|&tid| thread_cpu(tid)).sum::<f64>();
+                // The fluid's step alone (no body, the gas at rest stays at rest), for the
+                // share of the predict that is the sweeps.
+                let fluid_cpu = (0..FLUID_STEPS)
+                    .map(|_| {
+                        let (dt, c) = (s.max_dt(), cpu());
+                        s.advance(dt);
+                        cpu() - c
+                    })
+                    .collect();
+                let mut e = Embedded::new(&s, boxes()).expect("embedded");
+                e.set_fracture(true);
                 let mut times = RankTimes {
+                    fluid_cpu,
                     predict: Vec::new(),
                     correct: Vec::new(),
                     predict_cpu: Vec::new(),
@@ -202,8 +226,14 @@ fn main() {
     );
     println!("| K | part | rank 0 | rank 1 | rank 2 | rank 3 |");
     println!("| --- | --- | --- | --- | --- | --- |");
-    for k in [1, 2, 4] {
-        let times = rank_times(&grid, &state, k, steps);
+    // K = 4 also as 2 × 2 blocks across y and z, which cut the body four ways (the slabs that
+    // `choose` takes leave it in the two middle ones).
+    for (k, dims) in [(1, None), (2, None), (4, None), (4, Some([1, 2, 2]))] {
+        let times = rank_times(&grid, &state, k, dims, steps);
+        let k = match dims {
+            Some([a, b, c]) => format!("{k} ({a} × {b} × {c})"),
+            None => k.to_string(),
+        };
         let row = |f: &dyn Fn(&RankTimes) -> String| -> String {
             times.iter().map(f).collect::<Vec<_>>().join(" | ")
         };
@@ -212,6 +242,10 @@ fn main() {
         println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
         println!("| {k} | predict, CPU | {} |", row(&|t| ms(&t.predict_cpu)));
         println!("| {k} | correct, CPU | {} |", row(&|t| ms(&t.correct_cpu)));
+        println!(
+            "| {k} | fluid step alone, CPU | {} |",
+            row(&|t| ms(&t.fluid_cpu))
+        );
         println!("| {k} | sub-faces | {} |", row(&|t| t.subfaces.to_string()));
         println!("| {k} | cells | {} |", row(&|t| t.cells.to_string()));
         let merged = |t: &RankTimes| t.merged_or_widened.to_string();
