@@ -35,17 +35,24 @@ use crate::fv::euler::{
     NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_eigenvector,
     roe_star_states_positive, roe_strengths,
 };
-use crate::fv::isa::{AlignedVec, Isa};
+use crate::fv::isa::{FixedVec, Isa};
 use crate::fv::osmp::{
     INTERFACE_PAD, SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius,
 };
 
 /// An array over the cells (and faces) of a strip: entry `CARRY`, where the cell pass starts,
-/// and entry 0, where the face loop writes, start cache lines (`isa::AlignedVec`).
-type CellVec = AlignedVec<0>;
+/// and entry 0, where the face loop writes, start cache lines (`isa::FixedVec`, all of a
+/// strip's arrays in its one allocation).
+type CellVec = FixedVec<0, STRIP_LINES>;
 /// An array over the interfaces of a strip: entry `CARRY − 1`, where the interface pass, the
 /// speeds and the products start, starts a cache line (not `CARRY / 2 + R`, where `Ψ` reads).
-type InterfaceVec = AlignedVec<INTERFACE_PAD>;
+type InterfaceVec = FixedVec<INTERFACE_PAD, STRIP_LINES>;
+/// The cache lines of each strip array: `STRIP_LEN` entries.
+const STRIP_LINES: usize = STRIP_LEN / 8 + 1;
+/// The entries of each strip array: the most a strip uses (a short line's `todo + CARRY`).
+const STRIP_LEN: usize = SHORT_LINE + CARRY;
+const _: () = assert!(CellVec::LEN == STRIP_LEN && InterfaceVec::LEN == STRIP_LEN);
+const _: () = assert!(STRIP_CELLS <= STRIP_LEN);
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
@@ -76,20 +83,47 @@ const STRIP_CELLS: usize = LONG_STRIP_FACES + CARRY;
 /// they are, and strips of fixed length would compute up to a strip's faces more than it has.
 const SHORT_LINE: usize = 80;
 
-/// The buffers of one strip: its cells, interfaces and faces (structure of arrays).
+/// The buffers of one strip: its cells, interfaces and faces (structure of arrays), each of
+/// `STRIP_LEN` entries, in one allocation (`LineScratch` holds it boxed).
 #[derive(Clone, Debug, Default)]
 pub(super) struct Strip {
     cells: CellLine,
     roe: RoeLine,
-    speeds: [SpeedLine; 3],
-    waves: [WaveLine; NQ],
+    speeds: [SpeedLine<InterfaceVec>; 3],
+    waves: [WaveLine<InterfaceVec>; NQ],
     /// The regular face fluxes, one array per component.
     face_q: [CellVec; NQ],
     /// Whether each cell is vacuum, each interface's average valid, each face's linearised
     /// star states physical.
-    vacuum: Vec<bool>,
-    valid: Vec<bool>,
-    star_ok: Vec<bool>,
+    vacuum: Flags,
+    valid: Flags,
+    star_ok: Flags,
+}
+
+/// A flag for each entry of a strip.
+#[derive(Clone, Copy, Debug)]
+struct Flags([bool; STRIP_LEN]);
+
+impl Default for Flags {
+    fn default() -> Flags {
+        Flags([false; STRIP_LEN])
+    }
+}
+
+impl std::ops::Deref for Flags {
+    type Target = [bool];
+
+    #[inline(always)]
+    fn deref(&self) -> &[bool] {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Flags {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [bool] {
+        &mut self.0
+    }
 }
 
 impl Strip {
@@ -157,27 +191,6 @@ impl Strip {
             *dst = *src;
         }
     }
-
-    /// Sizes the buffers to at least `len` entries each (a no-op once done).
-    fn reserve(&mut self, len: usize) {
-        if self.vacuum.len() >= len {
-            return;
-        }
-        self.cells.resize(len);
-        self.roe.resize(len);
-        for sp in &mut self.speeds {
-            sp.resize(len);
-        }
-        for w in &mut self.waves {
-            w.resize(len);
-        }
-        for v in &mut self.face_q {
-            v.resize(len, 0.0);
-        }
-        for v in [&mut self.vacuum, &mut self.valid, &mut self.star_ok] {
-            v.resize(len, false);
-        }
-    }
 }
 
 /// What the cells of a line give the interfaces, one array per quantity (structure of arrays,
@@ -193,13 +206,6 @@ struct CellLine {
 }
 
 impl CellLine {
-    fn resize(&mut self, len: usize) {
-        let arrays = self.q.iter_mut().chain(&mut self.vel).chain(&mut self.flux);
-        for v in arrays.chain([&mut self.sqrt_rho, &mut self.h]) {
-            v.resize(len, 0.0);
-        }
-    }
-
     /// The cells `lo .. lo + len` as slices of one length, so that a loop over them has no
     /// bounds checks left and vectorises.
     #[inline(always)]
@@ -246,12 +252,6 @@ struct RoeLine {
 }
 
 impl RoeLine {
-    fn resize(&mut self, len: usize) {
-        for v in self.vel.iter_mut().chain([&mut self.h, &mut self.c]) {
-            v.resize(len, 0.0);
-        }
-    }
-
     /// The average of interface `l` of slices `vel, h, c, valid` of a `RoeLine` (of one
     /// length, so that no bounds check stays in a loop).
     #[inline(always)]
@@ -473,12 +473,11 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     let mut psi = [[0.0; PSI_FACES]; NQ];
     if todo <= SHORT_LINE {
         // One strip: the whole line (loops of the line's length).
-        s.strip.reserve(todo + CARRY);
+        assert!(todo + CARRY <= STRIP_LEN, "a short line of {todo} faces");
         strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
     } else {
         // Strips of STRIP_FACES or LONG_STRIP_FACES faces (the last one's beyond the line's
         // end computed on what is there, and not kept).
-        s.strip.reserve(STRIP_CELLS);
         let (short, long) = (todo.div_ceil(STRIP_FACES), todo.div_ceil(LONG_STRIP_FACES));
         if long * LONG_STRIP_FACES <= short * STRIP_FACES {
             for k in 0..long {
@@ -544,7 +543,7 @@ fn strip_faces<const ORDER: u32>(
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
         st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
-        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
+        psi_line::<ORDER, true, _>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
