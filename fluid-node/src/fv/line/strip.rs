@@ -32,13 +32,15 @@
 
 use super::{LineScratch, LineSetup, n_waves, special_faces};
 use crate::fv::euler::{
-    NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_eigenvector,
-    roe_star_states_positive, roe_strengths,
+    NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_strengths,
 };
-use crate::fv::isa::{FixedVec, Isa};
+use crate::fv::isa::FixedVec;
 use crate::fv::osmp::{
     INTERFACE_PAD, SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius,
 };
+use face::{FaceInputs, face_loop_on};
+
+mod face;
 
 /// An array over the cells (and faces) of a strip: entry `CARRY`, where the cell pass starts,
 /// and entry 0, where the face loop writes, start cache lines (`isa::FixedVec`, all of a
@@ -547,29 +549,18 @@ fn strip_faces<const ORDER: u32>(
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
-    let cells = st.cells.view(f0, count + 1);
-    let w = f0..f0 + count;
-    let roe_vel: [&[f64]; 3] = std::array::from_fn(|k| &st.roe.vel[k][w.clone()]);
-    let (roe_h, roe_c) = (&st.roe.h[w.clone()], &st.roe.c[w.clone()]);
-    let roe_valid = &st.valid[w.clone()];
-    let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
-    let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
-    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &psi[k][j0..j0 + count]);
-    let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
-    face_loop_on(
-        s.isa,
-        &FaceInputs {
-            cells,
-            roe: (roe_vel, roe_h, roe_c, roe_valid),
-            waves: (lam, alpha, psi),
-        },
-        &mut st.star_ok[j0..j0 + count],
-        &mut fq0[j0..j0 + count],
-        &mut fq1[j0..j0 + count],
-        &mut fq2[j0..j0 + count],
-        &mut fq3[j0..j0 + count],
-        &mut fq4[j0..j0 + count],
-    );
+    let inputs = FaceInputs {
+        cells: &st.cells,
+        roe: &st.roe,
+        valid: &st.valid,
+        speeds: &st.speeds,
+        waves: &st.waves,
+        psi,
+        f0,
+        j0,
+        count,
+    };
+    face_loop_on(s.isa, &inputs, &mut st.face_q, &mut st.star_ok);
     // What is on the line of the strip's cells, interfaces (a − 1 ..) and faces (a − CARRY / 2 ..).
     // (The line's cell or interface i is the strip's entry i + CARRY − a.)
     let at = |i: usize| i + CARRY - a;
@@ -588,97 +579,6 @@ fn strip_faces<const ORDER: u32>(
     }
 }
 
-/// What [`face_loop`] reads: the cells of the faces (`nf + 1`), the Roe averages (velocity, H, c,
-/// validity) and the waves' speeds, strengths and `Ψ` at the faces (`nf`).
-#[allow(clippy::type_complexity)]
-struct FaceInputs<'a> {
-    cells: CellView<'a>,
-    roe: ([&'a [f64]; 3], &'a [f64], &'a [f64], &'a [bool]),
-    waves: ([&'a [f64]; 3], [&'a [f64]; NQ], [&'a [f64]; NQ]),
-}
-
-/// [`face_loop`] on the instruction set `isa`: a function of its own for each (`isa.rs`).
-///
-/// NOTE: inlined into the line kernel, the face loop stayed scalar on every instruction set:
-/// LLVM asked for more run-time checks of overlap among its ~30 input and 6 output arrays than
-/// it makes ("too many memory checks needed"). In a function of its own the outputs are
-/// `noalias` arguments, and it vectorises. One call a strip.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_on(
-    isa: Isa,
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    match isa {
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 if Isa::Avx512.supported() => {
-            // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { face_loop_avx512(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
-        }
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::Avx2.supported() => {
-            // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { face_loop_avx2(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
-        }
-        _ => face_loop_baseline(inputs, star_ok, fq0, fq1, fq2, fq3, fq4),
-    }
-}
-
-/// [`face_loop`] for the baseline (`face_loop_on`).
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_baseline(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
-}
-
-/// [`face_loop`] for AVX2 (without FMA, `isa.rs`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_avx2(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
-}
-
-/// [`face_loop`] for AVX-512F (without FMA, `isa.rs`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_avx512(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
-}
-
 /// The first `len` entries of each of three arrays.
 #[inline(always)]
 fn cut3(x: [&[f64]; 3], len: usize) -> [&[f64]; 3] {
@@ -695,75 +595,4 @@ fn cut5(x: [&[f64]; 5], len: usize) -> [&[f64]; 5] {
         &x[3][..len],
         &x[4][..len],
     ]
-}
-
-/// The regular flux of every face `j` of `inputs.cells` (faces between cells `j` and `j + 1`)
-/// into `fq0..fq4`, and whether its linearised star states are physical. The outputs are
-/// separate `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
-#[inline(always)]
-fn face_loop(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    let FaceInputs {
-        cells,
-        roe: (roe_vel, roe_h, roe_c, roe_valid),
-        waves: (lam, alpha, psi),
-    } = inputs;
-    let nf = star_ok.len();
-    let (fq0, fq1, fq2, fq3, fq4) = (
-        &mut fq0[..nf],
-        &mut fq1[..nf],
-        &mut fq2[..nf],
-        &mut fq3[..nf],
-        &mut fq4[..nf],
-    );
-    // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
-    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar. The
-    // cuts are arrays written out (`cut3`, `cut5`): cut with `array::map`, the lengths of the
-    // cells' arrays were lost to the compiler, and the last vector's faces (4 of 48 on AVX2,
-    // 8 on AVX-512) ran on a scalar loop with the checks.
-    let (roe_vel, roe_h, roe_c) = (cut3(*roe_vel, nf), &roe_h[..nf], &roe_c[..nf]);
-    let roe_valid = &roe_valid[..nf];
-    let (lam, alpha, psi) = (cut3(*lam, nf), cut5(*alpha, nf), cut5(*psi, nf));
-    let phys = cut5(cells.flux, nf + 1);
-    let q_cells = cut5(cells.q, nf + 1);
-    for j in 0..nf {
-        let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
-        let mut flux = [0.0; NQ];
-        for q in 0..NQ {
-            flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
-        }
-        let mut a = [0.0; NQ];
-        let mut coef = [0.0; NQ];
-        for k in 0..NQ {
-            a[k] = alpha[k][j];
-            coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
-        }
-        // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
-        // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
-        // image is the mirror image of the flux to the last bit (a problem symmetric about
-        // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
-        let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
-        for q in 0..NQ {
-            flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
-        }
-        for k in 2..NQ {
-            let r = roe_eigenvector(&roe, k);
-            for q in 0..NQ {
-                flux[q] -= coef[k] * r[q];
-            }
-        }
-        [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
-        let (ul, ur): (State, State) = (
-            std::array::from_fn(|q| q_cells[q][j]),
-            std::array::from_fn(|q| q_cells[q][j + 1]),
-        );
-        star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
-    }
 }
