@@ -1,7 +1,7 @@
 //! The regular (OSMP) flux at a strip's faces, and whether their linearised star states are
 //! physical: a function of its own for each instruction set ([`face_loop_on`]).
 
-use super::{CellLine, CellVec, Flags, InterfaceVec, PSI_FACES, RoeLine, cut3, cut5};
+use super::{CellLine, Faces, Flags, InterfaceVec, PSI_FACES, RoeLine, cut3, cut5};
 use crate::fv::euler::{NQ, State, roe_eigenvector, roe_star_states_positive};
 use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine};
@@ -35,51 +35,51 @@ pub(super) struct FaceInputs<'a> {
 pub(super) fn face_loop_on(
     isa: Isa,
     inputs: &FaceInputs<'_>,
-    face_q: &mut [CellVec; NQ],
+    face: &mut Faces,
     star_ok: &mut Flags,
 ) {
     match isa {
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512 if Isa::Avx512.supported() => {
             // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { face_loop_avx512(inputs, face_q, star_ok) }
+            unsafe { face_loop_avx512(inputs, face, star_ok) }
         }
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 if Isa::Avx2.supported() => {
             // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { face_loop_avx2(inputs, face_q, star_ok) }
+            unsafe { face_loop_avx2(inputs, face, star_ok) }
         }
-        _ => face_loop_baseline(inputs, face_q, star_ok),
+        _ => face_loop_baseline(inputs, face, star_ok),
     }
 }
 
 /// [`face_loop`] for the baseline (`face_loop_on`).
 #[inline(never)]
-fn face_loop_baseline(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut Flags) {
-    face_loop(inputs, face_q, star_ok);
+fn face_loop_baseline(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+    face_loop(inputs, face, star_ok);
 }
 
 /// [`face_loop`] for AVX2 (without FMA, `isa.rs`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline(never)]
-fn face_loop_avx2(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut Flags) {
-    face_loop(inputs, face_q, star_ok);
+fn face_loop_avx2(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+    face_loop(inputs, face, star_ok);
 }
 
 /// [`face_loop`] for AVX-512F (without FMA, `isa.rs`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline(never)]
-fn face_loop_avx512(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut Flags) {
-    face_loop(inputs, face_q, star_ok);
+fn face_loop_avx512(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+    face_loop(inputs, face, star_ok);
 }
 
 /// The regular flux of the faces `j0 .. j0 + count` of `inputs` (face `j0 + j` between the
-/// strip's cells `f0 + j` and `f0 + j + 1`) into `face_q`, and whether their linearised star
+/// strip's cells `f0 + j` and `f0 + j + 1`) into `face`, and whether their linearised star
 /// states are physical into `star_ok`.
 #[inline(always)]
-fn face_loop(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut Flags) {
+fn face_loop(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
     let FaceInputs {
         cells,
         roe,
@@ -93,13 +93,7 @@ fn face_loop(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut 
     } = *inputs;
     let (w, o) = (f0..f0 + nf, j0..j0 + nf);
     let star_ok = &mut star_ok[o.clone()];
-    let [fq0, fq1, fq2, fq3, fq4] = face_q;
-    let (fq0, fq1, fq2) = (
-        &mut fq0[o.clone()],
-        &mut fq1[o.clone()],
-        &mut fq2[o.clone()],
-    );
-    let (fq3, fq4) = (&mut fq3[o.clone()], &mut fq4[o.clone()]);
+    let face = &mut face[o.clone()];
     // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
     // with them the loop stayed scalar. The cuts are arrays written out (`cut3`, `cut5`): cut
     // with `array::map`, the lengths were lost to the compiler, and the last vector's faces
@@ -169,7 +163,7 @@ fn face_loop(inputs: &FaceInputs<'_>, face_q: &mut [CellVec; NQ], star_ok: &mut 
                 flux[q] -= coef[k] * r[q];
             }
         }
-        [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
+        face[j] = flux;
         let (ul, ur): (State, State) = (
             std::array::from_fn(|q| q_cells[q][j]),
             std::array::from_fn(|q| q_cells[q][j + 1]),
