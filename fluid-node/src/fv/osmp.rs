@@ -267,6 +267,56 @@ impl<V: Line> WaveLine<V> {
             out[l] = curvature_m4(p1 - p0, p2 - p1);
         }
     }
+
+    /// [`WaveLine::fill_products`] of the `n` interfaces from `lo` on and
+    /// [`WaveLine::fill_curvatures`] of the `n` from `lo − 1` on (`lo ≥ 2`) in one loop: the
+    /// same values by the same operations.
+    ///
+    /// NOTE: one pass, not two, for the line kernel's strips: one loop's counting and one load
+    /// of `α` less for each vector of interfaces (two passes were 37 instructions a vector of 4
+    /// on AVX2, a fifth of the per-wave work besides `Ψ`).
+    #[inline(always)]
+    pub fn fill_products_curvatures(
+        &mut self,
+        lo: usize,
+        n: usize,
+        order: u32,
+        speed: &SpeedLine<V>,
+    ) {
+        assert!(
+            lo >= 2,
+            "curvatures from {lo} − 1 read two interfaces below"
+        );
+        let WaveLine { alpha, d, dm4 } = self;
+        let r = lo..lo + n;
+        let (nu, lam) = (&speed.nu[r.clone()], &speed.lam[lo - 2..]);
+        let (lam0, lam1, lam2) = (&lam[..n], &lam[1..n + 1], &lam[2..n + 2]);
+        let al = &alpha[lo - 2..];
+        let (al0, al1, al2) = (&al[..n], &al[1..n + 1], &al[2..n + 2]);
+        let [d0, d1, d2, d3, d4, d5] = d;
+        let (d0, d1, d2) = (&mut d0[r.clone()], &mut d1[r.clone()], &mut d2[r.clone()]);
+        let (d3, d4, d5) = (&mut d3[r.clone()], &mut d4[r.clone()], &mut d5[r.clone()]);
+        let [c1, c2, c3, c4, c5] = &speed.c;
+        let (c1, c2, c3) = (&c1[r.clone()], &c2[r.clone()], &c3[r.clone()]);
+        let (c4, c5) = (&c4[r.clone()], &c5[r]);
+        let out = &mut dm4[lo - 1..lo - 1 + n];
+        let nc = n_coefficients(order);
+        for l in 0..n {
+            let x = (1.0 - nu[l]) * al2[l];
+            d0[l] = x;
+            d1[l] = c1[l] * x;
+            if nc >= 3 {
+                d2[l] = c2[l] * x;
+                d3[l] = c3[l] * x;
+            }
+            if nc >= 5 {
+                d4[l] = c4[l] * x;
+                d5[l] = c5[l] * x;
+            }
+            let (p0, p1, p2) = (lam0[l] * al0[l], lam1[l] * al1[l], lam2[l] * al2[l]);
+            out[l] = curvature_m4(p1 - p0, p2 - p1);
+        }
+    }
 }
 
 /// `nf` consecutive interfaces from `f0` on, read at offsets up to `r` either side.

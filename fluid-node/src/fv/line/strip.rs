@@ -574,8 +574,7 @@ fn strip_faces<const ORDER: u32>(
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
-        st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
-        st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
+        st.waves[k].fill_products_curvatures(CARRY - 1, nc, ORDER, speed);
         psi_line::<ORDER, true, _>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
