@@ -134,7 +134,7 @@ pub struct LineScratch {
     /// Output: face fluxes, `n + 1` (face `i` is the left face of interior cell `i`).
     pub face: Vec<State>,
     /// The buffers of one strip of faces (`strip.rs`).
-    strip: strip::Strip,
+    strip: Box<strip::Strip>,
     /// Where the last strip started along the line (`strip.rs`).
     last_a: usize,
     /// Whether each cell is vacuum, `n + 2 ng`.

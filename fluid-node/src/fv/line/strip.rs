@@ -32,20 +32,29 @@
 
 use super::{LineScratch, LineSetup, n_waves, special_faces};
 use crate::fv::euler::{
-    NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_eigenvector,
-    roe_star_states_positive, roe_strengths,
+    NQ, RoeAverage, RoeSide, State, physical_flux, primitive_floored, roe_strengths,
 };
-use crate::fv::isa::{AlignedVec, Isa};
+use crate::fv::isa::FixedVec;
 use crate::fv::osmp::{
     INTERFACE_PAD, SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius,
 };
+use face::{FaceInputs, face_loop_on};
+
+mod face;
 
 /// An array over the cells (and faces) of a strip: entry `CARRY`, where the cell pass starts,
-/// and entry 0, where the face loop writes, start cache lines (`isa::AlignedVec`).
-type CellVec = AlignedVec<0>;
+/// and entry 0, where the face loop writes, start cache lines (`isa::FixedVec`, all of a
+/// strip's arrays in its one allocation).
+type CellVec = FixedVec<0, STRIP_LINES>;
 /// An array over the interfaces of a strip: entry `CARRY − 1`, where the interface pass, the
 /// speeds and the products start, starts a cache line (not `CARRY / 2 + R`, where `Ψ` reads).
-type InterfaceVec = AlignedVec<INTERFACE_PAD>;
+type InterfaceVec = FixedVec<INTERFACE_PAD, STRIP_LINES>;
+/// The cache lines of each strip array: `STRIP_LEN` entries.
+const STRIP_LINES: usize = STRIP_LEN / 8 + 1;
+/// The entries of each strip array: the most a strip uses (a short line's `todo + CARRY`).
+const STRIP_LEN: usize = SHORT_LINE + CARRY;
+const _: () = assert!(CellVec::LEN == STRIP_LEN && InterfaceVec::LEN == STRIP_LEN);
+const _: () = assert!(STRIP_CELLS <= STRIP_LEN);
 
 /// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
 /// them and the curvatures two before (`strip_faces`).
@@ -76,20 +85,78 @@ const STRIP_CELLS: usize = LONG_STRIP_FACES + CARRY;
 /// they are, and strips of fixed length would compute up to a strip's faces more than it has.
 const SHORT_LINE: usize = 80;
 
-/// The buffers of one strip: its cells, interfaces and faces (structure of arrays).
+/// The buffers of one strip: its cells, interfaces and faces (structure of arrays), each of
+/// `STRIP_LEN` entries, in one allocation (`LineScratch` holds it boxed).
 #[derive(Clone, Debug, Default)]
 pub(super) struct Strip {
     cells: CellLine,
     roe: RoeLine,
-    speeds: [SpeedLine; 3],
-    waves: [WaveLine; NQ],
-    /// The regular face fluxes, one array per component.
-    face_q: [CellVec; NQ],
+    speeds: [SpeedLine<InterfaceVec>; 3],
+    waves: [WaveLine<InterfaceVec>; NQ],
+    /// The regular face fluxes.
+    face: Faces,
     /// Whether each cell is vacuum, each interface's average valid, each face's linearised
     /// star states physical.
-    vacuum: Vec<bool>,
-    valid: Vec<bool>,
-    star_ok: Vec<bool>,
+    vacuum: Flags,
+    valid: Flags,
+    star_ok: Flags,
+}
+
+/// A state for each entry of a strip (the face fluxes, as the line holds them).
+///
+/// NOTE: the face loop stores each face's flux whole; written one array per component and
+/// copied face by face into the line's, the copy did not vectorise with the arrays in place
+/// (`isa::FixedVec`): 16 instructions a face, 4 % of the kernel's.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Faces([State; STRIP_LEN]);
+
+impl Default for Faces {
+    fn default() -> Faces {
+        Faces([[0.0; NQ]; STRIP_LEN])
+    }
+}
+
+impl std::ops::Deref for Faces {
+    type Target = [State];
+
+    #[inline(always)]
+    fn deref(&self) -> &[State] {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Faces {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [State] {
+        &mut self.0
+    }
+}
+
+/// A flag for each entry of a strip.
+#[derive(Clone, Copy, Debug)]
+struct Flags([bool; STRIP_LEN]);
+
+impl Default for Flags {
+    fn default() -> Flags {
+        Flags([false; STRIP_LEN])
+    }
+}
+
+impl std::ops::Deref for Flags {
+    type Target = [bool];
+
+    #[inline(always)]
+    fn deref(&self) -> &[bool] {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Flags {
+    #[inline(always)]
+    fn deref_mut(&mut self) -> &mut [bool] {
+        &mut self.0
+    }
 }
 
 impl Strip {
@@ -126,7 +193,7 @@ impl Strip {
         for v in &mut c.flux {
             mv(v);
         }
-        for v in [&mut c.sqrt_rho, &mut c.h] {
+        for v in [&mut c.sqrt_rho, &mut c.h, &mut c.side_ok] {
             mv(v);
         }
         for v in [&mut self.roe.h, &mut self.roe.c] {
@@ -157,27 +224,6 @@ impl Strip {
             *dst = *src;
         }
     }
-
-    /// Sizes the buffers to at least `len` entries each (a no-op once done).
-    fn reserve(&mut self, len: usize) {
-        if self.vacuum.len() >= len {
-            return;
-        }
-        self.cells.resize(len);
-        self.roe.resize(len);
-        for sp in &mut self.speeds {
-            sp.resize(len);
-        }
-        for w in &mut self.waves {
-            w.resize(len);
-        }
-        for v in &mut self.face_q {
-            v.resize(len, 0.0);
-        }
-        for v in [&mut self.vacuum, &mut self.valid, &mut self.star_ok] {
-            v.resize(len, false);
-        }
-    }
 }
 
 /// What the cells of a line give the interfaces, one array per quantity (structure of arrays,
@@ -190,16 +236,14 @@ struct CellLine {
     sqrt_rho: CellVec,
     h: CellVec,
     flux: [CellVec; NQ],
+    /// All bits set where the cell can side a Roe average (not vacuum, ρ > 0), else 0.
+    ///
+    /// NOTE: a mask of the width of the values, not a `bool` a cell: the interface loop took
+    /// ~17 instructions a vector of 4 to widen two cells' vacuum bytes and compare two ρ.
+    side_ok: CellVec,
 }
 
 impl CellLine {
-    fn resize(&mut self, len: usize) {
-        let arrays = self.q.iter_mut().chain(&mut self.vel).chain(&mut self.flux);
-        for v in arrays.chain([&mut self.sqrt_rho, &mut self.h]) {
-            v.resize(len, 0.0);
-        }
-    }
-
     /// The cells `lo .. lo + len` as slices of one length, so that a loop over them has no
     /// bounds checks left and vectorises.
     #[inline(always)]
@@ -246,12 +290,6 @@ struct RoeLine {
 }
 
 impl RoeLine {
-    fn resize(&mut self, len: usize) {
-        for v in self.vel.iter_mut().chain([&mut self.h, &mut self.c]) {
-            v.resize(len, 0.0);
-        }
-    }
-
     /// The average of interface `l` of slices `vel, h, c, valid` of a `RoeLine` (of one
     /// length, so that no bounds check stays in a loop).
     #[inline(always)]
@@ -306,7 +344,8 @@ fn cell_loop(
             &mut f3[r.clone()],
             &mut f4[r.clone()],
         ],
-        &mut vacuum[r],
+        &mut vacuum[r.clone()],
+        &mut c.side_ok[r],
         setup,
     );
 }
@@ -328,9 +367,11 @@ fn cell_pass(
     h: &mut [f64],
     [f0, f1, f2, f3, f4]: [&mut [f64]; NQ],
     vacuum: &mut [bool],
+    side_ok: &mut [f64],
     setup: &LineSetup,
 ) {
     let len = h.len();
+    let side_ok = &mut side_ok[..len];
     let q = cut5(q, len);
     let (vel0, vel1, vel2) = (&mut vel0[..len], &mut vel1[..len], &mut vel2[..len]);
     let (sqrt_rho, vacuum) = (&mut sqrt_rho[..len], &mut vacuum[..len]);
@@ -351,7 +392,9 @@ fn cell_pass(
         sqrt_rho[i] = side.sqrt_rho;
         h[i] = side.h;
         [f0[i], f1[i], f2[i], f3[i], f4[i]] = flux;
-        vacuum[i] = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+        let vac = !(w.rho >= setup.vacuum_rho && w.p >= setup.vacuum_p);
+        vacuum[i] = vac;
+        side_ok[i] = f64::from_bits(u64::from(!vac & (ui[0] > 0.0)).wrapping_neg());
     }
 }
 
@@ -368,7 +411,7 @@ fn interface_pass(st: &mut Strip, (lo, nint): (usize, usize), gamma: f64) {
     let r = lo..lo + nint;
     interface_loop(
         &cells,
-        &st.vacuum[lo..lo + nint + 1],
+        &st.cells.side_ok[lo..lo + nint + 1],
         gamma,
         &mut rv0[r.clone()],
         &mut rv1[r.clone()],
@@ -395,7 +438,7 @@ fn interface_pass(st: &mut Strip, (lo, nint): (usize, usize), gamma: f64) {
 #[allow(clippy::too_many_arguments)]
 fn interface_loop(
     cells: &CellView<'_>,
-    vacuum: &[bool],
+    side_ok: &[f64],
     gamma: f64,
     roe_v0: &mut [f64],
     roe_v1: &mut [f64],
@@ -422,7 +465,7 @@ fn interface_loop(
     let (lam0, lam1, lam2) = (&mut lam0[..nint], &mut lam1[..nint], &mut lam2[..nint]);
     let (a0, a1, a2) = (&mut a0[..nint], &mut a1[..nint], &mut a2[..nint]);
     let (a3, a4) = (&mut a3[..nint], &mut a4[..nint]);
-    let vacuum = &vacuum[..nint + 1];
+    let side_ok = &side_ok[..nint + 1];
     // NOTE: every input cut to the loop's length too (as in `face_loop`): with the cells'
     // arrays 64-byte aligned (`CellVec`) the loop otherwise ran on its scalar copy with the
     // bounds checks (6 % of the kernel's samples).
@@ -433,9 +476,9 @@ fn interface_loop(
         h: &cells.h[..nint + 1],
         flux: cells.flux,
     };
-    let rho = cells.q[0];
     for l in 0..nint {
-        let sides_ok = !vacuum[l] & !vacuum[l + 1] & (rho[l] > 0.0) & (rho[l + 1] > 0.0);
+        // Neither side vacuum, both ρ > 0 (`CellLine::side_ok`).
+        let sides_ok = (side_ok[l].to_bits() & side_ok[l + 1].to_bits()) != 0;
         let average = RoeSide::average(&cells.side(l), &cells.side(l + 1), gamma, sides_ok);
         let du: State = std::array::from_fn(|q| cells.q[q][l + 1] - cells.q[q][l]);
         // An invalid average is all zeros (so λ = 0), but its strengths divide by c = 0.
@@ -473,12 +516,11 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     let mut psi = [[0.0; PSI_FACES]; NQ];
     if todo <= SHORT_LINE {
         // One strip: the whole line (loops of the line's length).
-        s.strip.reserve(todo + CARRY);
+        assert!(todo + CARRY <= STRIP_LEN, "a short line of {todo} faces");
         strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
     } else {
         // Strips of STRIP_FACES or LONG_STRIP_FACES faces (the last one's beyond the line's
         // end computed on what is there, and not kept).
-        s.strip.reserve(STRIP_CELLS);
         let (short, long) = (todo.div_ceil(STRIP_FACES), todo.div_ceil(LONG_STRIP_FACES));
         if long * LONG_STRIP_FACES <= short * STRIP_FACES {
             for k in 0..long {
@@ -542,35 +584,23 @@ fn strip_faces<const ORDER: u32>(
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
-        st.waves[k].fill_products(CARRY - 1, nc, ORDER, speed);
-        st.waves[k].fill_curvatures(CARRY - 3, nc, speed);
-        psi_line::<ORDER, true>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
+        st.waves[k].fill_products_curvatures(CARRY - 1, nc, ORDER, speed);
+        psi_line::<ORDER, true, _>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
     }
     // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
     // physical.
-    let cells = st.cells.view(f0, count + 1);
-    let w = f0..f0 + count;
-    let roe_vel: [&[f64]; 3] = std::array::from_fn(|k| &st.roe.vel[k][w.clone()]);
-    let (roe_h, roe_c) = (&st.roe.h[w.clone()], &st.roe.c[w.clone()]);
-    let roe_valid = &st.valid[w.clone()];
-    let lam: [&[f64]; 3] = std::array::from_fn(|k| &st.speeds[k].lam[w.clone()]);
-    let alpha: [&[f64]; NQ] = std::array::from_fn(|k| &st.waves[k].alpha[w.clone()]);
-    let psi: [&[f64]; NQ] = std::array::from_fn(|k| &psi[k][j0..j0 + count]);
-    let [fq0, fq1, fq2, fq3, fq4] = &mut st.face_q;
-    face_loop_on(
-        s.isa,
-        &FaceInputs {
-            cells,
-            roe: (roe_vel, roe_h, roe_c, roe_valid),
-            waves: (lam, alpha, psi),
-        },
-        &mut st.star_ok[j0..j0 + count],
-        &mut fq0[j0..j0 + count],
-        &mut fq1[j0..j0 + count],
-        &mut fq2[j0..j0 + count],
-        &mut fq3[j0..j0 + count],
-        &mut fq4[j0..j0 + count],
-    );
+    let inputs = FaceInputs {
+        cells: &st.cells,
+        roe: &st.roe,
+        valid: &st.valid,
+        speeds: &st.speeds,
+        waves: &st.waves,
+        psi,
+        f0,
+        j0,
+        count,
+    };
+    face_loop_on(s.isa, &inputs, &mut st.face, &mut st.star_ok);
     // What is on the line of the strip's cells, interfaces (a − 1 ..) and faces (a − CARRY / 2 ..).
     // (The line's cell or interface i is the strip's entry i + CARRY − a.)
     let at = |i: usize| i + CARRY - a;
@@ -583,101 +613,7 @@ fn strip_faces<const ORDER: u32>(
     let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
     let first = faces.start + CARRY / 2 - a;
     s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
-    let face_q: [&[f64]; NQ] = std::array::from_fn(|q| &st.face_q[q][first..first + faces.len()]);
-    for (j, face) in s.face[faces].iter_mut().enumerate() {
-        *face = std::array::from_fn(|q| face_q[q][j]);
-    }
-}
-
-/// What [`face_loop`] reads: the cells of the faces (`nf + 1`), the Roe averages (velocity, H, c,
-/// validity) and the waves' speeds, strengths and `Ψ` at the faces (`nf`).
-#[allow(clippy::type_complexity)]
-struct FaceInputs<'a> {
-    cells: CellView<'a>,
-    roe: ([&'a [f64]; 3], &'a [f64], &'a [f64], &'a [bool]),
-    waves: ([&'a [f64]; 3], [&'a [f64]; NQ], [&'a [f64]; NQ]),
-}
-
-/// [`face_loop`] on the instruction set `isa`: a function of its own for each (`isa.rs`).
-///
-/// NOTE: inlined into the line kernel, the face loop stayed scalar on every instruction set:
-/// LLVM asked for more run-time checks of overlap among its ~30 input and 6 output arrays than
-/// it makes ("too many memory checks needed"). In a function of its own the outputs are
-/// `noalias` arguments, and it vectorises. One call a strip.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_on(
-    isa: Isa,
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    match isa {
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 if Isa::Avx512.supported() => {
-            // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { face_loop_avx512(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
-        }
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::Avx2.supported() => {
-            // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { face_loop_avx2(inputs, star_ok, fq0, fq1, fq2, fq3, fq4) }
-        }
-        _ => face_loop_baseline(inputs, star_ok, fq0, fq1, fq2, fq3, fq4),
-    }
-}
-
-/// [`face_loop`] for the baseline (`face_loop_on`).
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_baseline(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
-}
-
-/// [`face_loop`] for AVX2 (without FMA, `isa.rs`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_avx2(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
-}
-
-/// [`face_loop`] for AVX-512F (without FMA, `isa.rs`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline(never)]
-#[allow(clippy::too_many_arguments)]
-fn face_loop_avx512(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    face_loop(inputs, star_ok, fq0, fq1, fq2, fq3, fq4);
+    s.face[faces.clone()].copy_from_slice(&st.face[first..first + faces.len()]);
 }
 
 /// The first `len` entries of each of three arrays.
@@ -696,75 +632,4 @@ fn cut5(x: [&[f64]; 5], len: usize) -> [&[f64]; 5] {
         &x[3][..len],
         &x[4][..len],
     ]
-}
-
-/// The regular flux of every face `j` of `inputs.cells` (faces between cells `j` and `j + 1`)
-/// into `fq0..fq4`, and whether its linearised star states are physical. The outputs are
-/// separate `&mut` arguments so that the loop vectorises (see [`interface_loop`]).
-#[inline(always)]
-fn face_loop(
-    inputs: &FaceInputs<'_>,
-    star_ok: &mut [bool],
-    fq0: &mut [f64],
-    fq1: &mut [f64],
-    fq2: &mut [f64],
-    fq3: &mut [f64],
-    fq4: &mut [f64],
-) {
-    let FaceInputs {
-        cells,
-        roe: (roe_vel, roe_h, roe_c, roe_valid),
-        waves: (lam, alpha, psi),
-    } = inputs;
-    let nf = star_ok.len();
-    let (fq0, fq1, fq2, fq3, fq4) = (
-        &mut fq0[..nf],
-        &mut fq1[..nf],
-        &mut fq2[..nf],
-        &mut fq3[..nf],
-        &mut fq4[..nf],
-    );
-    // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
-    // with them (the slices of run-time lengths the caller passes) the loop stayed scalar. The
-    // cuts are arrays written out (`cut3`, `cut5`): cut with `array::map`, the lengths of the
-    // cells' arrays were lost to the compiler, and the last vector's faces (4 of 48 on AVX2,
-    // 8 on AVX-512) ran on a scalar loop with the checks.
-    let (roe_vel, roe_h, roe_c) = (cut3(*roe_vel, nf), &roe_h[..nf], &roe_c[..nf]);
-    let roe_valid = &roe_valid[..nf];
-    let (lam, alpha, psi) = (cut3(*lam, nf), cut5(*alpha, nf), cut5(*psi, nf));
-    let phys = cut5(cells.flux, nf + 1);
-    let q_cells = cut5(cells.q, nf + 1);
-    for j in 0..nf {
-        let roe = RoeLine::get(roe_vel, roe_h, roe_c, roe_valid, j);
-        let mut flux = [0.0; NQ];
-        for q in 0..NQ {
-            flux[q] = 0.5 * (phys[q][j] + phys[q][j + 1]);
-        }
-        let mut a = [0.0; NQ];
-        let mut coef = [0.0; NQ];
-        for k in 0..NQ {
-            a[k] = alpha[k][j];
-            coef[k] = 0.5 * lam[k.min(2)][j].abs() * (a[k] - psi[k][j]);
-        }
-        // NOTE: the two acoustic waves are summed first: a mirror image of the line swaps
-        // them (u − c ↔ u + c) and maps the others onto themselves, so the flux of a mirror
-        // image is the mirror image of the flux to the last bit (a problem symmetric about
-        // a plane stays symmetric, the integration test `fv_mirror`), whatever the order of the others.
-        let (r0, r1) = (roe_eigenvector(&roe, 0), roe_eigenvector(&roe, 1));
-        for q in 0..NQ {
-            flux[q] -= coef[0] * r0[q] + coef[1] * r1[q];
-        }
-        for k in 2..NQ {
-            let r = roe_eigenvector(&roe, k);
-            for q in 0..NQ {
-                flux[q] -= coef[k] * r[q];
-            }
-        }
-        [fq0[j], fq1[j], fq2[j], fq3[j], fq4[j]] = flux;
-        let (ul, ur): (State, State) = (
-            std::array::from_fn(|q| q_cells[q][j]),
-            std::array::from_fn(|q| q_cells[q][j + 1]),
-        );
-        star_ok[j] = roe_star_states_positive(&ul, &ur, &roe, &a);
-    }
 }
