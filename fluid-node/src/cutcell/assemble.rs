@@ -58,10 +58,18 @@ fn block_part_with(grid: &Grid, b: &BlockGeometry, with_vertices: bool) -> Vec<u
     let mut out = Vec::new();
     let block = b.block;
     let (w, n0) = (b.window, block.size(0));
+    // Only the rows the computation wrote can hold values (`WrittenRows`): the others are
+    // skipped without reading them (scanning every value of the block was 0.8 % of a rank's
+    // samples at 100³ on 2 ranks).
+    let row_of = |axis: Option<usize>, j: usize, k: usize| {
+        let ny = w.size(1) + usize::from(axis == Some(1));
+        (j - w.lo[1]) + ny * (k - w.lo[2])
+    };
     let cells = runs(block, |j, k| {
         let at = w.index([block.lo[0], j, k]);
         let first = grid.index(block.lo[0], j, k) as u32;
-        (first, &b.solid_fraction[at..at + n0])
+        let held = b.written.may_hold(0, row_of(None, j, k));
+        (first, &b.solid_fraction[at..at + if held { n0 } else { 0 }])
     });
     put_runs(&mut out, &cells);
     for axis in 0..3 {
@@ -78,7 +86,11 @@ fn block_part_with(grid: &Grid, b: &BlockGeometry, with_vertices: bool) -> Vec<u
         let runs = runs(faces, |j, k| {
             let at = w.face_index(axis, [faces.lo[0], j, k]);
             let first = face_index(grid, axis, [faces.lo[0], j, k]) as u32;
-            (first, &b.face_fraction[axis][at..at + n0])
+            let held = b.written.may_hold(1 + axis, row_of(Some(axis), j, k));
+            (
+                first,
+                &b.face_fraction[axis][at..at + if held { n0 } else { 0 }],
+            )
         });
         put_runs(&mut out, &runs);
     }
