@@ -538,10 +538,9 @@ impl HeldFractions {
         // NOTE: a box that spans x and y (slabs) holds one range of the global numbering; that
         // read is inlined into the readers (most of them read their own cells), the rest
         // (blocks, the runs) is not: it was 1.3 % of a rank's samples as one call per read.
-        if let Some(at) = self.slab_offset(c, self.cells[0] * self.cells[1]) {
-            if let Some(&v) = self.solid_fraction.get(at) {
-                return v;
-            }
+        let plane = self.cells[0] * self.cells[1];
+        if let Some(&v) = (self.slab_offset(c, plane)).and_then(|at| self.solid_fraction.get(at)) {
+            return v;
         }
         self.solid_fraction_apart(c)
     }
@@ -570,10 +569,9 @@ impl HeldFractions {
         let mut n = self.cells;
         n[axis] += 1;
         // The box's faces along `axis` are one range of the faces' numbering too.
-        if let Some(at) = self.slab_offset(f, n[0] * n[1]) {
-            if let Some(&v) = self.face_fraction[axis].get(at) {
-                return v;
-            }
+        let faces = &self.face_fraction[axis];
+        if let Some(&v) = (self.slab_offset(f, n[0] * n[1])).and_then(|at| faces.get(at)) {
+            return v;
         }
         self.face_fraction_apart(axis, f)
     }
