@@ -153,6 +153,53 @@ pub struct BlockGeometry {
     /// of the rows swept whole): the work, as [`crate::cutcell::CutDiagnostics::n_pieces`]
     /// counts it for the whole grid.
     pub n_pieces: usize,
+    /// The rows along x of Λ and λ that the computation wrote: every other row is zero.
+    pub(crate) written: WrittenRows,
+}
+
+/// The rows along x of a window's arrays that a computation wrote (with any value), per array:
+/// Λ, then λ along x, y and z; every other row of an array is zero (its arrays start from zero).
+/// What lets a block's share ([`crate::cutcell::block_part`]) read only those rows instead of
+/// every value of the window. Empty: not known (every row may hold values).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct WrittenRows {
+    /// Values per row of each array.
+    row: [usize; 4],
+    /// Per array and row (`j + ny k` over the array's rows), whether it was written.
+    marked: [Vec<bool>; 4],
+}
+
+impl WrittenRows {
+    /// None written yet, for the arrays of `window`'s cells and faces.
+    fn new(grid: &Grid, window: CellBox) -> WrittenRows {
+        let n = |values: usize, per_row: usize| values / per_row.max(1);
+        let row = std::array::from_fn(|a| match a {
+            0 | 2 | 3 => window.size(0),
+            _ => window.size(0) + 1,
+        });
+        let values = |a: usize| match a {
+            0 => window.n_cells(),
+            a => window.n_faces(grid, a - 1),
+        };
+        WrittenRows {
+            row,
+            marked: std::array::from_fn(|a| vec![false; n(values(a), row[a])]),
+        }
+    }
+
+    /// Marks the row of value `at` of `array` (0: Λ, 1 + axis: λ along `axis`).
+    #[inline]
+    pub(crate) fn mark(&mut self, array: usize, at: usize) {
+        if let Some(m) = self.marked[array].get_mut(at / self.row[array]) {
+            *m = true;
+        }
+    }
+
+    /// Whether row `row` of `array` may hold values (always, when nothing was recorded).
+    #[inline]
+    pub(crate) fn may_hold(&self, array: usize, row: usize) -> bool {
+        self.marked[array].get(row).is_none_or(|&m| m)
+    }
 }
 
 impl BlockGeometry {
@@ -164,6 +211,17 @@ impl BlockGeometry {
     /// λ of the face of `axis` at `ijk` of the window's faces.
     pub fn face_fraction_at(&self, axis: usize, ijk: [usize; 3]) -> f64 {
         self.face_fraction[axis][self.window.face_index(axis, ijk)]
+    }
+
+    /// Whether every value of each row of Λ and λ that the computation did not record as
+    /// written is zero, what [`crate::cutcell::block_part`] relies on to skip those rows.
+    pub fn unwritten_rows_are_zero(&self) -> bool {
+        let w = &self.written;
+        let arrays = std::iter::once(&self.solid_fraction).chain(&self.face_fraction);
+        arrays.enumerate().all(|(a, values)| {
+            (values.chunks(w.row[a].max(1)).enumerate())
+                .all(|(r, row)| w.may_hold(a, r) || row.iter().all(|v| v.to_bits() == 0))
+        })
     }
 
     /// Heap bytes (capacities).
@@ -241,6 +299,7 @@ pub(crate) fn block_cells(
         window,
         solid_fraction: vec![0.0; window.n_cells()],
         face_fraction: std::array::from_fn(|a| vec![0.0; window.n_faces(grid, a)]),
+        written: WrittenRows::new(grid, window),
         ..BlockGeometry::default()
     };
     // Rows of the x sweep: the window's and one more on each side (their covered cells give
@@ -345,6 +404,7 @@ fn sweep_x(
         volume: grid.cell_volume(),
         cells: &mut out.solid_fraction,
         faces: &mut out.face_fraction[0],
+        written: &mut out.written,
         covered_runs: &mut covered_runs,
     };
     sweep_rows_from(
@@ -446,6 +506,7 @@ fn sweep_cut_axis(
         volume: grid.cell_volume(),
         cells: &mut [],
         faces: &mut out.face_fraction[axis],
+        written: &mut out.written,
         covered_runs: &mut no_runs,
     };
     let start = |row| starts.get(&row).copied().unwrap_or((0, 0.0));
@@ -527,6 +588,7 @@ fn sweep_whole_rows(
         volume: grid.cell_volume(),
         cells: &mut [],
         faces: &mut out.face_fraction[axis],
+        written: &mut out.written,
         covered_runs: &mut no_runs,
     };
     sweep_rows_from(
@@ -572,6 +634,7 @@ pub(crate) fn fill_covered_faces(
                 if window.has_face(axis, at) {
                     let f = window.face_index(axis, at);
                     out.face_fraction[axis][f..f + len].fill(value);
+                    out.written.mark(1 + axis, f);
                 }
             }
         }
@@ -586,6 +649,7 @@ struct BlockSink<'a> {
     volume: f64,
     cells: &'a mut [f64],
     faces: &'a mut [f64],
+    written: &'a mut WrittenRows,
     covered_runs: &'a mut Vec<(u64, i32, i32, f64)>,
 }
 
@@ -593,7 +657,9 @@ impl SweepSink for BlockSink<'_> {
     fn face(&mut self, row: u64, pos: i32, lambda: f64) {
         let ijk = row_ijk(self.grid, self.axis, row, pos);
         if self.window.has_face(self.axis, ijk) {
-            self.faces[self.window.face_index(self.axis, ijk)] = lambda;
+            let f = self.window.face_index(self.axis, ijk);
+            self.faces[f] = lambda;
+            self.written.mark(1 + self.axis, f);
         }
     }
 
@@ -601,7 +667,9 @@ impl SweepSink for BlockSink<'_> {
         if self.axis == 0 {
             let ijk = row_ijk(self.grid, 0, row, pos);
             if self.window.contains(ijk) {
-                self.cells[self.window.index(ijk)] = moment / self.volume + lambda_top;
+                let c = self.window.index(ijk);
+                self.cells[c] = moment / self.volume + lambda_top;
+                self.written.mark(0, c);
             }
         }
     }
@@ -618,6 +686,7 @@ impl SweepSink for BlockSink<'_> {
         if self.window.has_face(0, ijk) {
             let face = self.window.face_index(0, ijk);
             self.faces[face..face + (to_faces - from) as usize].fill(lambda);
+            self.written.mark(1, face);
         }
         if from >= to {
             return;
@@ -625,6 +694,7 @@ impl SweepSink for BlockSink<'_> {
         if self.window.contains(ijk) {
             let cell = self.window.index(ijk);
             self.cells[cell..cell + (to - from) as usize].fill(lambda);
+            self.written.mark(0, cell);
         }
         self.covered_runs.push((row, from, to, lambda));
     }

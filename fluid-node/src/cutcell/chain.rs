@@ -213,10 +213,13 @@ impl BlockSweep {
         );
         let window = self.geom.window;
         let (grid, faces) = (&self.grid, &mut self.geom.face_fraction[axis]);
+        let written = &mut self.geom.written;
         let mut put = |pos: i32, lambda: f64| {
             let ijk = row_ijk(grid, axis, r.row, pos);
             if write && lambda != 0.0 && window.has_face(axis, ijk) {
-                faces[window.face_index(axis, ijk)] = lambda;
+                let f = window.face_index(axis, ijk);
+                faces[f] = lambda;
+                written.mark(1 + axis, f);
             }
         };
         let mut lambda = r.entry;

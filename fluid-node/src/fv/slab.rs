@@ -188,7 +188,12 @@ impl Slab {
     /// The rank owning global cell `idx`.
     pub fn owner(&self, idx: usize) -> usize {
         let g = self.global.ijk(idx);
-        let coords = std::array::from_fn(|a| block_of(self.global.cells[a], self.dims[a], g[a]));
+        // An axis not cut is block 0 without the divisions of `block_of` (the gathers of the
+        // near cells ask for each cell's owner: 1 % of a rank's samples on slabs).
+        let coords = std::array::from_fn(|a| match self.dims[a] {
+            1 => 0,
+            k => block_of(self.global.cells[a], k, g[a]),
+        });
         rank_of(self.dims, coords)
     }
 

@@ -46,6 +46,10 @@ pub(crate) fn assert_block_is_whole(
 ) {
     let w = b.window;
     let dim = grid.dim;
+    assert!(
+        b.unwritten_rows_are_zero(),
+        "{what}: a row written unrecorded"
+    );
     for c in 0..grid.n_cells() {
         let ijk = grid.ijk(c);
         if !w.contains(ijk) {
