@@ -96,7 +96,7 @@ pub fn curvature_m4(d_l: f64, d_r: f64) -> f64 {
 }
 
 /// What depends only on a wave speed, one entry per interface of a line (arrays `V`: a
-/// growable [`InterfaceVec`], or the fixed arrays of the line kernel's strips).
+/// growable `InterfaceVec`, or the fixed arrays of the line kernel's strips).
 #[derive(Clone, Debug, Default)]
 pub struct SpeedLine<V = InterfaceVec> {
     /// Eigenvalue λ [m/s] (filled by the caller).
