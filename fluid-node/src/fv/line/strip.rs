@@ -541,25 +541,33 @@ fn strip_faces<const ORDER: u32>(
     for sp in &mut st.speeds {
         sp.fill_range(CARRY - 1, nc, ORDER, sigma, inv_sigma);
     }
-    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
-    // (`f0`: the interface of face j0).
-    let f0 = CARRY / 2 + r + j0;
+    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j.
+    // Only the strip's faces that are the line's are computed from `Ψ` on: the faces `first ..
+    // first + faces.len()` (the line's `faces`), whose first one is the interface `f0`.
+    // NOTE: the faces before the line's first (the first strip's `CARRY / 2`) and past its last
+    // (the last strip's) are kept by nothing: their `Ψ` and fluxes were computed for nothing
+    // (15 of the 144 faces of a 3-D 128-cell line).
+    let nf = setup.n + 1;
+    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
+    let first = faces.start + CARRY / 2 - a;
+    let f0 = CARRY / 2 + r + first;
     // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
     // entries stay 0).
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products_curvatures(CARRY - 1, nc, ORDER, speed);
-        psi_line::<ORDER, true, _>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
+        psi_line::<ORDER, true, _>(
+            speed,
+            &st.waves[k],
+            f0,
+            &mut psi[k][first..first + faces.len()],
+        );
     }
-    // Regular (OSMP) flux at the strip's faces that are the line's (a − CARRY / 2 ..), and
-    // whether their linearised star states are physical, straight into the line's arrays.
+    // Regular (OSMP) flux at those faces, and whether their linearised star states are
+    // physical, straight into the line's arrays.
     // NOTE: computed into the strip's own arrays and copied, the copy of the faces was a
-    // `memcpy` call a strip (≈ 0.5 % of a 3-D step's samples), and the faces before the line's
-    // first (the first strip's) and past its last (the last strip's) were computed for nothing.
-    let nf = setup.n + 1;
-    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
-    let first = faces.start + CARRY / 2 - a;
+    // `memcpy` call a strip (≈ 0.5 % of a 3-D step's samples).
     let inputs = FaceInputs {
         cells: &st.cells,
         roe: &st.roe,
@@ -567,7 +575,7 @@ fn strip_faces<const ORDER: u32>(
         speeds: &st.speeds,
         waves: &st.waves,
         psi,
-        f0: f0 + (first - j0),
+        f0,
         j0: first,
         count: faces.len(),
     };
