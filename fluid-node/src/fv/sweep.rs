@@ -4,8 +4,9 @@
 //! Parallelism: pencils are cut into blocks of [`BLOCK_PENCILS`] (a fixed partition that does
 //! not depend on the thread count) and blocks run on rayon. Each pencil's result depends only
 //! on the input state, so the result is bit-identical for any number of threads. A block reads
-//! its cells into a tile and writes its results from a tile, straight into a second buffer in
-//! the x-fastest layout (`block.rs`), which the caller swaps with the state.
+//! its cells straight into its pencils' lines and writes its results from the lines the kernel
+//! wrote, straight into a second buffer in the x-fastest layout (`block.rs`), which the caller
+//! swaps with the state.
 
 use std::sync::Mutex;
 

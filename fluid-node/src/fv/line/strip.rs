@@ -502,9 +502,10 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     special_faces(s, setup, radius);
 }
 
-/// A strip of `nc` cells from the line's cell `a` on: the regular flux of its faces
-/// `j0 .. j0 + count` (`0 .. nc` in all) into [`LineScratch::face`], whether their linearised star states are physical, the
-/// vacuum flags of its cells and the validity of its interfaces, those on the line.
+/// A strip of `nc` cells from the line's cell `a` on: the regular flux of those of its faces
+/// `j0 .. j0 + count` (`0 .. nc` in all) that are the line's into [`LineScratch::face`], whether
+/// their linearised star states are physical, the vacuum flags of its cells and the validity of
+/// its interfaces, those on the line.
 ///
 /// A strip's entry `i` is the line's cell `a + i − CARRY` and interface `a + i − CARRY` (between
 /// cells `a + i − CARRY` and `a + i − CARRY + 1`); it computes the cells `CARRY .. CARRY + NF`,
