@@ -153,8 +153,10 @@ pub struct LineScratch {
     pub(crate) pencil: Vec<State>,
     pub(crate) pencil_new: Vec<State>,
     pub(crate) pencil_face: Vec<State>,
-    /// The interior cells of a block of pencils, in and out (`block.rs`).
-    pub(crate) tile: Vec<State>,
+    /// The lines of a block of pencils, in (`u`'s layout) and out (`new`'s), swapped with `u`
+    /// and `new` pencil by pencil (`block.rs`, `sweep.rs`).
+    pub(crate) tile_u: Vec<Vec<State>>,
+    pub(crate) tile_new: Vec<Vec<State>>,
     /// The instruction set [`advance_line`] runs on ([`Isa::best`] unless set).
     isa: Isa,
 }

@@ -4,8 +4,9 @@
 //! Parallelism: pencils are cut into blocks of [`BLOCK_PENCILS`] (a fixed partition that does
 //! not depend on the thread count) and blocks run on rayon. Each pencil's result depends only
 //! on the input state, so the result is bit-identical for any number of threads. A block reads
-//! its cells into a tile and writes its results from a tile, straight into a second buffer in
-//! the x-fastest layout (`block.rs`), which the caller swaps with the state.
+//! its cells straight into its pencils' lines and writes its results from the lines the kernel
+//! wrote, straight into a second buffer in the x-fastest layout (`block.rs`), which the caller
+//! swaps with the state.
 
 use std::sync::Mutex;
 
@@ -205,14 +206,13 @@ impl SlabHalo<'_> {
     }
 }
 
-/// Fills the line of pencil `p` (interior and ghosts) from its interior cells `cells` (in the
-/// sweep frame, [`gather_block`]), and from the halo planes of `halo` where a neighbour rank
+/// Fills the ghosts of the line of pencil `p`, whose interior cells are in place (in the sweep
+/// frame, [`gather_block`]), from the pencil's own cells and from the halo planes of `halo` where a neighbour rank
 /// is: the line then holds `n + k_lo + k_hi` updated cells (`k` = [`SlabHalo::overlap`] on
 /// each side with a neighbour) and `ng` ghosts beyond them.
 #[allow(clippy::too_many_arguments)]
 fn gather(
     line: &mut [State],
-    cells: &[State],
     nvar: usize,
     pencils: &Pencils,
     p: usize,
@@ -226,7 +226,6 @@ fn gather(
     let own = pencils.n;
     let [k_lo, k_hi] = halo.overlaps();
     let n = own + k_lo + k_hi;
-    line[ng + k_lo..ng + k_lo + own].copy_from_slice(&cells[..own]);
     // The halo's planes hold the cells of each plane in the order of the pencils.
     let plane = pencils.count;
     let from_plane = |planes: &[f64], t: usize| {
@@ -490,12 +489,24 @@ pub fn sweep_axis(
             let p0 = block * BLOCK_PENCILS;
             let bases = (p0..p0 + rep_block.len()).map(|p| pencils.base(p));
             let cells = Block::new(bases, pencils.n, pencils.stride);
-            gather_block(&mut line.tile, u_in, nvar, &cells, &fr);
+            let count = rep_block.len();
+            for tiles in [&mut line.tile_u, &mut line.tile_new] {
+                tiles.resize_with(count.max(tiles.len()), Vec::new);
+            }
+            for t in &mut line.tile_u[..count] {
+                t.resize(n_line + 2 * ng, [0.0; NQ]);
+            }
+            for t in &mut line.tile_new[..count] {
+                t.resize(n_line, [0.0; NQ]);
+            }
+            // Pencil k's own cells go to its line's `u` at ng + k_lo, and come back from its
+            // `new` at k_lo.
+            gather_block(&mut line.tile_u, ng + k_lo, u_in, nvar, &cells, &fr);
             for (k, rep) in rep_block.iter_mut().enumerate() {
                 let p = block * BLOCK_PENCILS + k;
+                std::mem::swap(&mut line.u, &mut line.tile_u[k]);
                 gather(
                     &mut line.u,
-                    &line.tile[k * n..(k + 1) * n],
                     nvar,
                     &pencils,
                     p,
@@ -512,7 +523,7 @@ pub fn sweep_axis(
                 } else {
                     advance_segments(line, &setup, &walls[lo..hi], &fr, halo)
                 };
-                line.tile[k * n..(k + 1) * n].copy_from_slice(&line.new[k_lo..k_lo + n]);
+                std::mem::swap(&mut line.new, &mut line.tile_new[k]);
                 let base = pencils.base(p);
                 if let Some(positions) = positions {
                     let (lo, hi) = (offsets[k] as usize, offsets[k + 1] as usize);
@@ -551,7 +562,7 @@ pub fn sweep_axis(
             }
             // SAFETY: this block alone writes the cells of its pencils (a cell lies on one
             // pencil along `axis`, a pencil in one block), and `u_in` is another buffer.
-            unsafe { writer.scatter_block(&line.tile, nvar, &cells, &fr) };
+            unsafe { writer.scatter_block(&line.tile_new, k_lo, nvar, &cells, &fr) };
         });
 }
 

@@ -93,44 +93,9 @@ pub(super) struct Strip {
     roe: RoeLine,
     speeds: [SpeedLine<InterfaceVec>; 3],
     waves: [WaveLine<InterfaceVec>; NQ],
-    /// The regular face fluxes.
-    face: Faces,
-    /// Whether each cell is vacuum, each interface's average valid, each face's linearised
-    /// star states physical.
+    /// Whether each cell is vacuum, each interface's average valid.
     vacuum: Flags,
     valid: Flags,
-    star_ok: Flags,
-}
-
-/// A state for each entry of a strip (the face fluxes, as the line holds them).
-///
-/// NOTE: the face loop stores each face's flux whole; written one array per component and
-/// copied face by face into the line's, the copy did not vectorise with the arrays in place
-/// (`isa::FixedVec`): 16 instructions a face, 4 % of the kernel's.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-struct Faces([State; STRIP_LEN]);
-
-impl Default for Faces {
-    fn default() -> Faces {
-        Faces([[0.0; NQ]; STRIP_LEN])
-    }
-}
-
-impl std::ops::Deref for Faces {
-    type Target = [State];
-
-    #[inline(always)]
-    fn deref(&self) -> &[State] {
-        &self.0
-    }
-}
-
-impl std::ops::DerefMut for Faces {
-    #[inline(always)]
-    fn deref_mut(&mut self) -> &mut [State] {
-        &mut self.0
-    }
 }
 
 /// A flag for each entry of a strip.
@@ -537,9 +502,10 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     special_faces(s, setup, radius);
 }
 
-/// A strip of `nc` cells from the line's cell `a` on: the regular flux of its faces
-/// `j0 .. j0 + count` (`0 .. nc` in all) into [`LineScratch::face`], whether their linearised star states are physical, the
-/// vacuum flags of its cells and the validity of its interfaces, those on the line.
+/// A strip of `nc` cells from the line's cell `a` on: the regular flux of those of its faces
+/// `j0 .. j0 + count` (`0 .. nc` in all) that are the line's into [`LineScratch::face`], whether
+/// their linearised star states are physical, the vacuum flags of its cells and the validity of
+/// its interfaces, those on the line.
 ///
 /// A strip's entry `i` is the line's cell `a + i − CARRY` and interface `a + i − CARRY` (between
 /// cells `a + i − CARRY` and `a + i − CARRY + 1`); it computes the cells `CARRY .. CARRY + NF`,
@@ -576,19 +542,33 @@ fn strip_faces<const ORDER: u32>(
     for sp in &mut st.speeds {
         sp.fill_range(CARRY - 1, nc, ORDER, sigma, inv_sigma);
     }
-    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j
-    // (`f0`: the interface of face j0).
-    let f0 = CARRY / 2 + r + j0;
+    // Face j of the strip is its interface CARRY / 2 + r + j: the line's face a − CARRY / 2 + j.
+    // Only the strip's faces that are the line's are computed from `Ψ` on: the faces `first ..
+    // first + faces.len()` (the line's `faces`), whose first one is the interface `f0`.
+    // NOTE: the faces before the line's first (the first strip's `CARRY / 2`) and past its last
+    // (the last strip's) are kept by nothing: their `Ψ` and fluxes were computed for nothing
+    // (15 of the 144 faces of a 3-D 128-cell line).
+    let nf = setup.n + 1;
+    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
+    let first = faces.start + CARRY / 2 - a;
+    let f0 = CARRY / 2 + r + first;
     // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
     // entries stay 0).
     let nw = n_waves(setup);
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products_curvatures(CARRY - 1, nc, ORDER, speed);
-        psi_line::<ORDER, true, _>(speed, &st.waves[k], f0, &mut psi[k][j0..j0 + count]);
+        psi_line::<ORDER, true, _>(
+            speed,
+            &st.waves[k],
+            f0,
+            &mut psi[k][first..first + faces.len()],
+        );
     }
-    // Regular (OSMP) flux at the strip's faces, and whether its linearised star states are
-    // physical.
+    // Regular (OSMP) flux at those faces, and whether their linearised star states are
+    // physical, straight into the line's arrays.
+    // NOTE: computed into the strip's own arrays and copied, the copy of the faces was a
+    // `memcpy` call a strip (≈ 0.5 % of a 3-D step's samples).
     let inputs = FaceInputs {
         cells: &st.cells,
         roe: &st.roe,
@@ -597,11 +577,16 @@ fn strip_faces<const ORDER: u32>(
         waves: &st.waves,
         psi,
         f0,
-        j0,
-        count,
+        j0: first,
+        count: faces.len(),
     };
-    face_loop_on(s.isa, &inputs, &mut st.face, &mut st.star_ok);
-    // What is on the line of the strip's cells, interfaces (a − 1 ..) and faces (a − CARRY / 2 ..).
+    face_loop_on(
+        s.isa,
+        &inputs,
+        &mut s.face[faces.clone()],
+        &mut s.star_ok[faces],
+    );
+    // What is on the line of the strip's cells and interfaces (a − 1 ..).
     // (The line's cell or interface i is the strip's entry i + CARRY − a.)
     let at = |i: usize| i + CARRY - a;
     s.vacuum[own.clone()].copy_from_slice(&st.vacuum[at(own.start)..at(own.end)]);
@@ -609,11 +594,6 @@ fn strip_faces<const ORDER: u32>(
     if !ints.is_empty() {
         s.valid[ints.clone()].copy_from_slice(&st.valid[at(ints.start)..at(ints.end)]);
     }
-    let nf = setup.n + 1;
-    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
-    let first = faces.start + CARRY / 2 - a;
-    s.star_ok[faces.clone()].copy_from_slice(&st.star_ok[first..first + faces.len()]);
-    s.face[faces.clone()].copy_from_slice(&st.face[first..first + faces.len()]);
 }
 
 /// The first `len` entries of each of three arrays.

@@ -1,7 +1,7 @@
 //! The regular (OSMP) flux at a strip's faces, and whether their linearised star states are
 //! physical: a function of its own for each instruction set ([`face_loop_on`]).
 
-use super::{CellLine, Faces, Flags, InterfaceVec, PSI_FACES, RoeLine, cut3, cut5};
+use super::{CellLine, Flags, InterfaceVec, PSI_FACES, RoeLine, cut3, cut5};
 use crate::fv::euler::{NQ, State, roe_eigenvector, roe_star_states_positive};
 use crate::fv::isa::Isa;
 use crate::fv::osmp::{SpeedLine, WaveLine};
@@ -35,8 +35,8 @@ pub(super) struct FaceInputs<'a> {
 pub(super) fn face_loop_on(
     isa: Isa,
     inputs: &FaceInputs<'_>,
-    face: &mut Faces,
-    star_ok: &mut Flags,
+    face: &mut [State],
+    star_ok: &mut [bool],
 ) {
     match isa {
         #[cfg(target_arch = "x86_64")]
@@ -55,7 +55,7 @@ pub(super) fn face_loop_on(
 
 /// [`face_loop`] for the baseline (`face_loop_on`).
 #[inline(never)]
-fn face_loop_baseline(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+fn face_loop_baseline(inputs: &FaceInputs<'_>, face: &mut [State], star_ok: &mut [bool]) {
     face_loop(inputs, face, star_ok);
 }
 
@@ -63,7 +63,7 @@ fn face_loop_baseline(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut F
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline(never)]
-fn face_loop_avx2(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+fn face_loop_avx2(inputs: &FaceInputs<'_>, face: &mut [State], star_ok: &mut [bool]) {
     face_loop(inputs, face, star_ok);
 }
 
@@ -71,15 +71,15 @@ fn face_loop_avx2(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[inline(never)]
-fn face_loop_avx512(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+fn face_loop_avx512(inputs: &FaceInputs<'_>, face: &mut [State], star_ok: &mut [bool]) {
     face_loop(inputs, face, star_ok);
 }
 
 /// The regular flux of the faces `j0 .. j0 + count` of `inputs` (face `j0 + j` between the
-/// strip's cells `f0 + j` and `f0 + j + 1`) into `face`, and whether their linearised star
-/// states are physical into `star_ok`.
+/// strip's cells `f0 + j` and `f0 + j + 1`) into `face[j]` (the line's faces), and whether their
+/// linearised star states are physical into `star_ok[j]`.
 #[inline(always)]
-fn face_loop(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
+fn face_loop(inputs: &FaceInputs<'_>, face: &mut [State], star_ok: &mut [bool]) {
     let FaceInputs {
         cells,
         roe,
@@ -91,9 +91,9 @@ fn face_loop(inputs: &FaceInputs<'_>, face: &mut Faces, star_ok: &mut Flags) {
         j0,
         count: nf,
     } = *inputs;
-    let (w, o) = (f0..f0 + nf, j0..j0 + nf);
-    let star_ok = &mut star_ok[o.clone()];
-    let face = &mut face[o.clone()];
+    let w = f0..f0 + nf;
+    let star_ok = &mut star_ok[..nf];
+    let face = &mut face[..nf];
     // NOTE: every input cut to the loop's length, so that no bounds check is left in the loop:
     // with them the loop stayed scalar. The cuts are arrays written out (`cut3`, `cut5`): cut
     // with `array::map`, the lengths were lost to the compiler, and the last vector's faces
