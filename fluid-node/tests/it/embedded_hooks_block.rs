@@ -13,7 +13,9 @@ use fluid_node::embedded::{SolidFrame, WallHooks, hook_halo, wall_hooks, wall_ho
 use fluid_node::grid::Grid;
 
 use crate::embedded_support::{polygon_2d, translated};
-use crate::fv_ranks::{bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d};
+use crate::fv_ranks::{
+    PROCESS_GRIDS_2D, PROCESS_GRIDS_3D, bodies, moving_bodies_2d, moving_bodies_3d, seam_plate_2d,
+};
 
 /// What the blocks of one check held, summed, to show the check covers each hook.
 #[derive(Debug, Default)]
@@ -99,31 +101,19 @@ fn flush_plates_2d() -> SolidFrame {
     bodies(&[lower, upper])
 }
 
-const DECOMPS_2D: [[usize; 3]; 6] = [
-    [1, 2, 1],
-    [1, 4, 1],
-    [2, 2, 1],
-    [3, 1, 1],
-    [2, 4, 1],
-    [1, 3, 1],
-];
-
-const DECOMPS_3D: [[usize; 3]; 6] = [
-    [1, 1, 2],
-    [1, 1, 4],
-    [1, 2, 2],
-    [1, 2, 1],
-    [1, 1, 3],
-    [1, 2, 4],
-];
-
 #[test]
 fn block_hooks_2d_are_the_whole_grids_on_every_process_grid() {
     let solid = bodies(&[moving_bodies_2d(), seam_plate_2d(), flush_plates_2d()]);
     let mut total = Tally::default();
     for (cells, dt) in [([40, 48], 0.006), ([120, 144], 0.002)] {
         let grid = Grid::new(&[0.0, 0.0], &[1.0, 1.0], &cells).expect("grid");
-        let t = check(&format!("2-D {cells:?}"), &grid, &solid, dt, &DECOMPS_2D);
+        let t = check(
+            &format!("2-D {cells:?}"),
+            &grid,
+            &solid,
+            dt,
+            &PROCESS_GRIDS_2D,
+        );
         total.blocks += t.blocks;
         total.windowed += t.windowed;
         total.walls += t.walls;
@@ -147,7 +137,13 @@ fn block_hooks_3d_are_the_whole_grids_on_every_process_grid() {
     let mut total = Tally::default();
     for (cells, dt) in [([16, 16, 24], 0.012), ([48, 48, 72], 0.004)] {
         let grid = Grid::new(&[0.0; 3], &[1.0; 3], &cells).expect("grid");
-        let t = check(&format!("3-D {cells:?}"), &grid, &solid, dt, &DECOMPS_3D);
+        let t = check(
+            &format!("3-D {cells:?}"),
+            &grid,
+            &solid,
+            dt,
+            &PROCESS_GRIDS_3D,
+        );
         total.blocks += t.blocks;
         total.windowed += t.windowed;
         total.walls += t.walls;
