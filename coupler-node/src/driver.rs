@@ -85,6 +85,10 @@ pub trait RecordSink {
     }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), SinkError>;
+    /// `true` while the loop waits for the fluid (its threads compute), `false` once the wait
+    /// is over: a sink that works on a thread of its own may stand aside meanwhile
+    /// ([`crate::record::Yield`]); the default does nothing.
+    fn fluid_computes(&mut self, _computes: bool) {}
 }
 
 /// A sink that keeps nothing (`record = "none"`).
@@ -462,6 +466,10 @@ impl RecordSink for TimedSink<'_> {
     fn end_step(&mut self) -> Result<(), SinkError> {
         self.timed(|s| s.end_step())
     }
+
+    fn fluid_computes(&mut self, computes: bool) {
+        self.inner.fluid_computes(computes);
+    }
 }
 
 /// The start time of each step the loop has seen \[s\], so that a frame's log time is the
@@ -511,7 +519,10 @@ fn drive_inner(
     let mut starts = StepStarts::default();
     loop {
         starts.observe(coupler);
-        let (from, frame) = receive(transport, coupler, cfg, abort, slice, busy)?;
+        sink.fluid_computes(coupler.waiting_for().contains(&NodeKind::Fluid));
+        let received = receive(transport, coupler, cfg, abort, slice, busy);
+        sink.fluid_computes(false);
+        let (from, frame) = received?;
         let (header, msg) = decode(from, &frame)?;
         let now = wall_ns();
         let t = starts.of(header.stamp.step, coupler);

@@ -12,7 +12,7 @@ use protocol::wire::NodeKind;
 
 use crate::driver::{RecordSink, SinkError};
 use crate::ledger::{CSV_HEADER, LedgerEntry};
-use crate::record::{Background, Recorder};
+use crate::record::{Background, Recorder, Yield};
 
 /// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
@@ -160,6 +160,8 @@ pub struct RunSink {
     links_broken: Option<CsvFile>,
     /// The run's folder, where the nodes write their outputs (the Foxglove views read them).
     out: std::path::PathBuf,
+    /// The record's thread stands aside while this is held (see [`RecordSink::fluid_computes`]).
+    yielding: Option<Yield>,
     /// File index of the first planned output (1 when the nodes wrote output 0 at t = 0).
     first_output: u32,
     /// Output 0 (t = 0) is written and its views not yet recorded.
@@ -174,6 +176,7 @@ impl RunSink {
     pub fn create(out: &Path, scene: &Scene, resumed: bool) -> anyhow::Result<RunSink> {
         let level = scene.run.record;
         let mut record_file = None;
+        let mut yielding = None;
         let record = match level {
             RecordLevel::None => None,
             level => {
@@ -192,7 +195,18 @@ impl RunSink {
                     &scene.to_toml(),
                 )
                 .with_context(|| format!("starting the record {}", path.display()))?;
-                let background = Background::start(recorder);
+                // NOTE (issue 39 item 4): where the run's threads fill the machine's cores, the
+                // record's thread stands aside while the fluid computes (`record::Yield`).
+                let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+                let fluid_threads = scene.run.threads as usize
+                    * scene.fluid.as_ref().map_or(1, |f| f.ranks as usize);
+                let background = if fluid_threads >= cores {
+                    let turns = Yield::default();
+                    yielding = Some(turns.clone());
+                    Background::yielding(recorder, turns)
+                } else {
+                    Background::start(recorder)
+                };
                 // NOTE: `record_max_bytes` is checked on the bytes written, so with a cap the
                 // record keeps up step by step (one step in flight), as the check assumes.
                 Some(match scene.run.record_max_bytes {
@@ -217,6 +231,7 @@ impl RunSink {
                 .then(|| CsvFile::create(&out.join("links_broken.csv"), &LINKS_BROKEN_HEADER))
                 .transpose()?,
             out: out.to_path_buf(),
+            yielding,
             first_output: u32::from(scene.initial_output()),
             initial_view: scene.initial_output() && !resumed,
             broken: Vec::new(),
@@ -337,6 +352,12 @@ impl RecordSink for RunSink {
         let done = self.record_call(|r| r.record_views(&out, k, t, &broken));
         self.broken = broken;
         done
+    }
+
+    fn fluid_computes(&mut self, computes: bool) {
+        if let Some(turns) = &self.yielding {
+            turns.hold(computes);
+        }
     }
 
     fn end_step(&mut self) -> Result<(), SinkError> {

@@ -15,6 +15,11 @@
 //! the end of the last step written. A write error ends the thread and comes back at the next
 //! step, with the committed bytes to cut the record back to.
 //!
+//! A run whose fluid fills the machine's cores also passes the record's thread a [`Yield`]: the
+//! coupler holds it while it waits for the fluid, and the thread writes only while the solid or
+//! the coupler computes (or once it falls [`YIELD_STEPS`] steps or [`YIELD_BYTES`] bytes behind,
+//! so that the coupler does not have to wait for it; and whenever the coupler waits for it).
+//!
 //! NOTE (issue 39 item 4): with at most one step in flight, the coupler of `clamped-beam-2d`
 //! waited 0.15-0.43 s a run at the ends of steps for the step before to be compressed (its
 //! `record_s`; 0.012-0.016 s without a record), on the run's critical path: every node waits for
@@ -23,6 +28,7 @@
 use std::io::{BufWriter, Write};
 use std::ops::Range;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use protocol::wire::NodeKind;
@@ -34,6 +40,15 @@ pub const MAX_LAG_STEPS: usize = 16;
 
 /// Bytes of the steps handed over and not yet written, at most (beyond the first step's).
 pub const MAX_LAG_BYTES: usize = 64 << 20;
+
+/// Steps in flight (beyond the oldest) from which the record's thread no longer stands aside
+/// for a held [`Yield`]: half the lag the coupler allows, so the thread catches up before the
+/// coupler would wait for it.
+pub const YIELD_STEPS: usize = MAX_LAG_STEPS / 2;
+
+/// Bytes in flight (beyond the oldest step's) from which the record's thread no longer stands
+/// aside for a held [`Yield`].
+pub const YIELD_BYTES: usize = MAX_LAG_BYTES / 2;
 
 /// Capacity of the channels to and from the thread: every step in flight, the messages of a step
 /// that did not end, and the finish.
@@ -73,6 +88,61 @@ impl Batch {
     }
 }
 
+/// When the record's thread stands aside (issue 39 item 4). The coupler holds it while it waits
+/// for a node whose threads fill the machine's cores: a core the record's thread takes then is
+/// taken from one of the node's threads, and the others wait for that one at the end of the
+/// parallel loop, so the record costs the run about twice its CPU time. While the solid or the
+/// coupler computes, a core is idle and the record costs little. The thread checks before each
+/// message it writes, and does not stand aside once it is [`YIELD_STEPS`] steps or
+/// [`YIELD_BYTES`] bytes behind, nor while the coupler waits for it.
+#[derive(Clone, Default)]
+pub struct Yield(Arc<(Mutex<Turn>, Condvar)>);
+
+#[derive(Default)]
+struct Turn {
+    /// The coupler asks the thread to stand aside.
+    held: bool,
+    /// The record is far enough behind to write regardless.
+    behind: bool,
+}
+
+impl Yield {
+    fn turn(&self) -> MutexGuard<'_, Turn> {
+        // (A poisoned lock: a thread panicked holding it; the flags are still plain booleans.)
+        self.0.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Holds (`true`) or releases the record's thread.
+    pub fn hold(&self, held: bool) {
+        let mut turn = self.turn();
+        if turn.held != held {
+            turn.held = held;
+            if !held {
+                self.0.1.notify_all();
+            }
+        }
+    }
+
+    /// Notes whether the record is far behind (see [`YIELD_STEPS`]).
+    fn set_behind(&self, behind: bool) {
+        let mut turn = self.turn();
+        if turn.behind != behind {
+            turn.behind = behind;
+            if behind {
+                self.0.1.notify_all();
+            }
+        }
+    }
+
+    /// Returns once the thread may write: not held, or far behind.
+    fn pass(&self) {
+        let mut turn = self.turn();
+        while turn.held && !turn.behind {
+            turn = self.0.1.wait(turn).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+}
+
 enum Job {
     /// A step's messages; `true`: then [`Recorder::end_step`] (a step's end), `false`: the
     /// messages of a step that will not end (before a finish).
@@ -104,16 +174,28 @@ pub struct Background<W: Write + std::io::Seek + Send + 'static> {
     /// Steps and bytes the record may fall behind by (besides the oldest step in flight).
     max_lag: (usize, usize),
     committed: u64,
+    /// When the thread stands aside, if it does ([`Background::yielding`]).
+    turns: Option<Yield>,
 }
 
 impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     /// Moves `recorder` onto a thread of its own.
     pub fn start(recorder: Recorder<BufWriter<W>>) -> Background<W> {
+        Background::start_with(recorder, None)
+    }
+
+    /// [`Background::start`], the thread standing aside while `turns` is held ([`Yield`]).
+    pub fn yielding(recorder: Recorder<BufWriter<W>>, turns: Yield) -> Background<W> {
+        Background::start_with(recorder, Some(turns))
+    }
+
+    fn start_with(recorder: Recorder<BufWriter<W>>, turns: Option<Yield>) -> Background<W> {
         let (jobs, queue) = sync_channel(QUEUE);
         let (tell, done) = sync_channel(QUEUE);
+        let worker_turns = turns.clone();
         let worker = std::thread::Builder::new()
             .name("record".into())
-            .spawn(move || work(recorder, &queue, &tell))
+            .spawn(move || work(recorder, &queue, &tell, worker_turns.as_ref()))
             .expect("spawning the record's thread");
         Background {
             jobs: Some(jobs),
@@ -124,6 +206,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             in_flight: std::collections::VecDeque::new(),
             max_lag: (MAX_LAG_STEPS, MAX_LAG_BYTES),
             committed: 0,
+            turns,
         }
     }
 
@@ -192,6 +275,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         let bytes = step.bytes.len();
         self.send(Job::Step(step, true))?;
         self.in_flight.push_back(bytes);
+        self.note_lag();
         while self.lagging() {
             self.wait()?;
         }
@@ -210,6 +294,22 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         self.in_flight.len()
     }
 
+    /// Tells the thread whether it is far enough behind to write regardless of [`Yield`].
+    fn note_lag(&self) {
+        if let Some(turns) = &self.turns {
+            let lag = self.in_flight.len().saturating_sub(1);
+            let lag_bytes: usize = self.in_flight.iter().skip(1).sum();
+            turns.set_behind(lag >= YIELD_STEPS || lag_bytes >= YIELD_BYTES);
+        }
+    }
+
+    /// Releases the thread: the coupler is about to wait for it.
+    fn release(&self) {
+        if let Some(turns) = &self.turns {
+            turns.hold(false);
+        }
+    }
+
     /// The steps in flight pass a bound (the oldest one not counted).
     fn lagging(&self) -> bool {
         let lag = self.in_flight.len().saturating_sub(1);
@@ -225,6 +325,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     /// Writes every step handed over (and the messages of a step not ended), then the summary
     /// and footer; returns the writer.
     pub fn finish(mut self) -> Result<W, RecordError> {
+        self.release();
         self.hand_over_the_rest()?;
         self.send(Job::Finish)?;
         self.jobs = None;
@@ -277,6 +378,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     }
 
     fn wait(&mut self) -> Result<(), RecordError> {
+        self.release();
         match self.done.recv() {
             Ok(done) => self.take(done),
             Err(_) => Err(gone()),
@@ -288,6 +390,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             Done::Step(bytes, batch) => {
                 self.committed = bytes;
                 self.in_flight.pop_front();
+                self.note_lag();
                 if self.spares.len() < SPARES {
                     self.spares.push(batch);
                 }
@@ -307,6 +410,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Drop for Background<W> {
     fn drop(&mut self) {
         // Dropped without `finish` (a run that ends on an error): the thread writes what it was
         // handed, then the summary, as the recorder's own drop did.
+        self.release();
         let _ = self.hand_over_the_rest();
         self.jobs = None;
         if let Some(worker) = self.worker.take() {
@@ -325,13 +429,20 @@ fn work<W: Write + std::io::Seek>(
     mut recorder: Recorder<BufWriter<W>>,
     queue: &Receiver<Job>,
     tell: &SyncSender<Done>,
+    turns: Option<&Yield>,
 ) -> Option<W> {
+    let pass = || {
+        if let Some(turns) = turns {
+            turns.pass();
+        }
+    };
     while let Ok(Job::Step(mut batch, end)) = queue.recv() {
-        let mut done = batch
-            .items
-            .drain(..)
-            .try_for_each(|item| write_item(&mut recorder, &batch.bytes, item));
+        let mut done = batch.items.drain(..).try_for_each(|item| {
+            pass();
+            write_item(&mut recorder, &batch.bytes, item)
+        });
         if end {
+            pass();
             done = done.and_then(|()| recorder.end_step());
         }
         if let Err(err) = done {
