@@ -85,10 +85,10 @@ pub trait RecordSink {
     }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), SinkError>;
-    /// `true` while the loop waits for the fluid (its threads compute), `false` once the wait
-    /// is over: a sink that works on a thread of its own may stand aside meanwhile
+    /// The nodes the loop waits for (they compute), before each wait, and none once it is over
+    /// (the coupler computes): a sink that works on a thread of its own may choose its moments
     /// ([`crate::record::Yield`]); the default does nothing.
-    fn fluid_computes(&mut self, _computes: bool) {}
+    fn waiting_for(&mut self, _nodes: &[NodeKind]) {}
 }
 
 /// A sink that keeps nothing (`record = "none"`).
@@ -467,8 +467,8 @@ impl RecordSink for TimedSink<'_> {
         self.timed(|s| s.end_step())
     }
 
-    fn fluid_computes(&mut self, computes: bool) {
-        self.inner.fluid_computes(computes);
+    fn waiting_for(&mut self, nodes: &[NodeKind]) {
+        self.inner.waiting_for(nodes);
     }
 }
 
@@ -519,9 +519,9 @@ fn drive_inner(
     let mut starts = StepStarts::default();
     loop {
         starts.observe(coupler);
-        sink.fluid_computes(coupler.waiting_for().contains(&NodeKind::Fluid));
+        sink.waiting_for(&coupler.waiting_for());
         let received = receive(transport, coupler, cfg, abort, slice, busy);
-        sink.fluid_computes(false);
+        sink.waiting_for(&[]);
         let (from, frame) = received?;
         let (header, msg) = decode(from, &frame)?;
         let now = wall_ns();

@@ -160,7 +160,8 @@ pub struct RunSink {
     links_broken: Option<CsvFile>,
     /// The run's folder, where the nodes write their outputs (the Foxglove views read them).
     out: std::path::PathBuf,
-    /// The record's thread stands aside while this is held (see [`RecordSink::fluid_computes`]).
+    /// The record's thread works while the coupler waits for the solid alone, and stands aside
+    /// otherwise ([`Yield`]; see [`RecordSink::waiting_for`]).
     yielding: Option<Yield>,
     /// File index of the first planned output (1 when the nodes wrote output 0 at t = 0).
     first_output: u32,
@@ -195,8 +196,8 @@ impl RunSink {
                     &scene.to_toml(),
                 )
                 .with_context(|| format!("starting the record {}", path.display()))?;
-                // NOTE (issue 39 item 4): where the run's threads fill the machine's cores, the
-                // record's thread stands aside while the fluid computes (`record::Yield`).
+                // NOTE (issue 39 item 4): where the fluid's threads fill the machine's cores, the
+                // record's thread works only while the solid computes (`record::Yield`).
                 let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
                 let fluid_threads = scene.run.threads as usize
                     * scene.fluid.as_ref().map_or(1, |f| f.ranks as usize);
@@ -354,9 +355,9 @@ impl RecordSink for RunSink {
         done
     }
 
-    fn fluid_computes(&mut self, computes: bool) {
+    fn waiting_for(&mut self, nodes: &[NodeKind]) {
         if let Some(turns) = &self.yielding {
-            turns.hold(computes);
+            turns.hold(nodes != [NodeKind::Solid]);
         }
     }
 

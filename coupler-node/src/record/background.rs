@@ -16,9 +16,9 @@
 //! step, with the committed bytes to cut the record back to.
 //!
 //! A run whose fluid fills the machine's cores also passes the record's thread a [`Yield`]: the
-//! coupler holds it while it waits for the fluid, and the thread writes only while the solid or
-//! the coupler computes (or once it falls [`YIELD_STEPS`] steps or [`YIELD_BYTES`] bytes behind,
-//! so that the coupler does not have to wait for it; and whenever the coupler waits for it).
+//! thread writes while the coupler waits for the solid alone (or once it falls [`YIELD_STEPS`]
+//! steps or [`YIELD_BYTES`] bytes behind, so that the coupler does not have to wait for it; and
+//! whenever the coupler waits for it).
 //!
 //! NOTE (issue 39 item 4): with at most one step in flight, the coupler of `clamped-beam-2d`
 //! waited 0.15-0.43 s a run at the ends of steps for the step before to be compressed (its
@@ -88,13 +88,15 @@ impl Batch {
     }
 }
 
-/// When the record's thread stands aside (issue 39 item 4). The coupler holds it while it waits
-/// for a node whose threads fill the machine's cores: a core the record's thread takes then is
-/// taken from one of the node's threads, and the others wait for that one at the end of the
-/// parallel loop, so the record costs the run about twice its CPU time. While the solid or the
-/// coupler computes, a core is idle and the record costs little. The thread checks before each
-/// message it writes, and does not stand aside once it is [`YIELD_STEPS`] steps or
-/// [`YIELD_BYTES`] bytes behind, nor while the coupler waits for it.
+/// When the record's thread works (issue 39 item 4). The coupler holds it except while it waits
+/// for the solid alone: a core the record's thread takes while the fluid computes is taken from
+/// one of the fluid's threads, which fill the cores, and the others then wait for that one at the
+/// end of their parallel loop, so the record costs the run about twice its CPU time; while the
+/// coupler computes, both nodes wait for it. While the solid computes (one thread in the scenes
+/// here), a core is idle. Held, the thread is not woken by the steps handed over, and stops
+/// before the next message of the step it is writing; it works regardless once it is
+/// [`YIELD_STEPS`] steps or [`YIELD_BYTES`] bytes behind, whenever the coupler waits for it, and
+/// once no more steps come.
 #[derive(Clone, Default)]
 pub struct Yield(Arc<(Mutex<Turn>, Condvar)>);
 
@@ -104,40 +106,66 @@ struct Turn {
     held: bool,
     /// The record is far enough behind to write regardless.
     behind: bool,
+    /// Jobs sent to the thread and not yet taken.
+    ready: usize,
+    /// No more jobs come (the coupler finishes, or dropped the record).
+    closed: bool,
+}
+
+impl Turn {
+    fn may_write(&self) -> bool {
+        !self.held || self.behind || self.closed
+    }
 }
 
 impl Yield {
     fn turn(&self) -> MutexGuard<'_, Turn> {
-        // (A poisoned lock: a thread panicked holding it; the flags are still plain booleans.)
+        // (A poisoned lock: a thread panicked holding it; the fields are still plain values.)
         self.0.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn update(&self, change: impl FnOnce(&mut Turn)) {
+        let mut turn = self.turn();
+        let before = turn.may_write() && turn.ready > 0;
+        change(&mut turn);
+        if turn.may_write() && !before {
+            self.0.1.notify_all();
+        }
     }
 
     /// Holds (`true`) or releases the record's thread.
     pub fn hold(&self, held: bool) {
-        let mut turn = self.turn();
-        if turn.held != held {
-            turn.held = held;
-            if !held {
-                self.0.1.notify_all();
-            }
-        }
+        self.update(|turn| turn.held = held);
     }
 
     /// Notes whether the record is far behind (see [`YIELD_STEPS`]).
     fn set_behind(&self, behind: bool) {
-        let mut turn = self.turn();
-        if turn.behind != behind {
-            turn.behind = behind;
-            if behind {
-                self.0.1.notify_all();
-            }
-        }
+        self.update(|turn| turn.behind = behind);
     }
 
-    /// Returns once the thread may write: not held, or far behind.
+    /// A job was sent to the thread.
+    fn handed(&self) {
+        self.update(|turn| turn.ready += 1);
+    }
+
+    /// No more jobs come: the thread takes the rest at once.
+    fn close(&self) {
+        self.update(|turn| turn.closed = true);
+    }
+
+    /// Returns once a job is there to take and the thread may write (or no more come).
+    fn next(&self) {
+        let mut turn = self.turn();
+        while !turn.closed && (turn.ready == 0 || !turn.may_write()) {
+            turn = self.0.1.wait(turn).unwrap_or_else(|e| e.into_inner());
+        }
+        turn.ready = turn.ready.saturating_sub(1);
+    }
+
+    /// Returns once the thread may write.
     fn pass(&self) {
         let mut turn = self.turn();
-        while turn.held && !turn.behind {
+        while !turn.may_write() {
             turn = self.0.1.wait(turn).unwrap_or_else(|e| e.into_inner());
         }
     }
@@ -310,6 +338,14 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         }
     }
 
+    /// No more jobs come: the thread writes the rest at once.
+    fn close(&mut self) {
+        self.jobs = None;
+        if let Some(turns) = &self.turns {
+            turns.close();
+        }
+    }
+
     /// The steps in flight pass a bound (the oldest one not counted).
     fn lagging(&self) -> bool {
         let lag = self.in_flight.len().saturating_sub(1);
@@ -325,10 +361,9 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     /// Writes every step handed over (and the messages of a step not ended), then the summary
     /// and footer; returns the writer.
     pub fn finish(mut self) -> Result<W, RecordError> {
-        self.release();
         self.hand_over_the_rest()?;
         self.send(Job::Finish)?;
-        self.jobs = None;
+        self.close();
         loop {
             match self.done.recv() {
                 Ok(Done::Step(bytes, _)) => self.committed = bytes,
@@ -366,6 +401,9 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             .as_ref()
             .is_some_and(|jobs| jobs.send(job).is_ok());
         if sent {
+            if let Some(turns) = &self.turns {
+                turns.handed();
+            }
             return Ok(());
         }
         // The thread stopped: its last word says why.
@@ -399,7 +437,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             Done::Finished => Ok(()),
             Done::Failed(err, bytes) => {
                 self.committed = bytes;
-                self.jobs = None;
+                self.close();
                 Err(err)
             }
         }
@@ -410,9 +448,8 @@ impl<W: Write + std::io::Seek + Send + 'static> Drop for Background<W> {
     fn drop(&mut self) {
         // Dropped without `finish` (a run that ends on an error): the thread writes what it was
         // handed, then the summary, as the recorder's own drop did.
-        self.release();
         let _ = self.hand_over_the_rest();
-        self.jobs = None;
+        self.close();
         if let Some(worker) = self.worker.take() {
             let _ = worker.join();
         }
@@ -436,7 +473,14 @@ fn work<W: Write + std::io::Seek>(
             turns.pass();
         }
     };
-    while let Ok(Job::Step(mut batch, end)) = queue.recv() {
+    // (Held, the thread waits on `turns`, not on the queue: a step handed over does not wake it.)
+    let next = || {
+        if let Some(turns) = turns {
+            turns.next();
+        }
+        queue.recv()
+    };
+    while let Ok(Job::Step(mut batch, end)) = next() {
         let mut done = batch.items.drain(..).try_for_each(|item| {
             pass();
             write_item(&mut recorder, &batch.bytes, item)

@@ -257,7 +257,8 @@ fn file_len(path: &std::path::Path) -> u64 {
     std::fs::metadata(path).unwrap().len()
 }
 
-/// Issue 39, item 4: while the coupler holds the record's [`Yield`] (it waits for the fluid),
+/// Issue 39, item 4: while the coupler holds the record's [`Yield`] (it waits for the fluid or
+/// computes),
 /// the record's thread writes nothing of the steps it is handed, up to `YIELD_STEPS` steps
 /// behind; one step more and it writes them although still held; at the end the record holds
 /// the bytes of the recorder called directly.
@@ -345,4 +346,38 @@ fn a_coupler_waiting_for_its_record_releases_it() {
         .unwrap();
     let _ = std::fs::remove_file(&path);
     assert!(written == direct, "the bytes differ");
+}
+
+/// Issue 39, item 4: a record dropped while held (a run that ends on an error) still writes the
+/// steps it was handed, and the drop returns.
+#[test]
+fn a_held_record_dropped_writes_what_it_was_handed() {
+    let path = std::env::temp_dir().join(format!("cosim-drop-{}.mcap", std::process::id()));
+    let recorder = Recorder::new(
+        BufWriter::new(std::fs::File::create(&path).unwrap()),
+        RecordLevel::Exchange,
+        RecordCompression::Zstd,
+        "unit-scene",
+        SCENE,
+    )
+    .unwrap();
+    let turns = Yield::default();
+    turns.hold(true);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut background = Background::yielding(recorder, turns);
+        for step in 0..3 {
+            one_step(&mut background, step, false);
+        }
+        drop(background);
+        let _ = tx.send(());
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("dropping a held record returned");
+    let bytes = std::fs::read(&path).unwrap();
+    let _ = std::fs::remove_file(&path);
+    let recording = coupler_node::record::read_recording(&bytes).unwrap();
+    let steps: std::collections::BTreeSet<u64> =
+        recording.messages.iter().map(|m| m.step).collect();
+    assert_eq!(steps, (0..3).collect(), "the steps in the record");
 }
