@@ -135,6 +135,9 @@ pub struct LineScratch {
     pub face: Vec<State>,
     /// The buffers of one strip of faces (`strip.rs`).
     strip: Box<strip::Strip>,
+    /// `Ψ` of each wave at a strip's faces, lent to the kernel as an argument of its own
+    /// (`advance_line`; `None` only while it is lent, or before the first line).
+    psi: Option<Box<strip::Psi>>,
     /// Where the last strip started along the line (`strip.rs`).
     last_a: usize,
     /// Whether each cell is vacuum, `n + 2 ng`.
@@ -217,48 +220,70 @@ pub fn state_ok(u: &State, gamma: f64, vacuum_rho: f64, vacuum_p: f64) -> bool {
 
 /// Advances one line by `Δt = sigma Δx` (see the module doc), on the instruction set of
 /// [`LineScratch::isa`] (the same bits on each, `isa.rs`).
+///
+/// NOTE: `Ψ`'s array is the scratch's, taken out for the line and passed to each instruction
+/// set's copy of the kernel as an argument of its own: a `&mut` argument reaches the compiler
+/// as `noalias`, so the `Ψ` loops need no run-time check of their output against the strip's
+/// arrays, and the array is not zeroed a line (a `memset` of 3.2 kB a line while it was a
+/// local array; held in the scratch and borrowed inside the kernel, the loops went back to
+/// the checks, docs/performance.md, hQ2).
 pub fn advance_line(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
-    match s.isa {
+    let mut psi = s.psi.take().unwrap_or_else(strip::new_psi);
+    let stats = match s.isa {
         #[cfg(target_arch = "x86_64")]
         Isa::Avx512 if Isa::Avx512.supported() => {
             // SAFETY: the CPU has AVX-512F (checked on the line above).
-            unsafe { advance_line_avx512(s, setup) }
+            unsafe { advance_line_avx512(s, setup, &mut psi) }
         }
         #[cfg(target_arch = "x86_64")]
         Isa::Avx2 if Isa::Avx2.supported() => {
             // SAFETY: the CPU has AVX2 (checked on the line above).
-            unsafe { advance_line_avx2(s, setup) }
+            unsafe { advance_line_avx2(s, setup, &mut psi) }
         }
-        _ => advance_line_body(s, setup),
-    }
+        _ => advance_line_baseline(s, setup, &mut psi),
+    };
+    s.psi = Some(psi);
+    stats
+}
+
+/// [`advance_line_body`] for the baseline (a function of its own, so that `psi` is `noalias`
+/// there too).
+#[inline(never)]
+fn advance_line_baseline(
+    s: &mut LineScratch,
+    setup: &LineSetup,
+    psi: &mut strip::Psi,
+) -> LineStats {
+    advance_line_body(s, setup, psi)
 }
 
 /// [`advance_line_body`] compiled for AVX2 (without FMA, `isa.rs`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn advance_line_avx2(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
-    advance_line_body(s, setup)
+fn advance_line_avx2(s: &mut LineScratch, setup: &LineSetup, psi: &mut strip::Psi) -> LineStats {
+    advance_line_body(s, setup, psi)
 }
 
 /// [`advance_line_body`] compiled for AVX-512F (without FMA, `isa.rs`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn advance_line_avx512(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
-    advance_line_body(s, setup)
+fn advance_line_avx512(s: &mut LineScratch, setup: &LineSetup, psi: &mut strip::Psi) -> LineStats {
+    advance_line_body(s, setup, psi)
 }
 
-/// The body of [`advance_line`]: inlined, with the passes it calls, into each ISA's copy.
+/// The body of [`advance_line`]: inlined, with the passes it calls, into each ISA's copy
+/// (`psi`: `Ψ`'s array, see [`advance_line`]).
 #[inline(always)]
-fn advance_line_body(s: &mut LineScratch, setup: &LineSetup) -> LineStats {
+fn advance_line_body(s: &mut LineScratch, setup: &LineSetup, psi: &mut strip::Psi) -> LineStats {
     let LineSetup { n, ng, .. } = *setup;
     let gamma = setup.gamma;
     let len = n + 2 * ng;
     debug_assert!(s.u.len() == len && s.face.len() == n + 1);
     let mut stats = LineStats::default();
     match setup.flux {
-        FluxKind::Osmp(3) => strip::osmp_faces::<3>(s, setup),
-        FluxKind::Osmp(5) => strip::osmp_faces::<5>(s, setup),
-        FluxKind::Osmp(7) => strip::osmp_faces::<7>(s, setup),
+        FluxKind::Osmp(3) => strip::osmp_faces::<3>(s, setup, psi),
+        FluxKind::Osmp(5) => strip::osmp_faces::<5>(s, setup, psi),
+        FluxKind::Osmp(7) => strip::osmp_faces::<7>(s, setup, psi),
         FluxKind::Osmp(order) => panic!("osmp order {order} (3, 5 or 7; checked at setup)"),
         FluxKind::MusclHancock => muscl::muscl_faces(s, setup),
     }
@@ -382,10 +407,15 @@ fn special_faces(s: &mut LineScratch, setup: &LineSetup, radius: usize) {
     // NOTE: the usual line has no special face at all: one pass without a branch a face says
     // so (the vacuum flags of each face's two cells and its star-state check), and every face
     // is regular.
-    let (vacuum, star_ok) = (&s.vacuum[ng - 1..ng + n + 1], &s.star_ok[..n + 1]);
-    let all_regular = (0..=n).fold(all_valid, |all, fi| {
-        all & !(vacuum[fi] | vacuum[fi + 1]) & star_ok[fi]
-    });
+    // NOTE: a loop over slices of one length: the fold over `0..=n` was a call of
+    // `RangeInclusive::fold` a line, out of the kernel and one face at a time (~600
+    // instructions a 3-D 128-cell line, 1.4 % of the kernel's).
+    let (left, right) = (&s.vacuum[ng - 1..ng + n], &s.vacuum[ng..ng + n + 1]);
+    let star_ok = &s.star_ok[..n + 1];
+    let mut all_regular = all_valid;
+    for fi in 0..n + 1 {
+        all_regular &= !(left[fi] | right[fi]) & star_ok[fi];
+    }
     if all_regular {
         s.kind[..=n].fill(FaceFlux::Regular);
         return;

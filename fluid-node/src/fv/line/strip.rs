@@ -85,6 +85,14 @@ const STRIP_CELLS: usize = LONG_STRIP_FACES + CARRY;
 /// they are, and strips of fixed length would compute up to a strip's faces more than it has.
 const SHORT_LINE: usize = 80;
 
+/// `Ψ` of each wave at the faces of a strip (`osmp_faces`).
+pub(super) type Psi = [[f64; PSI_FACES]; NQ];
+
+/// A [`Psi`] of zeros, on the heap.
+pub(super) fn new_psi() -> Box<Psi> {
+    Box::new([[0.0; PSI_FACES]; NQ])
+}
+
 /// The buffers of one strip: its cells, interfaces and faces (structure of arrays), each of
 /// `STRIP_LEN` entries, in one allocation (`LineScratch` holds it boxed).
 #[derive(Clone, Debug, Default)]
@@ -462,7 +470,7 @@ fn interface_loop(
 /// The regular (OSMP) flux of every face of the line, strip by strip (see the module doc),
 /// then the special faces.
 #[inline(always)]
-pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup) {
+pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetup, psi: &mut Psi) {
     let radius = stencil_radius(ORDER);
     assert_eq!(
         setup.ng,
@@ -473,16 +481,19 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     let nf = setup.n + 1;
     // The faces computed, counted from CARRY / 2 faces before the line's first.
     let todo = nf + CARRY / 2;
-    // `Ψ` of each wave at a strip's faces; the inactive waves' stay 0.
-    // NOTE: an array on the stack, which the compiler knows no other array of the kernel
-    // overlaps: written into the strip's buffers, each wave's loop first compared its output's
+    // `Ψ` of each wave at a strip's faces (`psi`, which the compiler knows no other array of
+    // the kernel overlaps, `line::advance_line`): each active wave's at the faces the face
+    // loop reads, written by the strip before it reads them; the inactive waves' are 0, set
+    // here (none in 3-D), as the scratch may have served lines of more waves.
+    // NOTE: written into the strip's buffers, each wave's loop first compared its output's
     // addresses with those of its ~35 inputs at run time (~160 instructions a wave a strip).
-    // Zeroed once a line (a zeroed array a strip cost more than the checks).
-    let mut psi = [[0.0; PSI_FACES]; NQ];
+    for row in &mut psi[n_waves(setup)..] {
+        row.fill(0.0);
+    }
     if todo <= SHORT_LINE {
         // One strip: the whole line (loops of the line's length).
         assert!(todo + CARRY <= STRIP_LEN, "a short line of {todo} faces");
-        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), &mut psi);
+        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), psi);
     } else {
         // Strips of STRIP_FACES or LONG_STRIP_FACES faces (the last one's beyond the line's
         // end computed on what is there, and not kept).
@@ -490,12 +501,12 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
         if long * LONG_STRIP_FACES <= short * STRIP_FACES {
             for k in 0..long {
                 let (a, nc) = (k * LONG_STRIP_FACES, LONG_STRIP_FACES);
-                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), &mut psi);
+                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), psi);
             }
         } else {
             for k in 0..short {
                 let (a, nc) = (k * STRIP_FACES, STRIP_FACES);
-                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), &mut psi);
+                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), psi);
             }
         }
     }
@@ -519,7 +530,7 @@ fn strip_faces<const ORDER: u32>(
     a: usize,
     nc: usize,
     (j0, count): (usize, usize),
-    psi: &mut [[f64; PSI_FACES]; NQ],
+    psi: &mut Psi,
 ) {
     let r = stencil_radius(ORDER);
     let (len, sigma) = (s.u.len(), setup.sigma);
