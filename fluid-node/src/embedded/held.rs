@@ -12,7 +12,9 @@
 
 use std::ops::Deref;
 
-use crate::cutcell::{CutGeometry, HeldFractions};
+use super::gather::chained_block_part;
+use crate::cutcell::{CellBox, CutGeometry, HeldFractions, Surface};
+use crate::fv::FluidSolver;
 
 /// The geometry of `F^n` or `F^{n+1}` as this rank holds it (module docs). Its [`CutGeometry`]
 /// (by `Deref`) holds the whole grid's sub-faces and cut cells; read Λ and λ through
@@ -33,6 +35,27 @@ impl Deref for Held {
 }
 
 impl Held {
+    /// The geometry of `surface` as a rank of `block` holds it, Λ and λ dense in `held`
+    /// (buffers reused). Collective: each rank computes the geometry of its own block only
+    /// (`chained_block_part`: no halo, the running sums of the cut axes passed along the pencils
+    /// of blocks), and one all-gather of every block's share gives every rank the whole grid's
+    /// sub-faces and cut cells, and Λ and λ dense in `held` and as runs elsewhere
+    /// (`CutGeometry::assemble_held_own`): the bits of one rank's `compute`, read anywhere.
+    pub(super) fn assemble_by_block(
+        &mut self,
+        solver: &FluidSolver,
+        surface: &Surface,
+        block: CellBox,
+        held: CellBox,
+    ) {
+        let grid = &solver.slab().global;
+        let (part, vertices) = chained_block_part(solver, surface, block);
+        let parts = solver.comm().all_gather(&part);
+        let fractions = (self.fractions).get_or_insert_with(|| HeldFractions::new(grid, held));
+        let own = (solver.comm().rank(), &vertices[..]);
+        solver.install(|| self.cut.assemble_held_own(grid, &parts, fractions, own));
+    }
+
     /// Λ of cell `c` (a cell of the whole grid).
     #[inline]
     pub(super) fn lambda(&self, c: usize) -> f64 {
