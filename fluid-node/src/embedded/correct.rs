@@ -13,7 +13,7 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, gather_swept, gather_updates};
+use super::gather::{CellUpdate, assemble_by_block, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
@@ -160,7 +160,7 @@ impl Embedded {
             None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
             Some(block) => {
                 let trial = &mut scratch.trial;
-                trial.assemble_by_block(solver, &accepted.surface(), block, held);
+                assemble_by_block(trial, solver, &accepted.surface(), block, held);
             }
         }
         solver.install(|| {

@@ -6,15 +6,13 @@
 //! runs of equal values elsewhere, so that the readers of other cells (identity (3) and the
 //! swept mass over every near cell, the checks, the whole mixing, the outputs) read the bits of
 //! one rank too. So the dense memory per rank falls with K, and no rank computes the whole
-//! grid's geometry, in a step or at the start ([`Held::assemble_by_block`]).
+//! grid's geometry, in a step or at the start (`gather::assemble_by_block`).
 //!
 //! [`hook_halo`]: super::hook_halo
 
 use std::ops::Deref;
 
-use super::gather::chained_block_part;
-use crate::cutcell::{CellBox, CutGeometry, HeldFractions, Surface};
-use crate::fv::FluidSolver;
+use crate::cutcell::{CutGeometry, HeldFractions};
 
 /// The geometry of `F^n` or `F^{n+1}` as this rank holds it (module docs). Its [`CutGeometry`]
 /// (by `Deref`) holds the whole grid's sub-faces and cut cells; read Λ and λ through
@@ -35,27 +33,6 @@ impl Deref for Held {
 }
 
 impl Held {
-    /// The geometry of `surface` as a rank of `block` holds it, Λ and λ dense in `held`
-    /// (buffers reused). Collective: each rank computes the geometry of its own block only
-    /// (`chained_block_part`: no halo, the running sums of the cut axes passed along the pencils
-    /// of blocks), and one all-gather of every block's share gives every rank the whole grid's
-    /// sub-faces and cut cells, and Λ and λ dense in `held` and as runs elsewhere
-    /// (`CutGeometry::assemble_held_own`): the bits of one rank's `compute`, read anywhere.
-    pub(super) fn assemble_by_block(
-        &mut self,
-        solver: &FluidSolver,
-        surface: &Surface,
-        block: CellBox,
-        held: CellBox,
-    ) {
-        let grid = &solver.slab().global;
-        let (part, vertices) = chained_block_part(solver, surface, block);
-        let parts = solver.comm().all_gather(&part);
-        let fractions = (self.fractions).get_or_insert_with(|| HeldFractions::new(grid, held));
-        let own = (solver.comm().rank(), &vertices[..]);
-        solver.install(|| self.cut.assemble_held_own(grid, &parts, fractions, own));
-    }
-
     /// Λ of cell `c` (a cell of the whole grid).
     #[inline]
     pub(super) fn lambda(&self, c: usize) -> f64 {

@@ -9,6 +9,7 @@ use super::cells::{CellKind, fluid_part, full_state};
 use super::{EmbeddedError, Loads, SolidFrame};
 use std::borrow::Cow;
 
+use super::gather::assemble_by_block;
 use super::held::Held;
 use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
@@ -272,14 +273,15 @@ impl Embedded {
         outside_domain(grid, &self.config.boundary, &solid.surface())?;
         // NOTE: a decomposed grid's rank computes the geometry of its block only and puts the
         // whole grid's together from the blocks' shares, as the correct does for `F^{n+1}`
-        // (`held.rs`): computing the whole grid's geometry here and taking its share
-        // (`HeldFractions::from_whole`) cost each rank of `opening-fracture-3d` at 100³ on 2
-        // ranks 235 M instructions at the start, more than one rank's 63 M.
+        // (`assemble_by_block`, `held.rs`): computing the whole grid's geometry here and
+        // taking its share (`HeldFractions::from_whole`) cost each rank of
+        // `opening-fracture-3d` at 100³ on 2 ranks 235 M instructions at the start, more than
+        // one rank's 63 M.
         let held = self.config.held_box();
         let geom = &mut self.state.geom;
         match self.config.block {
             None => compute(grid, &solid.surface(), &mut geom.cut),
-            Some(block) => geom.assemble_by_block(solver, &solid.surface(), block, held),
+            Some(block) => assemble_by_block(geom, solver, &solid.surface(), block, held),
         }
         self.state.current = solid;
         Ok(())

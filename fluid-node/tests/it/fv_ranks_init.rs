@@ -64,9 +64,12 @@ p = 0.1
     cfg
 }
 
+/// A grid's cells, its blocks per axis (`None`: as chosen) and its ranks.
+type Case = (&'static [u32], Option<[u32; 3]>, usize);
+
 #[test]
 fn each_rank_builds_its_blocks_initial_state_with_the_bits_of_one_rank() {
-    let cases: [(&[u32], Option<[u32; 3]>, usize); 6] = [
+    let cases: [Case; 6] = [
         (&[12, 12, 16], None, 2),
         (&[12, 12, 16], Some([1, 2, 2]), 4),
         (&[12, 12, 16], Some([1, 2, 1]), 2),
