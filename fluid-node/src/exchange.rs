@@ -420,7 +420,7 @@ impl FluidModel for RealFluid {
         self.particle_ids.clone_from(&state.particles);
         let named = |e| named_particles(e, state);
         match &mut self.embedded {
-            Some(e) => e.set_surface(frame).map_err(named)?,
+            Some(e) => e.set_surface(&self.solver, frame).map_err(named)?,
             None => {
                 let mut e = Embedded::new(&self.solver, frame).map_err(named)?;
                 e.set_fracture(self.fracture);

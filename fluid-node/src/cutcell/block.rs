@@ -137,7 +137,8 @@ pub struct BlockGeometry {
     pub window: CellBox,
     /// Λ per cell of the window ([`CellBox::index`]).
     pub solid_fraction: Vec<f64>,
-    /// λ per face of the window's cells and axis ([`CellBox::face_index`]).
+    /// λ per face of the window's cells and axis ([`CellBox::face_index`]); along the axes
+    /// other than x empty for [`compute_block_cells`].
     pub face_fraction: [Vec<f64>; 3],
     /// Sub-faces in the window's cells (global cell indices), sorted by cell then element.
     pub subfaces: Vec<SubFace>,
@@ -246,8 +247,12 @@ pub fn compute_block(grid: &Grid, surface: &Surface, block: CellBox, halo: usize
 }
 
 /// [`compute_block`] without the sweeps along the axes other than x: Λ, λ along x and the
-/// sub-faces only (exact on every cell of the window; λ along the other axes is left 0), what
-/// the loads need. No row is swept whole, so the cost is that of the window's elements.
+/// sub-faces only (exact on every cell of the window; λ along the other axes is left empty, not
+/// allocated), what the loads need. No row is swept whole, so the cost is that of the window's
+/// elements.
+///
+/// NOTE: the arrays of λ along y and z, zeroed and never written here, were half of the 16 MB
+/// each of the loads' trial geometries allocated and zeroed at 100³ on 2 ranks.
 pub fn compute_block_cells(
     grid: &Grid,
     surface: &Surface,
@@ -264,7 +269,7 @@ fn block_geometry(
     halo: usize,
     cut_axes: bool,
 ) -> BlockGeometry {
-    let (mut out, pieces, covered_runs) = block_cells(grid, surface, block, halo);
+    let (mut out, pieces, covered_runs) = block_cells(grid, surface, block, halo, cut_axes);
     if cut_axes {
         for axis in 1..grid.dim {
             sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
@@ -279,12 +284,14 @@ pub(crate) type CoveredRun = (u64, i32, i32, f64);
 
 /// The part of a block's geometry that needs no other block: the pieces clipped (of the
 /// window's cells and one cell around them), Λ, λ along x and the sub-faces of the window, its
-/// cut cells, and the covered runs of the x sweep.
+/// cut cells, and the covered runs of the x sweep; the arrays of λ along the other axes zero,
+/// or empty without `faces_across`.
 pub(crate) fn block_cells(
     grid: &Grid,
     surface: &Surface,
     block: CellBox,
     halo: usize,
+    faces_across: bool,
 ) -> (BlockGeometry, Vec<Piece>, Vec<CoveredRun>) {
     assert!(
         grid.dim == surface.dim,
@@ -298,7 +305,11 @@ pub(crate) fn block_cells(
         block,
         window,
         solid_fraction: vec![0.0; window.n_cells()],
-        face_fraction: std::array::from_fn(|a| vec![0.0; window.n_faces(grid, a)]),
+        face_fraction: std::array::from_fn(|a| match a {
+            0 => vec![0.0; window.n_faces(grid, a)],
+            _ if faces_across => vec![0.0; window.n_faces(grid, a)],
+            _ => Vec::new(),
+        }),
         written: WrittenRows::new(grid, window),
         ..BlockGeometry::default()
     };

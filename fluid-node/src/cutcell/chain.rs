@@ -77,7 +77,7 @@ impl BlockSweep {
     /// The local part of block `block`'s geometry (no halo): clipping, Λ, λ along x, the
     /// sub-faces, and the rows of each cut axis with their cut cells. Pure.
     pub fn new(grid: &Grid, surface: &Surface, block: CellBox) -> BlockSweep {
-        let (geom, pieces, covered_runs) = block_cells(grid, surface, block, 0);
+        let (geom, pieces, covered_runs) = block_cells(grid, surface, block, 0, true);
         let mut axes = vec![AxisChain::default(); 3];
         for (axis, chain) in axes.iter_mut().enumerate().take(grid.dim).skip(1) {
             chain.rows = axis_rows(grid, axis, &geom, &pieces);

@@ -13,15 +13,14 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, chained_block_part, gather_swept, gather_updates};
+use super::gather::{CellUpdate, assemble_by_block, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SWEPT_TOLERANCE, SolidFrame};
 use crate::cutcell::{
-    HeldFractions, SubFace, Surface, compute, face_index, subface_swept_volumes,
-    subface_swept_volumes_of,
+    SubFace, Surface, compute, face_index, subface_swept_volumes, subface_swept_volumes_of,
 };
 use crate::fv::euler::NQ;
 use crate::fv::{BoundaryKind, FluidSolver};
@@ -160,14 +159,8 @@ impl Embedded {
         match block {
             None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
             Some(block) => {
-                let (part, vertices) = chained_block_part(solver, &accepted.surface(), block);
-                let parts = solver.comm().all_gather(&part);
                 let trial = &mut scratch.trial;
-                let fractions = trial
-                    .fractions
-                    .get_or_insert_with(|| HeldFractions::new(grid, held));
-                let own = (solver.comm().rank(), &vertices[..]);
-                solver.install(|| trial.cut.assemble_held_own(grid, &parts, fractions, own));
+                assemble_by_block(trial, solver, &accepted.surface(), block, held);
             }
         }
         solver.install(|| {

@@ -5,9 +5,10 @@
 //! reads them computes one rank's bits.
 
 use super::cells::CellKind;
+use super::held::Held;
 use super::{Embedded, EmbeddedError};
 use crate::cutcell::{
-    BlockSweep, CellBox, SubfaceSwept, SubfaceSweptEntry, Surface, block_part_shared,
+    BlockSweep, CellBox, HeldFractions, SubfaceSwept, SubfaceSweptEntry, Surface, block_part_shared,
 };
 use crate::fv::FluidSolver;
 use crate::fv::comm::HaloExchange;
@@ -237,6 +238,27 @@ pub(super) fn gather_roots(
         }
     }
     all
+}
+
+/// The geometry of `surface` as a rank of `block` holds it, into `geom`, Λ and λ dense in
+/// `held` (buffers reused). Collective: each rank computes the geometry of its own block only
+/// ([`chained_block_part`]: no halo, the running sums of the cut axes passed along the pencils
+/// of blocks), and one all-gather of every block's share gives every rank the whole grid's
+/// sub-faces and cut cells, and Λ and λ dense in `held` and as runs elsewhere
+/// (`CutGeometry::assemble_held_own`): the bits of one rank's `compute`, read anywhere.
+pub(super) fn assemble_by_block(
+    geom: &mut Held,
+    solver: &FluidSolver,
+    surface: &Surface,
+    block: CellBox,
+    held: CellBox,
+) {
+    let grid = &solver.slab().global;
+    let (part, vertices) = chained_block_part(solver, surface, block);
+    let parts = solver.comm().all_gather(&part);
+    let fractions = (geom.fractions).get_or_insert_with(|| HeldFractions::new(grid, held));
+    let own = (solver.comm().rank(), &vertices[..]);
+    solver.install(|| geom.cut.assemble_held_own(grid, &parts, fractions, own));
 }
 
 /// The geometry of `surface` on this rank's `block` (no halo), with the whole grid's bits on

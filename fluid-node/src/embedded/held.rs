@@ -6,7 +6,7 @@
 //! runs of equal values elsewhere, so that the readers of other cells (identity (3) and the
 //! swept mass over every near cell, the checks, the whole mixing, the outputs) read the bits of
 //! one rank too. So the dense memory per rank falls with K, and no rank computes the whole
-//! grid's geometry in a step (`CutGeometry::assemble_held`).
+//! grid's geometry, in a step or at the start (`gather::assemble_by_block`).
 //!
 //! [`hook_halo`]: super::hook_halo
 

@@ -99,6 +99,68 @@ pub enum ConfigError {
 /// order not 3/5/7, periodic on one side only, wrong velocity length, a cell no entry covers,
 /// a non-physical initial state (ρ < 0, p < 0 or non-finite).
 pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), ConfigError> {
+    let (grid, params) = validated(cfg)?;
+    let dim = grid.dim;
+    if let Some(profile) = &cfg.profile {
+        let mut state = FluidState::zeros(dim, grid.n_cells());
+        let to3 = |v: &[f64]| std::array::from_fn(|a| v.get(a).copied().unwrap_or(0.0));
+        match profile {
+            Profile::DensityWave {
+                amplitude,
+                wave,
+                velocity,
+                p,
+            } => init::density_wave(
+                &mut state,
+                &grid,
+                *amplitude,
+                to3(wave),
+                to3(velocity),
+                *p,
+                params.gamma,
+                0.0,
+            ),
+            Profile::IsentropicVortex {
+                beta,
+                center,
+                velocity,
+            } => {
+                if dim != 2 {
+                    return Err(ConfigError::VortexNot2d { dim });
+                }
+                init::isentropic_vortex(
+                    &mut state,
+                    &grid,
+                    *beta,
+                    [center[0], center[1]],
+                    [velocity[0], velocity[1]],
+                    params.gamma,
+                    0.0,
+                );
+            }
+        }
+        let mut params = params;
+        set_far_pressures(&grid, &mut params, &state, cfg);
+        return Ok((grid, params, state));
+    }
+    let state = regions_of_block(cfg, &grid, params.gamma, ([0; 3], grid.cells))?;
+    let mut params = params;
+    set_far_pressures(&grid, &mut params, &state, cfg);
+    Ok((grid, params, state))
+}
+
+/// Whether a block's initial state from the `[[fluid.init]]` regions
+/// ([`regions_of_block`]) is all that [`from_scene`] gives a rank of that block: no analytic
+/// profile, and no characteristic side (whose far-field pressure may be the mean of the
+/// initial pressures along that side, which other blocks hold).
+pub fn init_by_block(cfg: &FluidConfig) -> bool {
+    let characteristic = (0..3).any(|a| cfg.boundary.axis(a).contains(&Boundary::Characteristic));
+    cfg.profile.is_none() && !characteristic
+}
+
+/// The grid and the parameters of the scene's `[fluid]` table, validated (everything
+/// [`from_scene`] checks but the cells' initial states).
+pub fn validated(cfg: &FluidConfig) -> Result<(Grid, FluidParams), ConfigError> {
     let cells: Vec<usize> = cfg.cells.iter().map(|&n| n as usize).collect();
     let grid = Grid::new(&cfg.lower, &cfg.upper, &cells)?;
     let dim = grid.dim;
@@ -162,65 +224,43 @@ pub fn from_scene(cfg: &FluidConfig) -> Result<(Grid, FluidParams, FluidState), 
             });
         }
     }
-    let mut state = FluidState::zeros(dim, grid.n_cells());
-    if let Some(profile) = &cfg.profile {
-        let to3 = |v: &[f64]| std::array::from_fn(|a| v.get(a).copied().unwrap_or(0.0));
-        match profile {
-            Profile::DensityWave {
-                amplitude,
-                wave,
-                velocity,
-                p,
-            } => init::density_wave(
-                &mut state,
-                &grid,
-                *amplitude,
-                to3(wave),
-                to3(velocity),
-                *p,
-                params.gamma,
-                0.0,
-            ),
-            Profile::IsentropicVortex {
-                beta,
-                center,
-                velocity,
-            } => {
-                if dim != 2 {
-                    return Err(ConfigError::VortexNot2d { dim });
-                }
-                init::isentropic_vortex(
-                    &mut state,
-                    &grid,
-                    *beta,
-                    [center[0], center[1]],
-                    [velocity[0], velocity[1]],
-                    params.gamma,
-                    0.0,
-                );
+    Ok((grid, params))
+}
+
+/// The initial state of the cells of the block `(first, own)` of `grid` (its first cell and
+/// its cells per axis, [`crate::fv::Slab::block_of_rank`]; `([0; 3], grid.cells)`: the whole
+/// grid) from the `[[fluid.init]]` regions, x fastest over the block: every entry, in order,
+/// sets the cells whose centre lies in its region. Errors: the block's first cell that no entry
+/// covers, in the grid's order.
+pub fn regions_of_block(
+    cfg: &FluidConfig,
+    grid: &Grid,
+    gamma: f64,
+    (first, own): ([usize; 3], [usize; 3]),
+) -> Result<FluidState, ConfigError> {
+    let dim = grid.dim;
+    let mut state = FluidState::zeros(dim, own.iter().product());
+    let mut idx = 0;
+    for k in first[2]..first[2] + own[2] {
+        for j in first[1]..first[1] + own[1] {
+            for i in first[0]..first[0] + own[0] {
+                let ijk = [i, j, k];
+                let x = grid.cell_center(ijk);
+                let entry = cfg.init.iter().rev().find(|e| e.region.contains(&x[..dim]));
+                let Some(entry) = entry else {
+                    return Err(ConfigError::Uncovered {
+                        cell: ijk,
+                        position: x[..dim].to_vec(),
+                    });
+                };
+                let mut vel = [0.0; 3];
+                vel[..entry.velocity.len()].copy_from_slice(&entry.velocity);
+                state.set_primitive(idx, entry.rho, vel, entry.p, gamma);
+                idx += 1;
             }
         }
-        let mut params = params;
-        set_far_pressures(&grid, &mut params, &state, cfg);
-        return Ok((grid, params, state));
     }
-    for idx in 0..grid.n_cells() {
-        let ijk = grid.ijk(idx);
-        let x = grid.cell_center(ijk);
-        let entry = cfg.init.iter().rev().find(|e| e.region.contains(&x[..dim]));
-        let Some(entry) = entry else {
-            return Err(ConfigError::Uncovered {
-                cell: ijk,
-                position: x[..dim].to_vec(),
-            });
-        };
-        let mut vel = [0.0; 3];
-        vel[..entry.velocity.len()].copy_from_slice(&entry.velocity);
-        state.set_primitive(idx, entry.rho, vel, entry.p, params.gamma);
-    }
-    let mut params = params;
-    set_far_pressures(&grid, &mut params, &state, cfg);
-    Ok((grid, params, state))
+    Ok(state)
 }
 
 /// Sets the far-field pressure of every characteristic side: `fluid.characteristic.p_far`

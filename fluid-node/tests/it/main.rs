@@ -34,6 +34,7 @@ mod fv_conservation;
 mod fv_mirror;
 mod fv_ranks;
 mod fv_ranks_hooks;
+mod fv_ranks_init;
 mod fv_ranks_refusals;
 mod fv_report;
 mod fv_riemann;
