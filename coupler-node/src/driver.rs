@@ -85,10 +85,6 @@ pub trait RecordSink {
     }
     /// The step is complete: make it durable.
     fn end_step(&mut self) -> Result<(), SinkError>;
-    /// The nodes the loop waits for (they compute), before each wait, and none once it is over
-    /// (the coupler computes): a sink that works on a thread of its own may choose its moments
-    /// ([`crate::record::Yield`]); the default does nothing.
-    fn waiting_for(&mut self, _nodes: &[NodeKind]) {}
 }
 
 /// A sink that keeps nothing (`record = "none"`).
@@ -466,10 +462,6 @@ impl RecordSink for TimedSink<'_> {
     fn end_step(&mut self) -> Result<(), SinkError> {
         self.timed(|s| s.end_step())
     }
-
-    fn waiting_for(&mut self, nodes: &[NodeKind]) {
-        self.inner.waiting_for(nodes);
-    }
 }
 
 /// The start time of each step the loop has seen \[s\], so that a frame's log time is the
@@ -519,10 +511,7 @@ fn drive_inner(
     let mut starts = StepStarts::default();
     loop {
         starts.observe(coupler);
-        sink.waiting_for(&coupler.waiting_for());
-        let received = receive(transport, coupler, cfg, abort, slice, busy);
-        sink.waiting_for(&[]);
-        let (from, frame) = received?;
+        let (from, frame) = receive(transport, coupler, cfg, abort, slice, busy)?;
         let (header, msg) = decode(from, &frame)?;
         let now = wall_ns();
         let t = starts.of(header.stamp.step, coupler);

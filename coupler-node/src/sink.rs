@@ -12,7 +12,7 @@ use protocol::wire::NodeKind;
 
 use crate::driver::{RecordSink, SinkError};
 use crate::ledger::{CSV_HEADER, LedgerEntry};
-use crate::record::{Background, Recorder, Yield};
+use crate::record::{Background, Recorder};
 
 /// A CSV file written as the run goes: a header, then rows handed over whole and written with
 /// one `write` on the unbuffered file, so a killed run keeps every row up to its last step.
@@ -160,9 +160,6 @@ pub struct RunSink {
     links_broken: Option<CsvFile>,
     /// The run's folder, where the nodes write their outputs (the Foxglove views read them).
     out: std::path::PathBuf,
-    /// The record's thread works while the coupler waits for the solid alone, and stands aside
-    /// otherwise ([`Yield`]; see [`RecordSink::waiting_for`]).
-    yielding: Option<Yield>,
     /// File index of the first planned output (1 when the nodes wrote output 0 at t = 0).
     first_output: u32,
     /// Output 0 (t = 0) is written and its views not yet recorded.
@@ -177,7 +174,6 @@ impl RunSink {
     pub fn create(out: &Path, scene: &Scene, resumed: bool) -> anyhow::Result<RunSink> {
         let level = scene.run.record;
         let mut record_file = None;
-        let mut yielding = None;
         let record = match level {
             RecordLevel::None => None,
             level => {
@@ -196,18 +192,7 @@ impl RunSink {
                     &scene.to_toml(),
                 )
                 .with_context(|| format!("starting the record {}", path.display()))?;
-                // NOTE (issue 39 item 4): where the fluid's threads fill the machine's cores, the
-                // record's thread works only while the solid computes (`record::Yield`).
-                let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-                let fluid_threads = scene.run.threads as usize
-                    * scene.fluid.as_ref().map_or(1, |f| f.ranks as usize);
-                let background = if fluid_threads >= cores {
-                    let turns = Yield::default();
-                    yielding = Some(turns.clone());
-                    Background::yielding(recorder, turns)
-                } else {
-                    Background::start(recorder)
-                };
+                let background = Background::start(recorder);
                 // NOTE: `record_max_bytes` is checked on the bytes written, so with a cap the
                 // record keeps up step by step (one step in flight), as the check assumes.
                 Some(match scene.run.record_max_bytes {
@@ -232,7 +217,6 @@ impl RunSink {
                 .then(|| CsvFile::create(&out.join("links_broken.csv"), &LINKS_BROKEN_HEADER))
                 .transpose()?,
             out: out.to_path_buf(),
-            yielding,
             first_output: u32::from(scene.initial_output()),
             initial_view: scene.initial_output() && !resumed,
             broken: Vec::new(),
@@ -353,12 +337,6 @@ impl RecordSink for RunSink {
         let done = self.record_call(|r| r.record_views(&out, k, t, &broken));
         self.broken = broken;
         done
-    }
-
-    fn waiting_for(&mut self, nodes: &[NodeKind]) {
-        if let Some(turns) = &self.yielding {
-            turns.hold(nodes != [NodeKind::Solid]);
-        }
     }
 
     fn end_step(&mut self) -> Result<(), SinkError> {

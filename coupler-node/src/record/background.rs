@@ -15,11 +15,6 @@
 //! the end of the last step written. A write error ends the thread and comes back at the next
 //! step, with the committed bytes to cut the record back to.
 //!
-//! A run whose fluid fills the machine's cores also passes the record's thread a [`Yield`]: the
-//! thread writes while the coupler waits for the solid alone (or once it falls [`YIELD_STEPS`]
-//! steps or [`YIELD_BYTES`] bytes behind, so that the coupler does not have to wait for it; and
-//! whenever the coupler waits for it).
-//!
 //! NOTE (issue 39 item 4): with at most one step in flight, the coupler of `clamped-beam-2d`
 //! waited 0.15-0.43 s a run at the ends of steps for the step before to be compressed (its
 //! `record_s`; 0.012-0.016 s without a record), on the run's critical path: every node waits for
@@ -28,7 +23,6 @@
 use std::io::{BufWriter, Write};
 use std::ops::Range;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use protocol::wire::NodeKind;
@@ -40,15 +34,6 @@ pub const MAX_LAG_STEPS: usize = 16;
 
 /// Bytes of the steps handed over and not yet written, at most (beyond the first step's).
 pub const MAX_LAG_BYTES: usize = 64 << 20;
-
-/// Steps in flight (beyond the oldest) from which the record's thread no longer stands aside
-/// for a held [`Yield`]: half the lag the coupler allows, so the thread catches up before the
-/// coupler would wait for it.
-pub const YIELD_STEPS: usize = MAX_LAG_STEPS / 2;
-
-/// Bytes in flight (beyond the oldest step's) from which the record's thread no longer stands
-/// aside for a held [`Yield`].
-pub const YIELD_BYTES: usize = MAX_LAG_BYTES / 2;
 
 /// Capacity of the channels to and from the thread: every step in flight, the messages of a step
 /// that did not end, and the finish.
@@ -88,89 +73,6 @@ impl Batch {
     }
 }
 
-/// When the record's thread works (issue 39 item 4). The coupler holds it except while it waits
-/// for the solid alone: a core the record's thread takes while the fluid computes is taken from
-/// one of the fluid's threads, which fill the cores, and the others then wait for that one at the
-/// end of their parallel loop, so the record costs the run about twice its CPU time; while the
-/// coupler computes, both nodes wait for it. While the solid computes (one thread in the scenes
-/// here), a core is idle. Held, the thread is not woken by the steps handed over, and stops
-/// before the next message of the step it is writing; it works regardless once it is
-/// [`YIELD_STEPS`] steps or [`YIELD_BYTES`] bytes behind, whenever the coupler waits for it, and
-/// once no more steps come.
-#[derive(Clone, Default)]
-pub struct Yield(Arc<(Mutex<Turn>, Condvar)>);
-
-#[derive(Default)]
-struct Turn {
-    /// The coupler asks the thread to stand aside.
-    held: bool,
-    /// The record is far enough behind to write regardless.
-    behind: bool,
-    /// Jobs sent to the thread and not yet taken.
-    ready: usize,
-    /// No more jobs come (the coupler finishes, or dropped the record).
-    closed: bool,
-}
-
-impl Turn {
-    fn may_write(&self) -> bool {
-        !self.held || self.behind || self.closed
-    }
-}
-
-impl Yield {
-    fn turn(&self) -> MutexGuard<'_, Turn> {
-        // (A poisoned lock: a thread panicked holding it; the fields are still plain values.)
-        self.0.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    fn update(&self, change: impl FnOnce(&mut Turn)) {
-        let mut turn = self.turn();
-        let before = turn.may_write() && turn.ready > 0;
-        change(&mut turn);
-        if turn.may_write() && !before {
-            self.0.1.notify_all();
-        }
-    }
-
-    /// Holds (`true`) or releases the record's thread.
-    pub fn hold(&self, held: bool) {
-        self.update(|turn| turn.held = held);
-    }
-
-    /// Notes whether the record is far behind (see [`YIELD_STEPS`]).
-    fn set_behind(&self, behind: bool) {
-        self.update(|turn| turn.behind = behind);
-    }
-
-    /// A job was sent to the thread.
-    fn handed(&self) {
-        self.update(|turn| turn.ready += 1);
-    }
-
-    /// No more jobs come: the thread takes the rest at once.
-    fn close(&self) {
-        self.update(|turn| turn.closed = true);
-    }
-
-    /// Returns once a job is there to take and the thread may write (or no more come).
-    fn next(&self) {
-        let mut turn = self.turn();
-        while !turn.closed && (turn.ready == 0 || !turn.may_write()) {
-            turn = self.0.1.wait(turn).unwrap_or_else(|e| e.into_inner());
-        }
-        turn.ready = turn.ready.saturating_sub(1);
-    }
-
-    /// Returns once the thread may write.
-    fn pass(&self) {
-        let mut turn = self.turn();
-        while !turn.may_write() {
-            turn = self.0.1.wait(turn).unwrap_or_else(|e| e.into_inner());
-        }
-    }
-}
-
 enum Job {
     /// A step's messages; `true`: then [`Recorder::end_step`] (a step's end), `false`: the
     /// messages of a step that will not end (before a finish).
@@ -202,28 +104,16 @@ pub struct Background<W: Write + std::io::Seek + Send + 'static> {
     /// Steps and bytes the record may fall behind by (besides the oldest step in flight).
     max_lag: (usize, usize),
     committed: u64,
-    /// When the thread stands aside, if it does ([`Background::yielding`]).
-    turns: Option<Yield>,
 }
 
 impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     /// Moves `recorder` onto a thread of its own.
     pub fn start(recorder: Recorder<BufWriter<W>>) -> Background<W> {
-        Background::start_with(recorder, None)
-    }
-
-    /// [`Background::start`], the thread standing aside while `turns` is held ([`Yield`]).
-    pub fn yielding(recorder: Recorder<BufWriter<W>>, turns: Yield) -> Background<W> {
-        Background::start_with(recorder, Some(turns))
-    }
-
-    fn start_with(recorder: Recorder<BufWriter<W>>, turns: Option<Yield>) -> Background<W> {
         let (jobs, queue) = sync_channel(QUEUE);
         let (tell, done) = sync_channel(QUEUE);
-        let worker_turns = turns.clone();
         let worker = std::thread::Builder::new()
             .name("record".into())
-            .spawn(move || work(recorder, &queue, &tell, worker_turns.as_ref()))
+            .spawn(move || work(recorder, &queue, &tell))
             .expect("spawning the record's thread");
         Background {
             jobs: Some(jobs),
@@ -234,7 +124,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             in_flight: std::collections::VecDeque::new(),
             max_lag: (MAX_LAG_STEPS, MAX_LAG_BYTES),
             committed: 0,
-            turns,
         }
     }
 
@@ -303,7 +192,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
         let bytes = step.bytes.len();
         self.send(Job::Step(step, true))?;
         self.in_flight.push_back(bytes);
-        self.note_lag();
         while self.lagging() {
             self.wait()?;
         }
@@ -320,30 +208,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     /// Steps handed over and not yet written.
     pub fn in_flight(&self) -> usize {
         self.in_flight.len()
-    }
-
-    /// Tells the thread whether it is far enough behind to write regardless of [`Yield`].
-    fn note_lag(&self) {
-        if let Some(turns) = &self.turns {
-            let lag = self.in_flight.len().saturating_sub(1);
-            let lag_bytes: usize = self.in_flight.iter().skip(1).sum();
-            turns.set_behind(lag >= YIELD_STEPS || lag_bytes >= YIELD_BYTES);
-        }
-    }
-
-    /// Releases the thread: the coupler is about to wait for it.
-    fn release(&self) {
-        if let Some(turns) = &self.turns {
-            turns.hold(false);
-        }
-    }
-
-    /// No more jobs come: the thread writes the rest at once.
-    fn close(&mut self) {
-        self.jobs = None;
-        if let Some(turns) = &self.turns {
-            turns.close();
-        }
     }
 
     /// The steps in flight pass a bound (the oldest one not counted).
@@ -363,7 +227,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     pub fn finish(mut self) -> Result<W, RecordError> {
         self.hand_over_the_rest()?;
         self.send(Job::Finish)?;
-        self.close();
+        self.jobs = None;
         loop {
             match self.done.recv() {
                 Ok(Done::Step(bytes, _)) => self.committed = bytes,
@@ -401,9 +265,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             .as_ref()
             .is_some_and(|jobs| jobs.send(job).is_ok());
         if sent {
-            if let Some(turns) = &self.turns {
-                turns.handed();
-            }
             return Ok(());
         }
         // The thread stopped: its last word says why.
@@ -416,7 +277,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
     }
 
     fn wait(&mut self) -> Result<(), RecordError> {
-        self.release();
         match self.done.recv() {
             Ok(done) => self.take(done),
             Err(_) => Err(gone()),
@@ -428,7 +288,6 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             Done::Step(bytes, batch) => {
                 self.committed = bytes;
                 self.in_flight.pop_front();
-                self.note_lag();
                 if self.spares.len() < SPARES {
                     self.spares.push(batch);
                 }
@@ -437,7 +296,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Background<W> {
             Done::Finished => Ok(()),
             Done::Failed(err, bytes) => {
                 self.committed = bytes;
-                self.close();
+                self.jobs = None;
                 Err(err)
             }
         }
@@ -449,7 +308,7 @@ impl<W: Write + std::io::Seek + Send + 'static> Drop for Background<W> {
         // Dropped without `finish` (a run that ends on an error): the thread writes what it was
         // handed, then the summary, as the recorder's own drop did.
         let _ = self.hand_over_the_rest();
-        self.close();
+        self.jobs = None;
         if let Some(worker) = self.worker.take() {
             let _ = worker.join();
         }
@@ -466,27 +325,13 @@ fn work<W: Write + std::io::Seek>(
     mut recorder: Recorder<BufWriter<W>>,
     queue: &Receiver<Job>,
     tell: &SyncSender<Done>,
-    turns: Option<&Yield>,
 ) -> Option<W> {
-    let pass = || {
-        if let Some(turns) = turns {
-            turns.pass();
-        }
-    };
-    // (Held, the thread waits on `turns`, not on the queue: a step handed over does not wake it.)
-    let next = || {
-        if let Some(turns) = turns {
-            turns.next();
-        }
-        queue.recv()
-    };
-    while let Ok(Job::Step(mut batch, end)) = next() {
-        let mut done = batch.items.drain(..).try_for_each(|item| {
-            pass();
-            write_item(&mut recorder, &batch.bytes, item)
-        });
+    while let Ok(Job::Step(mut batch, end)) = queue.recv() {
+        let mut done = batch
+            .items
+            .drain(..)
+            .try_for_each(|item| write_item(&mut recorder, &batch.bytes, item));
         if end {
-            pass();
             done = done.and_then(|()| recorder.end_step());
         }
         if let Err(err) = done {

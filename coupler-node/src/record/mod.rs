@@ -79,7 +79,7 @@ mod reader;
 mod recover;
 mod writer;
 
-pub use background::{Background, MAX_LAG_BYTES, MAX_LAG_STEPS, YIELD_BYTES, YIELD_STEPS, Yield};
+pub use background::{Background, MAX_LAG_BYTES, MAX_LAG_STEPS};
 pub use channels::{
     BusySeconds, DIAGNOSTICS_SCHEMA_NAME, DIAGNOSTICS_TOPIC, Diagnostics, FRAME_MESSAGE_ENCODING,
     FRAME_SCHEMA_ENCODING, FRAME_SCHEMA_NAME, checkpoint_topic, diagnostics_schema, frame_topic,

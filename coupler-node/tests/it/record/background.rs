@@ -5,9 +5,7 @@ use std::io::{BufWriter, Read};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
-use coupler_node::record::{
-    Background, MAX_LAG_BYTES, MAX_LAG_STEPS, YIELD_BYTES, YIELD_STEPS, Yield,
-};
+use coupler_node::record::{Background, MAX_LAG_BYTES, MAX_LAG_STEPS};
 
 use super::*;
 
@@ -64,36 +62,32 @@ impl<W: Write + Seek + Send + 'static> Calls for Background<W> {
 /// `n_steps` steps of loads, states, a checkpoint every other step and diagnostics, and the
 /// messages of one more step that does not end. Returns the committed bytes after each step.
 fn run(calls: &mut impl Calls, n_steps: u64) -> Vec<u64> {
-    (0..=n_steps)
-        .filter_map(|step| one_step(calls, step, step == n_steps))
-        .collect()
-}
-
-/// The messages of step `step` of [`run`]; ends it (and returns the committed bytes) unless
-/// `last`.
-fn one_step(calls: &mut impl Calls, step: u64, last: bool) -> Option<u64> {
+    let mut committed = Vec::new();
     let views = std::env::temp_dir().join("no-such-output-folder");
-    let t = step_start(step);
-    for iteration in 0..3 {
-        let loads = codec::encode(NodeKind::Fluid, &loads(step, iteration, 5000));
-        calls.frame(NodeKind::Fluid, NodeKind::Coupler, t, &loads);
-        let state = codec::encode(NodeKind::Solid, &solid_state(step, iteration));
-        calls.frame(NodeKind::Solid, NodeKind::Coupler, t, &state);
+    for step in 0..=n_steps {
+        let t = step_start(step);
+        for iteration in 0..3 {
+            let loads = codec::encode(NodeKind::Fluid, &loads(step, iteration, 5000));
+            calls.frame(NodeKind::Fluid, NodeKind::Coupler, t, &loads);
+            let state = codec::encode(NodeKind::Solid, &solid_state(step, iteration));
+            calls.frame(NodeKind::Solid, NodeKind::Coupler, t, &state);
+        }
+        if step.is_multiple_of(2) {
+            let cp = Message::Checkpoint(Checkpoint {
+                stamp: Stamp::step(step),
+                node: NodeKind::Fluid,
+                bytes: vec![step as u8; 100_000],
+            });
+            calls.checkpoint(t, &codec::encode(NodeKind::Fluid, &cp));
+        }
+        if step == n_steps {
+            break;
+        }
+        calls.views(&views, step as u32, t);
+        calls.diagnostics(t + 1e-3, format!("{{\"step\":{step}}}").as_bytes());
+        committed.push(calls.end_step());
     }
-    if step.is_multiple_of(2) {
-        let cp = Message::Checkpoint(Checkpoint {
-            stamp: Stamp::step(step),
-            node: NodeKind::Fluid,
-            bytes: vec![step as u8; 100_000],
-        });
-        calls.checkpoint(t, &codec::encode(NodeKind::Fluid, &cp));
-    }
-    if last {
-        return None;
-    }
-    calls.views(&views, step as u32, t);
-    calls.diagnostics(t + 1e-3, format!("{{\"step\":{step}}}").as_bytes());
-    Some(calls.end_step())
+    committed
 }
 
 /// Issue 39, item 4: the record's thread gets each step whole from the coupler and writes the
@@ -237,147 +231,4 @@ fn the_coupler_goes_on_while_the_record_falls_behind_within_its_bound() {
         .unwrap();
     let _ = std::fs::remove_file(&path);
     assert!(written == direct, "the bytes differ");
-}
-
-/// The bytes of `run(recorder, steps)` with the recorder called directly.
-fn direct_bytes(steps: u64) -> Vec<u8> {
-    let mut direct = Recorder::new(
-        Cursor::new(Vec::new()),
-        RecordLevel::Exchange,
-        RecordCompression::Zstd,
-        "unit-scene",
-        SCENE,
-    )
-    .unwrap();
-    run(&mut direct, steps);
-    direct.finish().unwrap().into_inner()
-}
-
-fn file_len(path: &std::path::Path) -> u64 {
-    std::fs::metadata(path).unwrap().len()
-}
-
-/// Issue 39, item 4: while the coupler holds the record's [`Yield`] (it waits for the fluid or
-/// computes),
-/// the record's thread writes nothing of the steps it is handed, up to `YIELD_STEPS` steps
-/// behind; one step more and it writes them although still held; at the end the record holds
-/// the bytes of the recorder called directly.
-#[test]
-fn a_held_record_stands_aside_until_far_behind() {
-    let steps = YIELD_STEPS as u64 + 3;
-    let direct = direct_bytes(steps);
-    let path = std::env::temp_dir().join(format!("cosim-yield-{}.mcap", std::process::id()));
-    let recorder = Recorder::new(
-        BufWriter::new(std::fs::File::create(&path).unwrap()),
-        RecordLevel::Exchange,
-        RecordCompression::Zstd,
-        "unit-scene",
-        SCENE,
-    )
-    .unwrap();
-    let turns = Yield::default();
-    turns.hold(true);
-    let mut background = Background::yielding(recorder, turns.clone());
-    let start = file_len(&path);
-    // (The steps here take about 1 MB each, far under YIELD_BYTES.)
-    const { assert!(YIELD_BYTES > 16 << 20) };
-    for step in 0..YIELD_STEPS as u64 {
-        one_step(&mut background, step, false);
-    }
-    std::thread::sleep(Duration::from_millis(300));
-    assert_eq!(file_len(&path), start, "held, the record's thread wrote");
-    assert_eq!(background.in_flight(), YIELD_STEPS);
-    one_step(&mut background, YIELD_STEPS as u64, false);
-    let deadline = std::time::Instant::now() + Duration::from_secs(60);
-    while file_len(&path) == start {
-        assert!(
-            std::time::Instant::now() < deadline,
-            "{YIELD_STEPS} steps behind, the record's thread still stands aside"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    for step in YIELD_STEPS as u64 + 1..=steps {
-        one_step(&mut background, step, step == steps);
-    }
-    drop(background.finish().unwrap());
-    let mut written = Vec::new();
-    std::fs::File::open(&path)
-        .unwrap()
-        .read_to_end(&mut written)
-        .unwrap();
-    let _ = std::fs::remove_file(&path);
-    assert!(written == direct, "the bytes differ");
-}
-
-/// Issue 39, item 4: a held [`Yield`] is released when the coupler has to wait for the record
-/// (here at every end of a step, held to no lag as with `run.record_max_bytes`): the run goes
-/// on, and the record holds the bytes of the recorder called directly.
-#[test]
-fn a_coupler_waiting_for_its_record_releases_it() {
-    let steps = 4;
-    let direct = direct_bytes(steps);
-    let path = std::env::temp_dir().join(format!("cosim-release-{}.mcap", std::process::id()));
-    let recorder = Recorder::new(
-        BufWriter::new(std::fs::File::create(&path).unwrap()),
-        RecordLevel::Exchange,
-        RecordCompression::Zstd,
-        "unit-scene",
-        SCENE,
-    )
-    .unwrap();
-    let turns = Yield::default();
-    let (tx, rx) = std::sync::mpsc::channel();
-    let held = turns.clone();
-    std::thread::spawn(move || {
-        let mut background = Background::yielding(recorder, held.clone()).max_lag(0, 0);
-        for step in 0..=steps {
-            held.hold(true);
-            one_step(&mut background, step, step == steps);
-        }
-        let _ = tx.send(background.finish().map(drop));
-    });
-    rx.recv_timeout(Duration::from_secs(60))
-        .expect("the coupler waited for a held record forever")
-        .unwrap();
-    let mut written = Vec::new();
-    std::fs::File::open(&path)
-        .unwrap()
-        .read_to_end(&mut written)
-        .unwrap();
-    let _ = std::fs::remove_file(&path);
-    assert!(written == direct, "the bytes differ");
-}
-
-/// Issue 39, item 4: a record dropped while held (a run that ends on an error) still writes the
-/// steps it was handed, and the drop returns.
-#[test]
-fn a_held_record_dropped_writes_what_it_was_handed() {
-    let path = std::env::temp_dir().join(format!("cosim-drop-{}.mcap", std::process::id()));
-    let recorder = Recorder::new(
-        BufWriter::new(std::fs::File::create(&path).unwrap()),
-        RecordLevel::Exchange,
-        RecordCompression::Zstd,
-        "unit-scene",
-        SCENE,
-    )
-    .unwrap();
-    let turns = Yield::default();
-    turns.hold(true);
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let mut background = Background::yielding(recorder, turns);
-        for step in 0..3 {
-            one_step(&mut background, step, false);
-        }
-        drop(background);
-        let _ = tx.send(());
-    });
-    rx.recv_timeout(Duration::from_secs(60))
-        .expect("dropping a held record returned");
-    let bytes = std::fs::read(&path).unwrap();
-    let _ = std::fs::remove_file(&path);
-    let recording = coupler_node::record::read_recording(&bytes).unwrap();
-    let steps: std::collections::BTreeSet<u64> =
-        recording.messages.iter().map(|m| m.step).collect();
-    assert_eq!(steps, (0..3).collect(), "the steps in the record");
 }
