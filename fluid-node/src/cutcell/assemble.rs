@@ -502,7 +502,9 @@ impl HeldFractions {
         }
     }
 
-    /// The same from the whole grid's geometry `whole` (its dense arrays).
+    /// The same from the whole grid's geometry `whole` (its dense arrays): the reference the
+    /// tests compare the assembled runs with (no rank computes the whole grid's geometry any
+    /// more, at the start either, since `embedded::gather::assemble_by_block`).
     pub fn from_whole(grid: &Grid, whole: &CutGeometry, held: CellBox) -> HeldFractions {
         let mut out = HeldFractions::new(grid, held);
         out.cell_runs = whole_runs(&whole.solid_fraction, grid.cells[0]);
