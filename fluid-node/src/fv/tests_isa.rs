@@ -1,6 +1,7 @@
 //! Every instruction set the line kernel is compiled for gives the same bits (`isa.rs`): a line
-//! with every kind of face, and 3-D steps on one and two threads, on each ISA this CPU has; and
-//! the CFL step a step's totals pass takes is `max_dt`'s own to the bit.
+//! with every kind of face, and 3-D steps on one and two threads, on each ISA this CPU has; a
+//! face's flux does not depend on how long its line is, whatever strips the line is cut into;
+//! and the CFL step a step's totals pass takes is `max_dt`'s own to the bit.
 
 use crate::fv::euler::State;
 use crate::fv::isa::Isa;
@@ -98,6 +99,61 @@ fn isa_paths_give_the_same_line_to_the_bit() {
             assert_eq!(other, stats, "{flux:?} on {isa:?}");
             let first = bits.iter().zip(&reference).position(|(a, b)| a != b);
             assert_eq!(first, None, "{flux:?} on {isa:?}: first differing value");
+        }
+    }
+}
+
+/// A face's flux reads only the cells of its stencil, so every line that holds those cells
+/// gives it the same bits, however long the line and whatever strips `line/strip.rs` cuts it
+/// into (one of its own length, one or more of each fixed length, the last one past the
+/// line's end): each line of 1 to 300 cells of a smooth flow (regular faces only, no fix)
+/// against the longest, for OSMP 3, 5 and 7, on every instruction set.
+#[test]
+fn a_faces_flux_does_not_depend_on_its_lines_length() {
+    const LONGEST: usize = 300;
+    let run = |isa: Isa, flux: FluxKind, u: &[State]| {
+        let ng = flux.ghost_cells();
+        let n = u.len() - 2 * ng;
+        let setup = LineSetup {
+            n,
+            ng,
+            flux,
+            sigma: 0.1,
+            gamma: GAMMA,
+            n_shear: 2,
+            vacuum_rho: 1e-10,
+            vacuum_p: 1e-10,
+            wall: [false, false],
+            own: [0, n],
+            end_face: true,
+        };
+        let mut s = LineScratch::default();
+        s.set_isa(isa);
+        s.resize(n, ng);
+        s.u.copy_from_slice(u);
+        let stats = advance_line(&mut s, &setup);
+        assert_eq!(stats, LineStats::default(), "{flux:?} on {isa:?}: n = {n}");
+        let bits = |v: &[State]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
+        (bits(&s.new), bits(&s.face))
+    };
+    for isa in Isa::available() {
+        for flux in [FluxKind::Osmp(3), FluxKind::Osmp(5), FluxKind::Osmp(7)] {
+            let ng = flux.ghost_cells();
+            let u: Vec<State> = (0..LONGEST + 2 * ng)
+                .map(|i| {
+                    let x = i as f64 / 37.0;
+                    let vel = [0.3 * x.sin(), 0.1 * (2.0 * x).cos(), -0.05];
+                    conserved(1.0 + 0.2 * (1.7 * x).sin(), vel, 1.0 + 0.3 * x.cos())
+                })
+                .collect();
+            let (new, face) = run(isa, flux, &u);
+            for n in 1..=LONGEST {
+                let (new_n, face_n) = run(isa, flux, &u[..n + 2 * ng]);
+                assert!(
+                    new_n == new[..new_n.len()] && face_n == face[..face_n.len()],
+                    "{flux:?} on {isa:?}: a line of {n} cells against one of {LONGEST}"
+                );
+            }
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The regular (OSMP) faces of a line, strip by strip, and the special faces after them.
 //!
-//! A line longer than [`SHORT_LINE`] faces is cut into strips of [`STRIP_FACES`] or
-//! [`LONG_STRIP_FACES`] faces. Each strip runs every pass of the scheme over its part of the
+//! A line longer than [`SHORT_RUN`] faces is cut into strips of one of the
+//! [`STRIP_LENGTHS`]. Each strip runs every pass of the scheme over its part of the
 //! line in a [`Strip`]'s buffers,
 //! which the strips reuse and which stay in L1: the cell pass (primitive variables, Roe sides,
 //! physical fluxes, vacuum flags), the interface pass (Roe averages, speeds, strengths), the
@@ -18,7 +18,7 @@
 //! version with strips of 26–33 faces was slower than the whole line). The entries beyond the
 //! line's end (the last strip's) are computed on what an earlier strip left there, and are
 //! never read by the line's own. A short line is one strip of its own length (loops of run-time
-//! length, as before): its arrays fit the L1 already.
+//! length): strips of fixed length would compute more faces than it has.
 //!
 //! NOTE: before, each pass ran over the whole line and wrote arrays that the next pass read:
 //! about 80 arrays of `n + 2 ng` values, 90 kB for a 128-cell line, twice the 48 kB L1 of this
@@ -54,24 +54,26 @@ const STRIP_LINES: usize = STRIP_LEN / 8 + 1;
 /// The entries of each strip array: the most a strip uses (a short line's `todo + CARRY`).
 const STRIP_LEN: usize = SHORT_LINE + CARRY;
 const _: () = assert!(CellVec::LEN == STRIP_LEN && InterfaceVec::LEN == STRIP_LEN);
-const _: () = assert!(STRIP_CELLS <= STRIP_LEN);
 
-/// Faces a strip computes: `STRIP_FACES` cells from its first one on, the interfaces one before
-/// them and the curvatures two before (`strip_faces`).
-pub(super) const STRIP_FACES: usize = 48;
-/// Faces a long strip computes: a line's strips are all of `STRIP_FACES` or all of
-/// `LONG_STRIP_FACES` faces, whichever computes fewer faces in all (the long ones on a tie).
+/// The lengths a line's strips may have, in faces: a strip of `nc` faces computes `nc` cells
+/// from its first one on, the interfaces one before them and the curvatures two before
+/// (`strip_faces`). A line takes strips of one of these lengths, the one that computes the
+/// fewest faces in all (the longest on a tie), unless it is short (`SHORT_RUN`).
 ///
 /// NOTE: a 3-D line of 128 cells (137 faces counted from `CARRY / 2` before its first) takes
 /// two strips of 72 faces, not three of 48 (144 faces either way): one carry and one set-up of
 /// every pass less a line: 3.8 % fewer kernel instructions on 128³ (AVX2, callgrind), the CPU
-/// time a step within the 2-core Zen 4 machine's noise (docs/performance.md, hP). A 2-D line
-/// of 518 cells keeps strips of 48 (528 faces against 576).
-const LONG_STRIP_FACES: usize = 72;
-/// The most faces a strip computes, counted from its first entry (`j0 + count` of `strip_faces`:
-/// `STRIP_FACES` a strip of a long line, up to `SHORT_LINE` for a short line).
+/// time a step within the 2-core Zen 4 machine's noise (docs/performance.md, hP). A line of
+/// 100 cells (109 faces) takes two of 56 (112 faces, against 144 when the strips were of 48 or
+/// 72 only); a line of 53 cells (a 100-cell pencil cut in two with its overlap, or a 53³ grid)
+/// one of 64, and one of 64 cells one of 80; a 2-D line of 518 cells strips of 48 (528 faces
+/// against 576).
+const STRIP_LENGTHS: [usize; 5] = [48, 56, 64, 72, 80];
+/// A line of up to this many faces (plus `CARRY / 2`) is one strip of its own length (loops of
+/// run-time length): strips of the lengths above would compute more faces than it has.
+const SHORT_RUN: usize = 40;
+/// The most faces a strip computes, counted from its first entry.
 const PSI_FACES: usize = SHORT_LINE;
-const _: () = assert!(LONG_STRIP_FACES <= PSI_FACES && STRIP_FACES <= LONG_STRIP_FACES);
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
@@ -79,11 +81,16 @@ const CARRY: usize = 16;
 /// `CARRY / 2 + R` (`strip_faces`), and `Ψ` reads `R` interfaces below it (`R ≤ 3`); the cell,
 /// interface and curvature passes start at `CARRY − 1`, `CARRY − 1` and `CARRY − 3`.
 const FIRST_READ: usize = CARRY / 2;
-/// The length of every buffer of a strip (its cells).
-const STRIP_CELLS: usize = LONG_STRIP_FACES + CARRY;
-/// A line of up to this many faces (plus `CARRY / 2`) is one strip: its arrays fit the L1 as
-/// they are, and strips of fixed length would compute up to a strip's faces more than it has.
+/// The longest strip, in faces.
 const SHORT_LINE: usize = 80;
+const _: () = {
+    let mut k = 0;
+    while k < STRIP_LENGTHS.len() {
+        let nc = STRIP_LENGTHS[k];
+        assert!(nc.is_multiple_of(8) && nc >= CARRY && nc <= SHORT_LINE && nc > SHORT_RUN);
+        k += 1;
+    }
+};
 
 /// `Ψ` of each wave at the faces of a strip (`osmp_faces`).
 pub(super) type Psi = [[f64; PSI_FACES]; NQ];
@@ -490,31 +497,46 @@ pub(super) fn osmp_faces<const ORDER: u32>(s: &mut LineScratch, setup: &LineSetu
     for row in &mut psi[n_waves(setup)..] {
         row.fill(0.0);
     }
-    if todo <= SHORT_LINE {
-        // One strip: the whole line (loops of the line's length).
-        assert!(todo + CARRY <= STRIP_LEN, "a short line of {todo} faces");
-        strip_faces::<ORDER>(s, setup, 0, todo, (CARRY / 2, nf), psi);
+    // Strips of one length, so that each line runs one copy of the strip's code (see the
+    // NOTE below): the length of STRIP_LENGTHS whose strips compute the fewest faces in all
+    // (the longest on a tie); a line of up to SHORT_RUN faces is one strip of its own length.
+    // The entries of the last strip beyond the line's end are computed on what is there, and
+    // not kept.
+    // NOTE: one call site a length, so that each is inlined with its length a constant:
+    // every loop of a strip then runs a number of entries known at compile time, a multiple of
+    // 8, with no scalar remainder. A line takes all its strips from one call site: two copies
+    // of the strip's code hot in a line (strips of 72 and a last one of its own length) did
+    // not fit the instruction cache and cost 1.3-1.5x the time a cell on 128^3.
+    let strips = |nc: usize| todo.div_ceil(nc);
+    let nc = if todo <= SHORT_RUN {
+        todo
     } else {
-        // Strips of STRIP_FACES or LONG_STRIP_FACES faces (the last one's beyond the line's
-        // end computed on what is there, and not kept).
-        let (short, long) = (todo.div_ceil(STRIP_FACES), todo.div_ceil(LONG_STRIP_FACES));
-        if long * LONG_STRIP_FACES <= short * STRIP_FACES {
-            for k in 0..long {
-                let (a, nc) = (k * LONG_STRIP_FACES, LONG_STRIP_FACES);
-                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), psi);
+        STRIP_LENGTHS
+            .into_iter()
+            .rev()
+            .min_by_key(|&nc| strips(nc) * nc)
+            .expect("strip lengths")
+    };
+    macro_rules! strips_of {
+        ($nc:expr) => {
+            for k in 0..strips($nc) {
+                strip_faces::<ORDER>(s, setup, k * $nc, $nc, psi);
             }
-        } else {
-            for k in 0..short {
-                let (a, nc) = (k * STRIP_FACES, STRIP_FACES);
-                strip_faces::<ORDER>(s, setup, a, nc, (0, nc), psi);
-            }
-        }
+        };
+    }
+    match nc {
+        48 => strips_of!(48),
+        56 => strips_of!(56),
+        64 => strips_of!(64),
+        72 => strips_of!(72),
+        80 => strips_of!(80),
+        _ => strip_faces::<ORDER>(s, setup, 0, todo, psi),
     }
     special_faces(s, setup, radius);
 }
 
 /// A strip of `nc` cells from the line's cell `a` on: the regular flux of those of its faces
-/// `j0 .. j0 + count` (`0 .. nc` in all) that are the line's into [`LineScratch::face`], whether
+/// (`0 .. nc`) that are the line's into [`LineScratch::face`], whether
 /// their linearised star states are physical, the vacuum flags of its cells and the validity of
 /// its interfaces, those on the line.
 ///
@@ -529,7 +551,6 @@ fn strip_faces<const ORDER: u32>(
     setup: &LineSetup,
     a: usize,
     nc: usize,
-    (j0, count): (usize, usize),
     psi: &mut Psi,
 ) {
     let r = stencil_radius(ORDER);
@@ -560,7 +581,7 @@ fn strip_faces<const ORDER: u32>(
     // (the last strip's) are kept by nothing: their `Ψ` and fluxes were computed for nothing
     // (15 of the 144 faces of a 3-D 128-cell line).
     let nf = setup.n + 1;
-    let faces = (a + j0).max(CARRY / 2) - CARRY / 2..(a + j0 + count - CARRY / 2).min(nf);
+    let faces = a.max(CARRY / 2) - CARRY / 2..(a + nc - CARRY / 2).min(nf);
     let first = faces.start + CARRY / 2 - a;
     let f0 = CARRY / 2 + r + first;
     // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
