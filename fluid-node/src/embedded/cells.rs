@@ -5,6 +5,7 @@ use protocol::sum::odd_sum;
 
 use super::COVERED_TOLERANCE;
 use super::held::Held;
+use super::slots::SlotOf;
 use crate::cutcell::SubFace;
 use crate::fv::BoundaryKind;
 use crate::fv::euler::NQ;
@@ -313,7 +314,7 @@ pub(super) fn marked_cells(marked: &[u64]) -> impl Iterator<Item = usize> + '_ {
 /// `slot_of[c] - 1`, unless its `kind` is still `Predicted`), or else its predicted state
 /// `u(q)` times its fluid fraction `alpha`.
 pub(super) fn part_of(
-    slot_of: &[u32],
+    slot_of: &SlotOf,
     content: &[[f64; NQ]],
     kind: &[CellKind],
     c: usize,

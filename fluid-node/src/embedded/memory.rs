@@ -54,7 +54,7 @@ impl Embedded {
             + loads_bytes(&state.last_loads);
         EmbeddedMemory {
             dense_geometry,
-            slot_of: vec_bytes(&near.slot_of),
+            slot_of: near.slot_of.memory_bytes(),
             near_surface,
             sparse_geometry,
         }

@@ -11,6 +11,7 @@ use super::cells::{
     oriented, part_of, shifted,
 };
 use super::held::Held;
+use super::slots::SlotOf;
 use super::state::{Config, NearCells};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MIX_BELOW, WIDEN_RINGS};
 use crate::cutcell::face_index;
@@ -60,7 +61,7 @@ const MAX_SEARCH: usize = 1024;
 struct Mixing<'a> {
     config: &'a Config,
     grid: &'a Grid,
-    slot_of: &'a [u32],
+    slot_of: &'a SlotOf,
     near: &'a [u32],
     /// The geometry of `F^{n+1}` (Λ, λ) and of `F^n` (Λ).
     new: &'a Held,

@@ -93,6 +93,7 @@ mod mix;
 mod near_wall;
 mod pool_sum;
 mod predict;
+mod slots;
 mod state;
 
 pub use correct::CorrectReport;

@@ -125,7 +125,7 @@ impl Embedded {
                 };
                 let near = NearView {
                     cells: &near.cells,
-                    slot_of: &near.slot_of,
+                    slot_of: near.slot_of.whole_grid(),
                 };
                 view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
@@ -142,9 +142,7 @@ impl Embedded {
     fn collect_near_cells(&mut self) {
         let grid = &self.config.grid;
         let near = &mut self.near;
-        for &c in &near.cells {
-            near.slot_of[c as usize] = 0;
-        }
+        near.slot_of.clear(&near.cells);
         near.cells.clear();
         // NOTE: marked in a bit set of the grid, a row of each neighbourhood at a time, and
         // read out in order: the ascending list that sorting them gave (that sort was 1.2 % of
@@ -154,7 +152,7 @@ impl Embedded {
             mark_around(&mut marked, grid, grid.ijk(c as usize), NEAR_RADIUS);
         }
         for c in marked_cells(&marked) {
-            near.slot_of[c] = near.cells.len() as u32 + 1;
+            near.slot_of.set(c, near.cells.len() as u32 + 1);
             near.cells.push(c as u32);
         }
     }

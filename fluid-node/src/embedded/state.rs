@@ -11,6 +11,7 @@ use std::borrow::Cow;
 
 use super::gather::assemble_by_block;
 use super::held::Held;
+use super::slots::SlotOf;
 use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
@@ -81,8 +82,9 @@ pub(super) struct State {
 pub(super) struct NearCells {
     /// Cells near the wet surface of `F^n`, ascending.
     pub(super) cells: Vec<u32>,
-    /// `slot + 1` of each cell in `cells`, 0 elsewhere (reset sparsely).
-    pub(super) slot_of: Vec<u32>,
+    /// `slot + 1` of each cell in `cells`, 0 elsewhere (reset sparsely; dense over the held
+    /// box only, `slots.rs`).
+    pub(super) slot_of: SlotOf,
     /// `U^n` of the near cells, `nvar` each.
     pub(super) saved: Vec<f64>,
     /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces this rank keeps
@@ -186,7 +188,7 @@ impl Embedded {
         let mut e = Embedded {
             near: NearCells {
                 cells: Vec::new(),
-                slot_of: vec![0; grid.n_cells()],
+                slot_of: SlotOf::default(),
                 saved: Vec::new(),
                 face_slots: Default::default(),
                 hooks: SplitHooks::default(),
@@ -227,6 +229,7 @@ impl Embedded {
                 odd_content: OddSum::default(),
             },
         };
+        e.near.slot_of = SlotOf::new(&e.config.grid, e.config.held_box());
         e.set_surface(solver, solid)?;
         Ok(e)
     }
