@@ -51,8 +51,8 @@ type CellVec = FixedVec<0, STRIP_LINES>;
 type InterfaceVec = FixedVec<INTERFACE_PAD, STRIP_LINES>;
 /// The cache lines of each strip array: `STRIP_LEN` entries.
 const STRIP_LINES: usize = STRIP_LEN / 8 + 1;
-/// The entries of each strip array: the most a strip uses (a short line's `todo + CARRY`).
-const STRIP_LEN: usize = SHORT_LINE + CARRY;
+/// The entries of each strip array: the most a strip uses (the longest strip's and its carry).
+const STRIP_LEN: usize = LONGEST_STRIP + CARRY;
 const _: () = assert!(CellVec::LEN == STRIP_LEN && InterfaceVec::LEN == STRIP_LEN);
 
 /// The lengths a line's strips may have, in faces: a strip of `nc` faces computes `nc` cells
@@ -73,7 +73,7 @@ const STRIP_LENGTHS: [usize; 5] = [48, 56, 64, 72, 80];
 /// run-time length): strips of the lengths above would compute more faces than it has.
 const SHORT_RUN: usize = 40;
 /// The most faces a strip computes, counted from its first entry.
-const PSI_FACES: usize = SHORT_LINE;
+const PSI_FACES: usize = LONGEST_STRIP;
 /// The entries a strip takes from the strip before: its first cells, interfaces and curvatures
 /// (see `strip_faces`).
 const CARRY: usize = 16;
@@ -82,12 +82,12 @@ const CARRY: usize = 16;
 /// interface and curvature passes start at `CARRY − 1`, `CARRY − 1` and `CARRY − 3`.
 const FIRST_READ: usize = CARRY / 2;
 /// The longest strip, in faces.
-const SHORT_LINE: usize = 80;
+const LONGEST_STRIP: usize = 80;
 const _: () = {
     let mut k = 0;
     while k < STRIP_LENGTHS.len() {
         let nc = STRIP_LENGTHS[k];
-        assert!(nc.is_multiple_of(8) && nc >= CARRY && nc <= SHORT_LINE && nc > SHORT_RUN);
+        assert!(nc.is_multiple_of(8) && nc >= CARRY && nc <= LONGEST_STRIP && nc > SHORT_RUN);
         k += 1;
     }
 };
