@@ -12,12 +12,12 @@ use crate::grid::Grid;
 /// 4 bytes per cell of its held box and 8 per near cell beyond it, not 4 per cell of the whole
 /// grid (issue 40 item 1: 537 MB a rank at 512³). Indexed as the array it replaces:
 /// `slot_of[c]` for a cell index `c` of the whole grid.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(super) struct SlotOf {
     /// The cells held dense.
     held: CellBox,
-    /// The grid's cells per axis (`Grid::ijk`).
-    cells: [usize; 3],
+    /// The grid (a cell's index to its `ijk`).
+    grid: Grid,
     /// Whether `held` is the whole grid (then `dense` is indexed by the cell index itself).
     whole: bool,
     /// `slot + 1` of each cell of `held`, 0 where it is no near cell, by `CellBox::index`.
@@ -31,7 +31,7 @@ impl SlotOf {
     pub(super) fn new(grid: &Grid, held: CellBox) -> SlotOf {
         SlotOf {
             held,
-            cells: grid.cells,
+            grid: grid.clone(),
             whole: held == CellBox::whole(grid),
             dense: vec![0; held.n_cells()],
             beyond: Vec::new(),
@@ -44,9 +44,7 @@ impl SlotOf {
         if self.whole {
             return Some(c);
         }
-        let i = c % self.cells[0];
-        let rest = c / self.cells[0];
-        let ijk = [i, rest % self.cells[1], rest / self.cells[1]];
+        let ijk = self.grid.ijk(c);
         self.held.contains(ijk).then(|| self.held.index(ijk))
     }
 

@@ -185,32 +185,34 @@ impl Embedded {
             });
         }
         let params = solver.params();
+        let config = Config {
+            fracture: false,
+            mixing_by_root: true,
+            start_levers: false,
+            ng: params.ghost_cells(),
+            gamma: params.gamma,
+            vacuum: (params.vacuum_rho, params.vacuum_p),
+            boundary: params.boundary,
+            block: (solver.slab().ranks > 1).then(|| {
+                let slab = solver.slab();
+                CellBox {
+                    lo: slab.offset,
+                    hi: std::array::from_fn(|a| slab.offset[a] + slab.local.cells[a]),
+                }
+            }),
+            grid,
+        };
+        let slot_of = SlotOf::new(&config.grid, config.held_box());
         let mut e = Embedded {
             near: NearCells {
                 cells: Vec::new(),
-                slot_of: SlotOf::default(),
+                slot_of,
                 saved: Vec::new(),
                 face_slots: Default::default(),
                 hooks: SplitHooks::default(),
                 wall_pressure: Vec::new(),
             },
-            config: Config {
-                fracture: false,
-                mixing_by_root: true,
-                start_levers: false,
-                ng: params.ghost_cells(),
-                gamma: params.gamma,
-                vacuum: (params.vacuum_rho, params.vacuum_p),
-                boundary: params.boundary,
-                block: (solver.slab().ranks > 1).then(|| {
-                    let slab = solver.slab();
-                    CellBox {
-                        lo: slab.offset,
-                        hi: std::array::from_fn(|a| slab.offset[a] + slab.local.cells[a]),
-                    }
-                }),
-                grid,
-            },
+            config,
             state: State {
                 current: SolidFrame::default(),
                 geom: Held::default(),
@@ -229,7 +231,6 @@ impl Embedded {
                 odd_content: OddSum::default(),
             },
         };
-        e.near.slot_of = SlotOf::new(&e.config.grid, e.config.held_box());
         e.set_surface(solver, solid)?;
         Ok(e)
     }
