@@ -6,7 +6,7 @@ use protocol::sum::odd_sum;
 use super::COVERED_TOLERANCE;
 use super::held::Held;
 use super::slots::SlotOf;
-use crate::cutcell::SubFace;
+use crate::cutcell::{CellBox, SubFace};
 use crate::fv::BoundaryKind;
 use crate::fv::euler::NQ;
 use crate::grid::Grid;
@@ -258,26 +258,117 @@ pub(super) fn shifted(grid: &Grid, ijk: [usize; 3], d: [isize; 3]) -> Option<[us
     Some(out)
 }
 
-/// A bit set of the cells of `grid` (one bit per cell, by [`Grid::index`]).
-pub(super) fn cell_bits(grid: &Grid) -> Vec<u64> {
-    vec![0u64; grid.n_cells().div_ceil(64)]
+/// The cells within `r` of `centres` (cells, by their `ijk`) along each active axis that lie in
+/// the grid, ascending, each once.
+///
+/// NOTE: marked in a bit set of the box that holds them (the centres' bounding box grown by
+/// `r`), not of the whole grid: a rank of a decomposed grid marks every near cell of the
+/// surface, and a bit set of the whole grid (16.8 MB at 512³, zeroed and read out in every
+/// predict whatever the number of ranks) was the last array of the whole grid its step built
+/// (issue 40 item 1). Read out row by row, it is the ascending list the whole grid's gave.
+pub(super) fn cells_around(grid: &Grid, centres: &[[usize; 3]], r: usize) -> Vec<u32> {
+    let Some(bounds) = bounding_box(centres) else {
+        return Vec::new();
+    };
+    let held = bounds.grown(grid, r);
+    let mut marks = BoxMarks::new([0, 1, 2], held.lo, [0, 1, 2].map(|a| held.size(a)));
+    for ijk in centres {
+        let span = |a: usize| {
+            let r = if a < grid.dim { r } else { 0 };
+            (
+                ijk[a].saturating_sub(r),
+                (ijk[a] + r).min(grid.cells[a] - 1),
+            )
+        };
+        let (x, y, z) = (span(0), span(1), span(2));
+        for k in z.0..=z.1 {
+            for j in y.0..=y.1 {
+                marks.mark_row([x.0, j, k], x.1);
+            }
+        }
+    }
+    let mut cells = Vec::new();
+    marks.for_each(|ijk| cells.push(grid.index(ijk[0], ijk[1], ijk[2]) as u32));
+    cells
 }
 
-/// Marks in `marked` (see [`cell_bits`]) cell `ijk` and the cells within `r` of it along each
-/// active axis that lie in the grid: those of `ijk` and [`offsets`]`(dim, r)` that [`shifted`]
-/// gives. Each row along x is a run of consecutive bits, set a word at a time.
-pub(super) fn mark_around(marked: &mut [u64], grid: &Grid, ijk: [usize; 3], r: usize) {
-    let span = |a: usize| {
-        let r = if a < grid.dim { r } else { 0 };
-        (
-            ijk[a].saturating_sub(r),
-            (ijk[a] + r).min(grid.cells[a] - 1),
-        )
+/// The smallest box that holds every cell of `cells` (`None` for none).
+pub(super) fn bounding_box(cells: &[[usize; 3]]) -> Option<CellBox> {
+    let first = cells.first()?;
+    let mut b = CellBox {
+        lo: *first,
+        hi: first.map(|v| v + 1),
     };
-    let (x, y, z) = (span(0), span(1), span(2));
-    for k in z.0..=z.1 {
-        for j in y.0..=y.1 {
-            mark_run(marked, grid.index(x.0, j, k), grid.index(x.1, j, k));
+    for ijk in cells {
+        for a in 0..3 {
+            b.lo[a] = b.lo[a].min(ijk[a]);
+            b.hi[a] = b.hi[a].max(ijk[a] + 1);
+        }
+    }
+    Some(b)
+}
+
+/// A bit set of the points of a box (cells, or the faces of one axis), a row of whole words
+/// for each row along the box's fastest axis, read out in the box's order: its rows ascending
+/// (the slowest axis slowest), each along the fastest axis.
+pub(super) struct BoxMarks {
+    /// The axes from the fastest to the slowest.
+    order: [usize; 3],
+    /// The first point and the number of points along each axis.
+    lo: [usize; 3],
+    size: [usize; 3],
+    /// Words a row.
+    row_words: usize,
+    bits: Vec<u64>,
+}
+
+impl BoxMarks {
+    /// No mark, over the points `lo .. lo + size`, rows along `order[0]`.
+    pub(super) fn new(order: [usize; 3], lo: [usize; 3], size: [usize; 3]) -> BoxMarks {
+        let row_words = size[order[0]].div_ceil(64);
+        let rows = size[order[1]] * size[order[2]];
+        BoxMarks {
+            order,
+            lo,
+            size,
+            row_words,
+            bits: vec![0; row_words * rows],
+        }
+    }
+
+    /// Marks the points from `first` to the one at `last` along the fastest axis (in the box).
+    pub(super) fn mark_row(&mut self, first: [usize; 3], last: usize) {
+        let [a, b, c] = self.order;
+        let row = (first[b] - self.lo[b]) + self.size[b] * (first[c] - self.lo[c]);
+        let base = 64 * self.row_words * row;
+        mark_run(
+            &mut self.bits,
+            base + first[a] - self.lo[a],
+            base + last - self.lo[a],
+        );
+    }
+
+    /// Calls `f` with each marked point, in the box's order.
+    pub(super) fn for_each(&self, mut f: impl FnMut([usize; 3])) {
+        let [a, b, c] = self.order;
+        let mut point = self.lo;
+        let mut words = self.bits.chunks_exact(self.row_words);
+        for kc in 0..self.size[c] {
+            point[c] = self.lo[c] + kc;
+            for kb in 0..self.size[b] {
+                point[b] = self.lo[b] + kb;
+                let row = words
+                    .next()
+                    .expect("a row of words for each row of the box");
+                for (w, &word) in row.iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        point[a] = self.lo[a] + 64 * w + bits.trailing_zeros() as usize;
+                        f(point);
+                        bits &= bits - 1;
+                    }
+                }
+            }
         }
     }
 }
@@ -341,8 +432,26 @@ pub(super) fn max_abs(values: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{cell_bits, mark_around, marked_cells, offsets, shifted};
+    use super::{BoxMarks, cells_around, offsets, shifted};
     use crate::grid::Grid;
+    use proptest::prelude::*;
+
+    /// The cells within `r` of `centres` that [`shifted`] keeps, ascending, each once: what a
+    /// bit set of the whole grid gave.
+    fn shifted_neighbourhoods(grid: &Grid, centres: &[[usize; 3]], r: usize) -> Vec<u32> {
+        let mut expected: Vec<u32> = Vec::new();
+        for &ijk in centres {
+            expected.push(grid.index(ijk[0], ijk[1], ijk[2]) as u32);
+            for d in offsets(grid.dim, r as isize) {
+                if let Some(q) = shifted(grid, ijk, d) {
+                    expected.push(grid.index(q[0], q[1], q[2]) as u32);
+                }
+            }
+        }
+        expected.sort_unstable();
+        expected.dedup();
+        expected
+    }
 
     /// The marked runs are the cells of the offsets that [`shifted`] keeps, on 1-, 2- and 3-D
     /// grids, at the edges and corners, with runs across 64-bit words and longer than one.
@@ -358,23 +467,70 @@ mod tests {
             for r in [0, 1, 2, 70] {
                 let n = grid.n_cells();
                 let picks = [0, 1, n / 2, n / 3 + 5, n - 2, n - 1];
-                let mut marked = cell_bits(grid);
-                let mut expected: Vec<usize> = Vec::new();
-                for &c in &picks {
-                    let ijk = grid.ijk(c);
-                    mark_around(&mut marked, grid, ijk, r);
-                    expected.push(c);
-                    for d in offsets(grid.dim, r as isize) {
-                        if let Some(q) = shifted(grid, ijk, d) {
-                            expected.push(grid.index(q[0], q[1], q[2]));
-                        }
-                    }
-                }
-                expected.sort_unstable();
-                expected.dedup();
-                let got: Vec<usize> = marked_cells(&marked).collect();
+                let centres: Vec<[usize; 3]> = picks.iter().map(|&c| grid.ijk(c)).collect();
+                let got = cells_around(grid, &centres, r);
+                let expected = shifted_neighbourhoods(grid, &centres, r);
                 assert_eq!(got, expected, "{:?}, r = {r}", grid.cells);
             }
+        }
+        let grid = &grids[2];
+        assert!(cells_around(grid, &[], 2).is_empty());
+    }
+
+    proptest! {
+        /// Marked in the bit set of the centres' box, the cells around any centres of any grid
+        /// are those of the whole grid's neighbourhoods, in the same order.
+        #[test]
+        fn the_cells_around_are_the_whole_grids(
+            dim in 1usize..=3,
+            cells in prop::array::uniform3(1usize..80),
+            picks in prop::collection::vec(any::<prop::sample::Index>(), 0..12),
+            r in 0usize..4,
+        ) {
+            let cells = &cells[..dim];
+            let grid = Grid::new(&vec![0.0; dim], &vec![1.0; dim], cells).expect("grid");
+            let centres: Vec<[usize; 3]> =
+                picks.iter().map(|i| grid.ijk(i.index(grid.n_cells()))).collect();
+            prop_assert_eq!(
+                cells_around(&grid, &centres, r),
+                shifted_neighbourhoods(&grid, &centres, r)
+            );
+        }
+
+        /// Rows marked along any axis of a box are read out in the box's order: the points
+        /// ascending by their slowest axis, then the middle one, then the fastest.
+        #[test]
+        fn a_boxs_marks_read_out_in_its_order(
+            axis in 0usize..3,
+            lo in prop::array::uniform3(0usize..20),
+            size in prop::array::uniform3(1usize..70),
+            rows in prop::collection::vec(
+                (prop::array::uniform3(any::<prop::sample::Index>()), any::<prop::sample::Index>()),
+                0..10,
+            ),
+        ) {
+            let (o1, o2) = match axis {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            let mut marks = BoxMarks::new([axis, o1, o2], lo, size);
+            let mut expected = Vec::new();
+            for (first, len) in &rows {
+                let first: [usize; 3] = std::array::from_fn(|a| lo[a] + first[a].index(size[a]));
+                let last = first[axis] + len.index(lo[axis] + size[axis] - first[axis]);
+                marks.mark_row(first, last);
+                for m in first[axis]..=last {
+                    let mut q = first;
+                    q[axis] = m;
+                    expected.push((q[o2], q[o1], q[axis]));
+                }
+            }
+            expected.sort_unstable();
+            expected.dedup();
+            let mut got = Vec::new();
+            marks.for_each(|q| got.push((q[o2], q[o1], q[axis])));
+            prop_assert_eq!(got, expected);
         }
     }
 }

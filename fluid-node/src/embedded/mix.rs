@@ -7,8 +7,8 @@
 use rayon::prelude::*;
 
 use super::cells::{
-    CellKind, cell_bits, face_neighbours, fluid_part, mark_around, marked_cells, max_abs, offsets,
-    oriented, part_of, shifted,
+    CellKind, cells_around, face_neighbours, fluid_part, max_abs, offsets, oriented, part_of,
+    shifted,
 };
 use super::held::Held;
 use super::slots::SlotOf;
@@ -533,17 +533,15 @@ impl Mixing<'_> {
     /// [`WIDEN_RINGS`] of them (collective).
     fn predicted(&self, solver: &mut FluidSolver, groups: &[(usize, usize)]) -> Predicted {
         let grid = self.grid;
-        // NOTE: the cells are marked in a bit set of the grid, a row of each neighbourhood at a
-        // time, and read out in order: the ascending list without duplicates that sorting them
-        // all gave (the sort of the 125 cells around each of them was 6 % of the fluid node's
-        // time in `cube-mobile-walls` on 50³).
-        let mut marked = cell_bits(grid);
-        for &(root, k) in groups {
-            for c in [root, self.near[k] as usize] {
-                mark_around(&mut marked, grid, grid.ijk(c), WIDEN_RINGS);
-            }
-        }
-        let reads: Vec<u32> = marked_cells(&marked).map(|c| c as u32).collect();
+        // NOTE: the cells are marked in a bit set, a row of each neighbourhood at a time, and
+        // read out in order (`cells_around`): the ascending list without duplicates that
+        // sorting them all gave (the sort of the 125 cells around each of them was 6 % of the
+        // fluid node's time in `cube-mobile-walls` on 50³).
+        let centres: Vec<[usize; 3]> = (groups.iter())
+            .flat_map(|&(root, k)| [root, self.near[k] as usize])
+            .map(|c| grid.ijk(c))
+            .collect();
+        let reads = cells_around(grid, &centres, WIDEN_RINGS);
         let values = solver.cells_at(&reads);
         Predicted {
             reads,

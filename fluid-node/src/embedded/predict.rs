@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::cells::{cell_bits, full_state, mark_around, marked_cells};
+use super::cells::{BoxMarks, bounding_box, cells_around, full_state};
 use super::hooks::{HookGeometry, NearView, wall_hooks_held, wall_hooks_in};
 use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
@@ -143,17 +143,15 @@ impl Embedded {
         let grid = &self.config.grid;
         let near = &mut self.near;
         near.slot_of.clear(&near.cells);
-        near.cells.clear();
-        // NOTE: marked in a bit set of the grid, a row of each neighbourhood at a time, and
-        // read out in order: the ascending list that sorting them gave (that sort was 1.2 % of
-        // the fluid node's time in `cube-mobile-walls` on 50³).
-        let mut marked = cell_bits(grid);
-        for &c in &self.state.geom.cut_cells {
-            mark_around(&mut marked, grid, grid.ijk(c as usize), NEAR_RADIUS);
-        }
-        for c in marked_cells(&marked) {
-            near.slot_of.set(c, near.cells.len() as u32 + 1);
-            near.cells.push(c as u32);
+        // NOTE: marked in a bit set, a row of each neighbourhood at a time, and read out in
+        // order (`cells_around`): the ascending list that sorting them gave (that sort was
+        // 1.2 % of the fluid node's time in `cube-mobile-walls` on 50³).
+        let cut: Vec<[usize; 3]> = (self.state.geom.cut_cells.iter())
+            .map(|&c| grid.ijk(c as usize))
+            .collect();
+        near.cells = cells_around(grid, &cut, NEAR_RADIUS);
+        for (slot, &c) in near.cells.iter().enumerate() {
+            near.slot_of.set(c as usize, slot as u32 + 1);
         }
     }
 
@@ -178,25 +176,38 @@ impl Embedded {
             hooks,
             ..
         } = &mut self.near;
-        let cells = &*cells;
+        let cells: Vec<[usize; 3]> = cells.iter().map(|&c| grid.ijk(c as usize)).collect();
+        // No near cell: an empty box, no face kept.
+        let bounds = bounding_box(&cells).unwrap_or(CellBox {
+            lo: [0; 3],
+            hi: [0; 3],
+        });
+        let cells = &cells;
         let axes = (hooks.taps.par_iter_mut().zip(face_slots)).enumerate();
         solver.install(|| {
             axes.take(grid.dim).for_each(|(axis, (tap, slots))| {
                 let stride: usize = grid.cells[..axis].iter().product();
                 let n = grid.cells[axis];
                 let count = grid.n_cells() / n;
-                // NOTE: the faces `(pencil, position)` are marked in a bit set of `p (n + 1) + m`
-                // and read out in order: the ascending list without duplicates that sorting them
-                // gave (that sort was 1.3 % of the fluid node's time in `cube-mobile-walls`).
-                let mut marked = vec![0u64; (count * (n + 1)).div_ceil(64)];
-                for &c in cells {
-                    let c = c as usize;
-                    let m = (c / stride) % n;
-                    let p = c % stride + (c / (stride * n)) * stride;
+                // NOTE: the faces `(pencil, position)` are marked in a bit set of the faces of
+                // the near cells' bounding box along `axis`, rows along `axis`, the other axes
+                // in the pencils' order, and read out in order: the ascending list without
+                // duplicates that sorting them gave (that sort was 1.3 % of the fluid node's
+                // time in `cube-mobile-walls`). A bit set of every face of the grid was zeroed
+                // and read out in every predict on every rank (issue 40 item 1).
+                let (o1, o2) = match axis {
+                    0 => (1, 2),
+                    1 => (0, 2),
+                    _ => (0, 1),
+                };
+                let mut size = [0, 1, 2].map(|a| bounds.size(a));
+                size[axis] += 1;
+                let mut marks = BoxMarks::new([axis, o1, o2], bounds.lo, size);
+                for &ijk in cells {
+                    let m = ijk[axis];
                     let faces = match block {
                         None => m..m + 2,
                         Some(b) => {
-                            let ijk = grid.ijk(c);
                             let across =
                                 (0..3).all(|a| a == axis || b.lo[a] <= ijk[a] && ijk[a] < b.hi[a]);
                             if !across {
@@ -210,13 +221,15 @@ impl Embedded {
                             }
                         }
                     };
-                    for f in faces.map(|m| p * (n + 1) + m) {
-                        marked[f / 64] |= 1 << (f % 64);
-                    }
+                    let mut first = ijk;
+                    first[axis] = faces.start;
+                    marks.mark_row(first, faces.end - 1);
                 }
-                let keys: Vec<(u32, u32)> = marked_cells(&marked)
-                    .map(|f| ((f / (n + 1)) as u32, (f % (n + 1)) as u32))
-                    .collect();
+                let mut keys: Vec<(u32, u32)> = Vec::new();
+                marks.for_each(|q| {
+                    let p = q[o1] + grid.cells[o1] * q[o2];
+                    keys.push((p as u32, q[axis] as u32));
+                });
                 tap.clear(count);
                 for &(p, m) in &keys {
                     tap.pencil_offsets[p as usize + 1] += 1;
