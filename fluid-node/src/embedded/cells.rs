@@ -101,6 +101,35 @@ pub(super) fn face_neighbours(
     })
 }
 
+/// A face neighbour: `(axis, neighbour, the face's index triple)` (see [`face_neighbours`]).
+pub(super) type FaceNeighbour = (usize, [usize; 3], [usize; 3]);
+
+/// [`face_neighbours`] into an array, and how many there are: the same in the same order.
+#[inline]
+pub(super) fn face_neighbours_of(grid: &Grid, ijk: [usize; 3]) -> ([FaceNeighbour; 6], usize) {
+    let mut out = [(0, [0; 3], [0; 3]); 6];
+    let mut n = 0;
+    for a in 0..grid.dim {
+        let mut below = ijk;
+        let mut above = ijk;
+        below[a] = below[a].wrapping_sub(1);
+        above[a] += 1;
+        let below = (ijk[a] > 0).then_some((a, below, ijk));
+        let above = (ijk[a] + 1 < grid.cells[a]).then_some((a, above, above));
+        // The side towards the grid's middle first (see `oriented`).
+        let sides = if 2 * ijk[a] + 1 > grid.cells[a] {
+            [below, above]
+        } else {
+            [above, below]
+        };
+        for side in sides.into_iter().flatten() {
+            out[n] = side;
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
 /// Offset `d` from cell `ijk` turned towards the grid's middle: its component along each axis
 /// on which the cell lies in the upper half is negated.
 ///
@@ -432,7 +461,7 @@ pub(super) fn max_abs(values: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{BoxMarks, cells_around, offsets, shifted};
+    use super::{BoxMarks, cells_around, face_neighbours, face_neighbours_of, offsets, shifted};
     use crate::grid::Grid;
     use proptest::prelude::*;
 
@@ -495,6 +524,22 @@ mod tests {
                 cells_around(&grid, &centres, r),
                 shifted_neighbourhoods(&grid, &centres, r)
             );
+        }
+
+        /// The face neighbours listed into an array are the iterator's, in its order, for any
+        /// cell of any 1-, 2- or 3-D grid.
+        #[test]
+        fn the_face_neighbours_array_is_the_iterators(
+            dim in 1usize..=3,
+            cells in prop::array::uniform3(1usize..6),
+            pick in any::<prop::sample::Index>(),
+        ) {
+            let cells = &cells[..dim];
+            let grid = Grid::new(&vec![0.0; dim], &vec![1.0; dim], cells).expect("grid");
+            let ijk = grid.ijk(pick.index(grid.n_cells()));
+            let (faces, n) = face_neighbours_of(&grid, ijk);
+            let expected: Vec<_> = face_neighbours(&grid, ijk).collect();
+            prop_assert_eq!(&faces[..n], &expected[..]);
         }
 
         /// Rows marked along any axis of a box are read out in the box's order: the points
