@@ -13,7 +13,7 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, assemble_by_block, gather_swept, gather_updates};
+use super::gather::{CellUpdate, Updates, assemble_by_block, gather_swept, gather_updates};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
@@ -298,14 +298,14 @@ impl Embedded {
         // them (the sources', or every updated cell's when groups merge or widen).
         let this = &*self;
         let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
-        let mut updates: Vec<(usize, Result<CellUpdate, EmbeddedError>)> = solver.install(|| {
+        let mut updates: Updates = solver.install(|| {
             (0..n_near)
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
                 .filter(|&k| this.own_slot(k))
                 .filter_map(|k| {
                     let update = this.cell_update(k, dt, step, &flush, opening, cracking);
-                    update.transpose().map(|u| (k, u))
+                    update.transpose().map(|u| (k, u.map_err(Box::new)))
                 })
                 .collect()
         });
@@ -316,10 +316,10 @@ impl Embedded {
             });
         }
         for (k, update) in updates {
-            let u = update?;
+            let u = update.map_err(|e| *e)?;
             self.scratch.kind[k] = CellKind::Updated;
             report.cut_cells += 1;
-            for v in &u.leaving[..u.n_leaving] {
+            for v in &u.leaving {
                 for q in 0..NQ {
                     leaving[q] += v[q];
                 }
@@ -349,8 +349,7 @@ impl Embedded {
         };
         let mut update = CellUpdate {
             content: [0.0; NQ],
-            leaving: [[0.0; NQ]; 6],
-            n_leaving: 0,
+            leaving: Vec::new(),
         };
         let ijk = grid.ijk(c);
         let nvar = grid.dim + 2;
@@ -375,16 +374,14 @@ impl Embedded {
                 for q in 0..NQ {
                     v[q] = -((wl - counted) * fl[q] * sigma * volume);
                 }
-                update.leaving[update.n_leaving] = v;
-                update.n_leaving += 1;
+                update.leaving.push(v);
             }
             if ijk[a] + 1 == grid.cells[a] && open[1] {
                 let mut v = [0.0; NQ];
                 for q in 0..NQ {
                     v[q] = (wr - counted) * fr[q] * sigma * volume;
                 }
-                update.leaving[update.n_leaving] = v;
-                update.n_leaving += 1;
+                update.leaving.push(v);
             }
             let dim = grid.dim;
             acc[0] += sigma * (wl * fl[0] - wr * fr[0]);

@@ -18,13 +18,21 @@ use crate::fv::slab::rank_of;
 /// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
 /// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
 /// adding `−v` is subtracting `v`, bit for bit).
+///
+/// NOTE: 64 bytes, with the amounts through open sides (few cells have any) on the heap and a
+/// failed update's error boxed ([`Updates`]): with those amounts in an array of six sides an
+/// update was 288 bytes, and the list of them, collected afresh each step, 304 bytes a near cell
+/// of which the pages were faulted in and copied (a third of the updates' time on one rank in
+/// `embedded_ranks`).
 pub(super) struct CellUpdate {
     /// `(1 − Λ^{n+1}) U^n` plus the weighted fluid fluxes.
     pub(super) content: [f64; NQ],
-    /// What leaves through each open domain side the cell touches, the first `n_leaving`.
-    pub(super) leaving: [[f64; NQ]; 6],
-    pub(super) n_leaving: usize,
+    /// What leaves through each open domain side the cell touches.
+    pub(super) leaving: Vec<[f64; NQ]>,
 }
+
+/// Near cells' updates by slot ([`Embedded::fluid_fluxes`]), a failed one with its error.
+pub(super) type Updates = Vec<(usize, Result<CellUpdate, Box<EmbeddedError>>)>;
 
 impl Embedded {
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
@@ -101,9 +109,9 @@ pub(super) fn gather_swept(solver: &FluidSolver, swept: &mut SubfaceSwept) {
 /// it touches.
 pub(super) fn gather_updates(
     solver: &FluidSolver,
-    mine: Vec<(usize, Result<CellUpdate, EmbeddedError>)>,
+    mine: Updates,
     flux_not_kept: impl Fn(usize) -> EmbeddedError,
-) -> Vec<(usize, Result<CellUpdate, EmbeddedError>)> {
+) -> Updates {
     const FAILED: u32 = u32::MAX;
     let mut bytes = Vec::with_capacity(mine.len() * (8 + 8 * NQ));
     let mut put = |values: &[f64; NQ]| {
@@ -115,8 +123,8 @@ pub(super) fn gather_updates(
     for (k, update) in &mine {
         match update {
             Ok(u) => {
-                heads.push((*k as u32, u.n_leaving as u32));
-                for v in &u.leaving[..u.n_leaving] {
+                heads.push((*k as u32, u.leaving.len() as u32));
+                for v in &u.leaving {
                     put(v);
                 }
             }
@@ -147,16 +155,15 @@ pub(super) fn gather_updates(
         for i in 0..n {
             let (k, n_leaving) = (u32_at(part, 8 + 8 * i) as usize, u32_at(part, 12 + 8 * i));
             if n_leaving == FAILED {
-                all.push((k, Err(flux_not_kept(k))));
+                all.push((k, Err(Box::new(flux_not_kept(k)))));
                 continue;
             }
             let mut u = CellUpdate {
                 content: [0.0; NQ],
-                leaving: [[0.0; NQ]; 6],
-                n_leaving: n_leaving as usize,
+                leaving: Vec::new(),
             };
-            for v in &mut u.leaving[..u.n_leaving] {
-                *v = values(part, at);
+            for _ in 0..n_leaving {
+                u.leaving.push(values(part, at));
                 at += 8 * NQ;
             }
             all.push((k, Ok(u)));
@@ -166,8 +173,8 @@ pub(super) fn gather_updates(
     all.extend(mine);
     // NOTE: a slot is updated by one rank, so any sort by slot gives this order. The list is
     // the ranks' own lists one after the other, each by slot; the stable sort merges those
-    // runs, where the unstable one sorted them afresh, moving each update (over 300 bytes)
-    // about log n times.
+    // runs, where the unstable one sorted them afresh, moving each update (then over 300
+    // bytes) about log n times.
     all.sort_by_key(|u| u.0);
     all
 }
