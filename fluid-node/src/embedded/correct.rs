@@ -510,12 +510,12 @@ impl Embedded {
         let grid = &self.config.grid;
         let ijk = grid.ijk(c);
         let sigma = dt / grid.dx[a];
-        let lo = face_index(grid, a, ijk);
         let mut up = ijk;
         up[a] += 1;
-        let hi = face_index(grid, a, up);
-        let (Some(&fl), Some(&fr)) = (self.near.face_flux(a, lo), self.near.face_flux(a, hi))
-        else {
+        let (Some(&fl), Some(&fr)) = (
+            self.near.face_flux(grid, a, ijk),
+            self.near.face_flux(grid, a, up),
+        ) else {
             return None;
         };
         let below = across(grid, &self.config.boundary, c, a, 0);

@@ -36,7 +36,6 @@ impl Embedded {
         let h = &near.hooks;
         let near_surface = vec_bytes(&near.cells)
             + vec_bytes(&near.saved)
-            + near.face_slots.iter().map(vec_bytes).sum::<usize>()
             + h.ghosts.iter().map(vec_bytes).sum::<usize>()
             + h.walls.iter().map(vec_bytes).sum::<usize>()
             + vec_bytes(&h.pressure_cells)

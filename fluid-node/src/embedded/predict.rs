@@ -5,9 +5,9 @@ use rayon::prelude::*;
 
 use super::cells::{BoxMarks, bounding_box, cells_around, full_state};
 use super::hooks::{HookGeometry, NearView, wall_hooks_held, wall_hooks_in};
-use super::state::NearCells;
+use super::state::{NearCells, pencil_axes};
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
-use crate::cutcell::{CellBox, face_index};
+use crate::cutcell::CellBox;
 use crate::fv::euler::NQ;
 use crate::fv::sweep::{frame, from_local, to_local};
 use crate::fv::{FluidSolver, GhostFill, StepReport, mirror};
@@ -170,12 +170,7 @@ impl Embedded {
     fn taps(&mut self, solver: &FluidSolver) {
         let grid = &self.config.grid;
         let block = self.config.block;
-        let NearCells {
-            cells,
-            face_slots,
-            hooks,
-            ..
-        } = &mut self.near;
+        let NearCells { cells, hooks, .. } = &mut self.near;
         let cells: Vec<[usize; 3]> = cells.iter().map(|&c| grid.ijk(c as usize)).collect();
         // No near cell: an empty box, no face kept.
         let bounds = bounding_box(&cells).unwrap_or(CellBox {
@@ -183,10 +178,9 @@ impl Embedded {
             hi: [0; 3],
         });
         let cells = &cells;
-        let axes = (hooks.taps.par_iter_mut().zip(face_slots)).enumerate();
+        let axes = hooks.taps.par_iter_mut().enumerate();
         solver.install(|| {
-            axes.take(grid.dim).for_each(|(axis, (tap, slots))| {
-                let stride: usize = grid.cells[..axis].iter().product();
+            axes.take(grid.dim).for_each(|(axis, tap)| {
                 let n = grid.cells[axis];
                 let count = grid.n_cells() / n;
                 // NOTE: the faces `(pencil, position)` are marked in a bit set of the faces of
@@ -195,11 +189,7 @@ impl Embedded {
                 // duplicates that sorting them gave (that sort was 1.3 % of the fluid node's
                 // time in `cube-mobile-walls`). A bit set of every face of the grid was zeroed
                 // and read out in every predict on every rank (issue 40 item 1).
-                let (o1, o2) = match axis {
-                    0 => (1, 2),
-                    1 => (0, 2),
-                    _ => (0, 1),
-                };
+                let (o1, o2) = pencil_axes(axis);
                 let mut size = [0, 1, 2].map(|a| bounds.size(a));
                 size[axis] += 1;
                 let mut marks = BoxMarks::new([axis, o1, o2], bounds.lo, size);
@@ -238,15 +228,6 @@ impl Embedded {
                 for p in 0..count {
                     tap.pencil_offsets[p + 1] += tap.pencil_offsets[p];
                 }
-                slots.clear();
-                for (slot, &(p, m)) in keys.iter().enumerate() {
-                    let p = p as usize;
-                    let base = p % stride + (p / stride) * stride * n;
-                    let mut ijk = grid.ijk(base);
-                    ijk[axis] = m as usize;
-                    slots.push((face_index(grid, axis, ijk) as u32, slot as u32));
-                }
-                slots.sort_unstable();
             });
         });
     }

@@ -87,10 +87,6 @@ pub(super) struct NearCells {
     pub(super) slot_of: SlotOf,
     /// `U^n` of the near cells, `nvar` each.
     pub(super) saved: Vec<f64>,
-    /// Per axis: `(face index, slot in the axis tap)` of the near cells' faces this rank keeps
-    /// (every near cell's on one rank; on a decomposed grid those of its own near cells and, on
-    /// its block's low sides, of the near cells below: `Embedded::taps`), by face index.
-    pub(super) face_slots: [Vec<(u32, u32)>; 3],
     /// What the sweeps take in (ghost fills, vacuum cells) and give back (directional
     /// pressures, face fluxes).
     pub(super) hooks: SplitHooks,
@@ -155,11 +151,31 @@ impl NearCells {
         &self.saved[k * nvar..(k + 1) * nvar]
     }
 
-    /// The sweeps' flux through face `face` along `axis`, if kept.
-    pub(super) fn face_flux(&self, axis: usize, face: usize) -> Option<&[f64; NQ]> {
-        let slots = &self.face_slots[axis];
-        let k = slots.binary_search_by_key(&(face as u32), |e| e.0).ok()?;
-        Some(&self.hooks.taps[axis].flux[slots[k].1 as usize])
+    /// The sweeps' flux through the face along `axis` at `ijk` (the low face of cell `ijk`;
+    /// `ijk[axis]` up to the grid's cells along it), if kept: the faces this rank keeps, those of
+    /// every near cell on one rank, and on a decomposed grid those of its own near cells and, on
+    /// its block's low sides, of the near cells below (`Embedded::taps`).
+    ///
+    /// NOTE: found in its pencil's kept faces (a few), where the tap's offsets put it; a list of
+    /// `(face index, slot)` of every kept face, searched by bisection twice a cell and axis, was
+    /// a third of the cell updates' time (`embedded_ranks` at 96³ on one rank).
+    pub(super) fn face_flux(
+        &self,
+        grid: &Grid,
+        axis: usize,
+        ijk: [usize; 3],
+    ) -> Option<&[f64; NQ]> {
+        let (o1, o2) = pencil_axes(axis);
+        let p = ijk[o1] + grid.cells[o1] * ijk[o2];
+        let tap = &self.hooks.taps[axis];
+        let (lo, hi) = (
+            tap.pencil_offsets[p] as usize,
+            tap.pencil_offsets[p + 1] as usize,
+        );
+        let k = tap.positions[lo..hi]
+            .binary_search(&(ijk[axis] as u32))
+            .ok()?;
+        Some(&tap.flux[lo + k])
     }
 
     /// `p̄` of a near cell.
@@ -208,7 +224,6 @@ impl Embedded {
                 cells: Vec::new(),
                 slot_of,
                 saved: Vec::new(),
-                face_slots: Default::default(),
                 hooks: SplitHooks::default(),
                 wall_pressure: Vec::new(),
             },
@@ -378,5 +393,15 @@ impl Embedded {
     /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
         solver.totals_with_own_solid(&self.solid_fraction())
+    }
+}
+
+/// The two axes other than `axis`, lower first: the pencils along `axis` are numbered by them,
+/// `ijk[o1] + cells[o1] ijk[o2]` (as `fv::sweep::Pencils` numbers them).
+pub(super) fn pencil_axes(axis: usize) -> (usize, usize) {
+    match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
     }
 }
