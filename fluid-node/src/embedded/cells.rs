@@ -75,36 +75,19 @@ pub(super) fn full_state(cell: &[f64], dim: usize, scale: f64) -> [f64; NQ] {
     full
 }
 
-/// The face neighbours of cell `ijk` inside the grid, axis by axis, lower side first: `(axis,
-/// neighbour, the face's index triple)` (a face is indexed by the cell above it).
-pub(super) fn face_neighbours(
-    grid: &Grid,
-    ijk: [usize; 3],
-) -> impl Iterator<Item = (usize, [usize; 3], [usize; 3])> + '_ {
-    (0..grid.dim).flat_map(move |a| {
-        let below = (ijk[a] > 0).then(|| {
-            let mut q = ijk;
-            q[a] -= 1;
-            (a, q, ijk)
-        });
-        let above = (ijk[a] + 1 < grid.cells[a]).then(|| {
-            let mut q = ijk;
-            q[a] += 1;
-            (a, q, q)
-        });
-        // The side towards the grid's middle first (see `oriented`).
-        if 2 * ijk[a] + 1 > grid.cells[a] {
-            below.into_iter().chain(above)
-        } else {
-            above.into_iter().chain(below)
-        }
-    })
+/// The face neighbours of cell `ijk` inside the grid, axis by axis (see
+/// [`face_neighbours_of`]).
+pub(super) fn face_neighbours(grid: &Grid, ijk: [usize; 3]) -> impl Iterator<Item = FaceNeighbour> {
+    let (faces, n) = face_neighbours_of(grid, ijk);
+    faces.into_iter().take(n)
 }
 
 /// A face neighbour: `(axis, neighbour, the face's index triple)` (see [`face_neighbours`]).
 pub(super) type FaceNeighbour = (usize, [usize; 3], [usize; 3]);
 
-/// [`face_neighbours`] into an array, and how many there are: the same in the same order.
+/// The face neighbours of cell `ijk` inside the grid, axis by axis, on each axis the side
+/// towards the grid's middle first (see [`oriented`]): `(axis, neighbour, the face's index
+/// triple)` (a face is indexed by the cell above it), into an array, and how many there are.
 #[inline]
 pub(super) fn face_neighbours_of(grid: &Grid, ijk: [usize; 3]) -> ([FaceNeighbour; 6], usize) {
     let mut out = [(0, [0; 3], [0; 3]); 6];
@@ -461,6 +444,7 @@ pub(super) fn max_abs(values: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::state::pencil_axes;
     use super::{BoxMarks, cells_around, face_neighbours, face_neighbours_of, offsets, shifted};
     use crate::grid::Grid;
     use proptest::prelude::*;
@@ -526,8 +510,8 @@ mod tests {
             );
         }
 
-        /// The face neighbours listed into an array are the iterator's, in its order, for any
-        /// cell of any 1-, 2- or 3-D grid.
+        /// The face neighbours listed into an array are those of the iterator they replaced, in
+        /// its order, for any cell of any 1-, 2- or 3-D grid.
         #[test]
         fn the_face_neighbours_array_is_the_iterators(
             dim in 1usize..=3,
@@ -537,9 +521,30 @@ mod tests {
             let cells = &cells[..dim];
             let grid = Grid::new(&vec![0.0; dim], &vec![1.0; dim], cells).expect("grid");
             let ijk = grid.ijk(pick.index(grid.n_cells()));
+            // The iterator the array replaced (the search's order, as before).
+            let expected: Vec<_> = (0..grid.dim)
+                .flat_map(move |a| {
+                    let below = (ijk[a] > 0).then(|| {
+                        let mut q = ijk;
+                        q[a] -= 1;
+                        (a, q, ijk)
+                    });
+                    let above = (ijk[a] + 1 < grid.cells[a]).then(|| {
+                        let mut q = ijk;
+                        q[a] += 1;
+                        (a, q, q)
+                    });
+                    if 2 * ijk[a] + 1 > grid.cells[a] {
+                        below.into_iter().chain(above)
+                    } else {
+                        above.into_iter().chain(below)
+                    }
+                })
+                .collect();
             let (faces, n) = face_neighbours_of(&grid, ijk);
-            let expected: Vec<_> = face_neighbours(&grid, ijk).collect();
             prop_assert_eq!(&faces[..n], &expected[..]);
+            let listed: Vec<_> = face_neighbours(&grid, ijk).collect();
+            prop_assert_eq!(listed, expected);
         }
 
         /// Rows marked along any axis of a box are read out in the box's order: the points
@@ -554,11 +559,7 @@ mod tests {
                 0..10,
             ),
         ) {
-            let (o1, o2) = match axis {
-                0 => (1, 2),
-                1 => (0, 2),
-                _ => (0, 1),
-            };
+            let (o1, o2) = pencil_axes(axis);
             let mut marks = BoxMarks::new([axis, o1, o2], lo, size);
             let mut expected = Vec::new();
             for (first, len) in &rows {

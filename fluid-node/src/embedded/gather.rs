@@ -22,8 +22,8 @@ use crate::fv::slab::rank_of;
 /// NOTE: 64 bytes, with the amounts through open sides (few cells have any) on the heap and a
 /// failed update's error boxed ([`Updates`]): with those amounts in an array of six sides an
 /// update was 288 bytes, and the list of them, collected afresh each step, 304 bytes a near cell
-/// of which the pages were faulted in and copied (a third of the updates' time on one rank in
-/// `embedded_ranks`).
+/// of which the pages were faulted in and copied (more than a third of the updates' time on one
+/// rank in `embedded_ranks`).
 pub(super) struct CellUpdate {
     /// `(1 − Λ^{n+1}) U^n` plus the weighted fluid fluxes.
     pub(super) content: [f64; NQ],
