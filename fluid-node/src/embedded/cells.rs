@@ -113,6 +113,16 @@ pub(super) fn face_neighbours_of(grid: &Grid, ijk: [usize; 3]) -> ([FaceNeighbou
     (out, n)
 }
 
+/// The two axes other than `axis`, lower first: the pencils along `axis` are numbered by them,
+/// `ijk[o1] + cells[o1] ijk[o2]` (as `fv::sweep::Pencils` numbers them).
+pub(super) fn pencil_axes(axis: usize) -> (usize, usize) {
+    match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    }
+}
+
 /// Offset `d` from cell `ijk` turned towards the grid's middle: its component along each axis
 /// on which the cell lies in the upper half is negated.
 ///
@@ -444,8 +454,9 @@ pub(super) fn max_abs(values: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::state::pencil_axes;
-    use super::{BoxMarks, cells_around, face_neighbours, face_neighbours_of, offsets, shifted};
+    use super::{
+        BoxMarks, cells_around, face_neighbours, face_neighbours_of, offsets, pencil_axes, shifted,
+    };
     use crate::grid::Grid;
     use proptest::prelude::*;
 

@@ -3,9 +3,9 @@
 
 use rayon::prelude::*;
 
-use super::cells::{BoxMarks, bounding_box, cells_around, full_state};
+use super::cells::{BoxMarks, bounding_box, cells_around, full_state, pencil_axes};
 use super::hooks::{HookGeometry, NearView, wall_hooks_held, wall_hooks_in};
-use super::state::{NearCells, pencil_axes};
+use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::CellBox;
 use crate::fv::euler::NQ;

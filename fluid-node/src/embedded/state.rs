@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::beyond::outside_domain;
-use super::cells::{CellKind, fluid_part, full_state};
+use super::cells::{CellKind, fluid_part, full_state, pencil_axes};
 use super::{EmbeddedError, Loads, SolidFrame};
 use std::borrow::Cow;
 
@@ -392,15 +392,5 @@ impl Embedded {
     /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
         solver.totals_with_own_solid(&self.solid_fraction())
-    }
-}
-
-/// The two axes other than `axis`, lower first: the pencils along `axis` are numbered by them,
-/// `ijk[o1] + cells[o1] ijk[o2]` (as `fv::sweep::Pencils` numbers them).
-pub(super) fn pencil_axes(axis: usize) -> (usize, usize) {
-    match axis {
-        0 => (1, 2),
-        1 => (0, 2),
-        _ => (0, 1),
     }
 }
