@@ -171,9 +171,8 @@ pub(crate) struct WrittenRows {
 }
 
 impl WrittenRows {
-    /// None written yet, for the arrays of `window`'s cells and faces.
-    fn new(grid: &Grid, window: CellBox) -> WrittenRows {
-        let n = |values: usize, per_row: usize| values / per_row.max(1);
+    /// Values per row and rows of each array of `window`'s cells and faces.
+    fn new_counts(grid: &Grid, window: CellBox) -> ([usize; 4], [usize; 4]) {
         let row = std::array::from_fn(|a| match a {
             0 | 2 | 3 => window.size(0),
             _ => window.size(0) + 1,
@@ -182,10 +181,7 @@ impl WrittenRows {
             0 => window.n_cells(),
             a => window.n_faces(grid, a - 1),
         };
-        WrittenRows {
-            row,
-            marked: std::array::from_fn(|a| vec![false; n(values(a), row[a])]),
-        }
+        (row, std::array::from_fn(|a| values(a) / row[a].max(1)))
     }
 
     /// Marks the row of value `at` of `array` (0: Λ, 1 + axis: λ along `axis`).
@@ -201,9 +197,71 @@ impl WrittenRows {
     pub(crate) fn may_hold(&self, array: usize, row: usize) -> bool {
         self.marked[array].get(row).is_none_or(|&m| m)
     }
+
+    /// Zeroes every row of `arrays` (Λ, then λ along x, y and z, as recorded) that may hold
+    /// values, so that all of their values are zero: the rows recorded as written, or the whole
+    /// array where nothing was recorded.
+    fn zero_written(&self, arrays: [&mut Vec<f64>; 4]) {
+        for (a, values) in arrays.into_iter().enumerate() {
+            let row = self.row[a].max(1);
+            if self.marked[a].is_empty() {
+                values.fill(0.0);
+                continue;
+            }
+            for (r, &m) in self.marked[a].iter().enumerate() {
+                if !m {
+                    continue;
+                }
+                let end = ((r + 1) * row).min(values.len());
+                values[(r * row).min(end)..end].fill(0.0);
+            }
+        }
+    }
+
+    /// None written yet, for the arrays of `window`'s cells and faces (buffers reused).
+    fn reset(&mut self, grid: &Grid, window: CellBox) {
+        let fresh = WrittenRows::new_counts(grid, window);
+        self.row = fresh.0;
+        for (m, n) in self.marked.iter_mut().zip(fresh.1) {
+            m.clear();
+            m.resize(n, false);
+        }
+    }
 }
 
 impl BlockGeometry {
+    /// Makes this geometry (an earlier one of any window, or the default) the start of a
+    /// computation of `block` and its `window`: Λ and λ along x zero on the window's cells and
+    /// faces, λ along the other axes zero as well with `faces_across` and empty without, no
+    /// sub-face, no row written. The buffers are kept: every value the earlier computation held
+    /// lies in a row it recorded as written (or in an array with nothing recorded), and only
+    /// those rows are zeroed, then each array takes its new length (issue 40 item 4: allocated
+    /// and zeroed afresh, the loads' three trial geometries and the correct's block geometry of
+    /// each step were 41 MB a rank at 100³ on 2 ranks).
+    fn start(&mut self, grid: &Grid, block: CellBox, window: CellBox, faces_across: bool) {
+        let [f0, f1, f2] = &mut self.face_fraction;
+        self.written
+            .zero_written([&mut self.solid_fraction, f0, f1, f2]);
+        self.solid_fraction.resize(window.n_cells(), 0.0);
+        for (a, faces) in self.face_fraction.iter_mut().enumerate() {
+            let n = if a == 0 || faces_across {
+                window.n_faces(grid, a)
+            } else {
+                0
+            };
+            faces.resize(n, 0.0);
+        }
+        self.written.reset(grid, window);
+        self.block = block;
+        self.window = window;
+        self.subfaces.clear();
+        self.subface_vertices.clear();
+        self.cut_cells.clear();
+        self.clipped_elements = 0;
+        self.whole_rows = 0;
+        self.n_pieces = 0;
+    }
+
     /// Λ of cell `ijk` of the window.
     pub fn solid_fraction_at(&self, ijk: [usize; 3]) -> f64 {
         self.solid_fraction[self.window.index(ijk)]
@@ -243,7 +301,18 @@ impl BlockGeometry {
 /// Pure. Cost: the elements that reach the window (in 2-D with x cut: its band of rows), plus
 /// those of the rows swept whole.
 pub fn compute_block(grid: &Grid, surface: &Surface, block: CellBox, halo: usize) -> BlockGeometry {
-    block_geometry(grid, surface, block, halo, true)
+    block_geometry(grid, surface, block, halo, true, BlockGeometry::default())
+}
+
+/// [`compute_block`] into the buffers of `reuse`, as [`compute_block_cells_reusing`] does.
+pub fn compute_block_reusing(
+    grid: &Grid,
+    surface: &Surface,
+    block: CellBox,
+    halo: usize,
+    reuse: BlockGeometry,
+) -> BlockGeometry {
+    block_geometry(grid, surface, block, halo, true, reuse)
 }
 
 /// [`compute_block`] without the sweeps along the axes other than x: Λ, λ along x and the
@@ -259,7 +328,20 @@ pub fn compute_block_cells(
     block: CellBox,
     halo: usize,
 ) -> BlockGeometry {
-    block_geometry(grid, surface, block, halo, false)
+    block_geometry(grid, surface, block, halo, false, BlockGeometry::default())
+}
+
+/// [`compute_block_cells`] into the buffers of `reuse`, an earlier block geometry of any block
+/// and window (or the default): the same geometry, bit for bit, without allocating and zeroing
+/// the window's arrays afresh (`BlockGeometry::start`).
+pub fn compute_block_cells_reusing(
+    grid: &Grid,
+    surface: &Surface,
+    block: CellBox,
+    halo: usize,
+    reuse: BlockGeometry,
+) -> BlockGeometry {
+    block_geometry(grid, surface, block, halo, false, reuse)
 }
 
 fn block_geometry(
@@ -268,8 +350,9 @@ fn block_geometry(
     block: CellBox,
     halo: usize,
     cut_axes: bool,
+    reuse: BlockGeometry,
 ) -> BlockGeometry {
-    let (mut out, pieces, covered_runs) = block_cells(grid, surface, block, halo, cut_axes);
+    let (mut out, pieces, covered_runs) = block_cells(grid, surface, block, halo, cut_axes, reuse);
     if cut_axes {
         for axis in 1..grid.dim {
             sweep_cut_axis(grid, surface, axis, &pieces, &mut out);
@@ -285,13 +368,14 @@ pub(crate) type CoveredRun = (u64, i32, i32, f64);
 /// The part of a block's geometry that needs no other block: the pieces clipped (of the
 /// window's cells and one cell around them), Λ, λ along x and the sub-faces of the window, its
 /// cut cells, and the covered runs of the x sweep; the arrays of λ along the other axes zero,
-/// or empty without `faces_across`.
+/// or empty without `faces_across`. Into the buffers of `reuse` (`BlockGeometry::start`).
 pub(crate) fn block_cells(
     grid: &Grid,
     surface: &Surface,
     block: CellBox,
     halo: usize,
     faces_across: bool,
+    reuse: BlockGeometry,
 ) -> (BlockGeometry, Vec<Piece>, Vec<CoveredRun>) {
     assert!(
         grid.dim == surface.dim,
@@ -301,18 +385,8 @@ pub(crate) fn block_cells(
     );
     surface.check();
     let window = block.grown(grid, halo);
-    let mut out = BlockGeometry {
-        block,
-        window,
-        solid_fraction: vec![0.0; window.n_cells()],
-        face_fraction: std::array::from_fn(|a| match a {
-            0 => vec![0.0; window.n_faces(grid, a)],
-            _ if faces_across => vec![0.0; window.n_faces(grid, a)],
-            _ => Vec::new(),
-        }),
-        written: WrittenRows::new(grid, window),
-        ..BlockGeometry::default()
-    };
+    let mut out = reuse;
+    out.start(grid, block, window, faces_across);
     // Rows of the x sweep: the window's and one more on each side (their covered cells give
     // the window's outermost faces).
     let rows = window.grown(grid, 1);

@@ -77,7 +77,18 @@ impl BlockSweep {
     /// The local part of block `block`'s geometry (no halo): clipping, Λ, λ along x, the
     /// sub-faces, and the rows of each cut axis with their cut cells. Pure.
     pub fn new(grid: &Grid, surface: &Surface, block: CellBox) -> BlockSweep {
-        let (geom, pieces, covered_runs) = block_cells(grid, surface, block, 0, true);
+        BlockSweep::reusing(grid, surface, block, BlockGeometry::default())
+    }
+
+    /// [`BlockSweep::new`] into the buffers of `reuse`, an earlier block geometry of any block
+    /// and window (or the default; what [`BlockSweep::finish`] returns): the same bits.
+    pub fn reusing(
+        grid: &Grid,
+        surface: &Surface,
+        block: CellBox,
+        reuse: BlockGeometry,
+    ) -> BlockSweep {
+        let (geom, pieces, covered_runs) = block_cells(grid, surface, block, 0, true, reuse);
         let mut axes = vec![AxisChain::default(); 3];
         for (axis, chain) in axes.iter_mut().enumerate().take(grid.dim).skip(1) {
             chain.rows = axis_rows(grid, axis, &geom, &pieces);

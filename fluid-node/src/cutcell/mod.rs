@@ -92,7 +92,10 @@ mod swept;
 mod tests;
 
 pub use assemble::{HeldFractions, block_part, block_part_shared};
-pub use block::{BlockGeometry, CellBox, compute_block, compute_block_cells};
+pub use block::{
+    BlockGeometry, CellBox, compute_block, compute_block_cells, compute_block_cells_reusing,
+    compute_block_reusing,
+};
 pub use chain::{BlockSweep, compute_blocks, pass_messages};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,

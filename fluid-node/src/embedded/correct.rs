@@ -159,8 +159,8 @@ impl Embedded {
         match block {
             None => solver.install(|| compute(grid, &accepted.surface(), &mut scratch.trial.cut)),
             Some(block) => {
-                let trial = &mut scratch.trial;
-                assemble_by_block(trial, solver, &accepted.surface(), block, held);
+                let (trial, reuse) = (&mut scratch.trial, &mut scratch.block);
+                assemble_by_block(trial, reuse, solver, &accepted.surface(), block, held);
             }
         }
         solver.install(|| {

@@ -8,7 +8,8 @@ use super::cells::CellKind;
 use super::held::Held;
 use super::{Embedded, EmbeddedError};
 use crate::cutcell::{
-    BlockSweep, CellBox, HeldFractions, SubfaceSwept, SubfaceSweptEntry, Surface, block_part_shared,
+    BlockGeometry, BlockSweep, CellBox, HeldFractions, SubfaceSwept, SubfaceSweptEntry, Surface,
+    block_part_shared,
 };
 use crate::fv::FluidSolver;
 use crate::fv::comm::HaloExchange;
@@ -252,16 +253,18 @@ pub(super) fn gather_roots(
 /// ([`chained_block_part`]: no halo, the running sums of the cut axes passed along the pencils
 /// of blocks), and one all-gather of every block's share gives every rank the whole grid's
 /// sub-faces and cut cells, and Λ and λ dense in `held` and as runs elsewhere
-/// (`CutGeometry::assemble_held_own`): the bits of one rank's `compute`, read anywhere.
+/// (`CutGeometry::assemble_held_own`): the bits of one rank's `compute`, read anywhere. The
+/// block's geometry is computed into the buffers of `reuse` and left there.
 pub(super) fn assemble_by_block(
     geom: &mut Held,
+    reuse: &mut BlockGeometry,
     solver: &FluidSolver,
     surface: &Surface,
     block: CellBox,
     held: CellBox,
 ) {
     let grid = &solver.slab().global;
-    let (part, vertices) = chained_block_part(solver, surface, block);
+    let (part, vertices) = chained_block_part(solver, surface, block, reuse);
     let parts = solver.comm().all_gather(&part);
     let fractions = (geom.fractions).get_or_insert_with(|| HeldFractions::new(grid, held));
     let own = (solver.comm().rank(), &vertices[..]);
@@ -274,16 +277,19 @@ pub(super) fn assemble_by_block(
 /// for each cut axis, the running sums passed up the pencil of blocks along it in rank order and
 /// `above` passed down (`cutcell::BlockSweep`, module `chain`). No rank clips an element beyond
 /// its cells and one cell around them. Traffic: 8 bytes per row whose cut cells cross a block
-/// boundary, up, and as many down.
+/// boundary, up, and as many down. The block's geometry is computed into the buffers of
+/// `reuse` and left there.
 pub(super) fn chained_block_part(
     solver: &FluidSolver,
     surface: &Surface,
     block: CellBox,
+    reuse: &mut BlockGeometry,
 ) -> (Vec<u8>, Vec<[f64; 3]>) {
     let slab = solver.slab();
     let grid = &slab.global;
     debug_assert_eq!(block, CellBox::of_rank(grid, slab.dims, slab.rank));
-    let mut sweep = solver.install(|| BlockSweep::new(grid, surface, block));
+    let buffers = std::mem::take(reuse);
+    let mut sweep = solver.install(|| BlockSweep::reusing(grid, surface, block, buffers));
     let neighbour = |axis: usize, up: bool| {
         let c = slab.coords[axis];
         let to = if up {
@@ -326,5 +332,6 @@ pub(super) fn chained_block_part(
         let down = sweep.down(axis, &from_above);
         transfer(axis, false, &mut [], Some(&down));
     }
-    block_part_shared(grid, &sweep.finish())
+    *reuse = sweep.finish();
+    block_part_shared(grid, reuse)
 }

@@ -8,7 +8,7 @@ use super::error::Reach;
 use super::levers::Levers;
 use super::pool_sum::add_on_pool;
 use super::{Embedded, EmbeddedError, SolidFrame};
-use crate::cutcell::{SubFace, Surface, compute, compute_block_cells};
+use crate::cutcell::{SubFace, Surface, compute, compute_block_cells_reusing};
 use crate::fv::FluidSolver;
 
 /// Whether two surfaces are the same, bit for bit (so their geometries are).
@@ -74,6 +74,7 @@ impl Embedded {
             }
             Some(block) => {
                 let grid = &self.config.grid;
+                let reuse = std::mem::take(&mut self.scratch.block);
                 let mut terms = |subfaces: &[SubFace], lambda: &dyn Fn(usize) -> f64| {
                     (subfaces.iter())
                         .filter(|s| block.contains(grid.ijk(s.cell as usize)))
@@ -90,10 +91,14 @@ impl Embedded {
                 // was work one rank does not do.
                 let mine = if same_surface(&trial.surface(), &self.state.current.surface()) {
                     let geom = &self.state.geom;
-                    terms(&geom.subfaces, &|c| geom.lambda(c))
+                    let mine = terms(&geom.subfaces, &|c| geom.lambda(c));
+                    self.scratch.block = reuse;
+                    mine
                 } else {
-                    let geom = compute_block_cells(grid, &trial.surface(), block, 1);
-                    terms(&geom.subfaces, &|c| geom.solid_fraction_at(grid.ijk(c)))
+                    let geom = compute_block_cells_reusing(grid, &trial.surface(), block, 1, reuse);
+                    let mine = terms(&geom.subfaces, &|c| geom.solid_fraction_at(grid.ijk(c)));
+                    self.scratch.block = geom;
+                    mine
                 };
                 gather_terms(solver, mine, &mut sum).map(|(_, _, pc)| pc)
             }

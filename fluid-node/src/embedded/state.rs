@@ -12,7 +12,7 @@ use std::borrow::Cow;
 use super::gather::assemble_by_block;
 use super::held::Held;
 use super::slots::SlotOf;
-use crate::cutcell::{CellBox, CutGeometry, SubfaceSwept, compute};
+use crate::cutcell::{BlockGeometry, CellBox, CutGeometry, SubfaceSwept, compute};
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
 use crate::fv::{BoundaryKind, FluidSolver, SplitHooks};
@@ -112,6 +112,10 @@ pub(super) struct Scratch {
     /// Per-slot sums independent of the sub-faces' order (mirror-exact loads).
     pub(super) odd: OddSum,
     pub(super) odd_content: OddSum,
+    /// The buffers of the last block geometry this rank computed (the loads' trial surfaces,
+    /// the correct's block of `F^{n+1}`), for the next (`cutcell::compute_block_cells_reusing`,
+    /// `BlockSweep::reusing`); empty on one rank.
+    pub(super) block: BlockGeometry,
 }
 
 impl Config {
@@ -243,6 +247,7 @@ impl Embedded {
                 kind: Vec::new(),
                 odd: OddSum::default(),
                 odd_content: OddSum::default(),
+                block: BlockGeometry::default(),
             },
         };
         e.set_surface(solver, solid)?;
@@ -299,7 +304,10 @@ impl Embedded {
         let geom = &mut self.state.geom;
         match self.config.block {
             None => compute(grid, &solid.surface(), &mut geom.cut),
-            Some(block) => assemble_by_block(geom, solver, &solid.surface(), block, held),
+            Some(block) => {
+                let reuse = &mut self.scratch.block;
+                assemble_by_block(geom, reuse, solver, &solid.surface(), block, held);
+            }
         }
         self.state.current = solid;
         Ok(())

@@ -9,7 +9,8 @@
 
 use fluid_node::cutcell::{
     BlockGeometry, CellBox, CutGeometry, SubfaceSwept, SubfaceSweptEntry, compute, compute_block,
-    compute_block_cells, subface_swept_volumes, subface_swept_volumes_of,
+    compute_block_cells, compute_block_cells_reusing, compute_block_reusing, subface_swept_volumes,
+    subface_swept_volumes_of,
 };
 use fluid_node::embedded::SolidFrame;
 use fluid_node::grid::Grid;
@@ -110,10 +111,36 @@ pub(crate) fn assert_block_is_whole(
     assert_eq!(cut, b.cut_cells, "{what}: cut cells");
 }
 
+/// Every field of a block geometry as bits, to compare.
+fn geometry_bits(b: &BlockGeometry) -> Vec<u64> {
+    let mut x = vec![
+        b.clipped_elements as u64,
+        b.whole_rows as u64,
+        b.n_pieces as u64,
+    ];
+    x.extend(b.block.lo.iter().chain(&b.block.hi).map(|&v| v as u64));
+    x.extend(b.window.lo.iter().chain(&b.window.hi).map(|&v| v as u64));
+    for values in std::iter::once(&b.solid_fraction).chain(&b.face_fraction) {
+        x.push(values.len() as u64);
+        x.extend(values.iter().map(|v| v.to_bits()));
+    }
+    for s in &b.subfaces {
+        x.extend([s.cell, s.element, s.particle, s.first_vertex, s.n_vertices].map(u64::from));
+        x.push(s.area.to_bits());
+        x.extend(s.normal.iter().chain(&s.centroid).map(|v| v.to_bits()));
+    }
+    x.extend(b.subface_vertices.iter().flatten().map(|v| v.to_bits()));
+    x.extend(b.cut_cells.iter().map(|&c| u64::from(c)));
+    x
+}
+
 /// Every block of every process grid in `decomps`, with every halo, at `positions` steps of
-/// `dt` along the bodies' velocities.
+/// `dt` along the bodies' velocities. Each geometry is also computed into the buffers of the
+/// one before it (`compute_block_reusing`, `compute_block_cells_reusing`: another block, halo,
+/// position or kind of geometry), which must give the same geometry, every field.
 fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize; 3]]) -> Tally {
     let mut tally = Tally::default();
+    let mut reused = BlockGeometry::default();
     for k in 0..4 {
         let frame = translated(solid, k as f64 * dt);
         let surface = frame.surface();
@@ -130,6 +157,17 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
                     assert_block_is_whole(grid, &whole, &b, false, &what);
                     let cells = compute_block_cells(grid, &surface, block, halo);
                     assert_block_is_whole(grid, &whole, &cells, true, &what);
+                    let buffers = std::mem::take(&mut reused);
+                    reused = compute_block_reusing(grid, &surface, block, halo, buffers);
+                    let same = geometry_bits(&reused) == geometry_bits(&b);
+                    assert!(same && reused.unwritten_rows_are_zero(), "{what}: reused");
+                    let buffers = std::mem::take(&mut reused);
+                    reused = compute_block_cells_reusing(grid, &surface, block, halo, buffers);
+                    let same = geometry_bits(&reused) == geometry_bits(&cells);
+                    assert!(
+                        same && reused.unwritten_rows_are_zero(),
+                        "{what}: cells reused"
+                    );
                     assert_eq!(cells.whole_rows, 0, "{what}: compute_block_cells");
                     tally.whole_rows += b.whole_rows;
                     tally.fewer += usize::from(b.clipped_elements < surface.n_elements());
