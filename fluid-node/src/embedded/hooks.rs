@@ -253,51 +253,83 @@ pub(super) struct HookGeometry<'a> {
 }
 
 /// The near cells of a [`HookGeometry`] (cells of its window within [`NEAR_RADIUS`] of one of
-/// its cut cells), ascending, and `slot + 1` of each by window index (0 elsewhere).
+/// its cut cells), ascending, and `slot + 1` of each by index in `slot_box`, a box of the
+/// window that holds them all (0 elsewhere).
 pub(super) struct NearView<'a> {
     pub(super) cells: &'a [u32],
     pub(super) slot_of: &'a [u32],
+    pub(super) slot_box: CellBox,
+}
+
+impl NearView<'_> {
+    /// `slot + 1` of cell `ijk` if it is a near cell, else 0.
+    #[inline]
+    pub(super) fn slot_of(&self, ijk: [usize; 3]) -> u32 {
+        if self.slot_box.contains(ijk) {
+            self.slot_of[self.slot_box.index(ijk)]
+        } else {
+            0
+        }
+    }
 }
 
 /// The near cells of a block's window, owned ([`NearView`] borrows them).
 struct NearOfView {
     cells: Vec<u32>,
     slot_of: Vec<u32>,
+    slot_box: CellBox,
 }
 
 impl NearOfView {
     /// The cells of `view`'s window within [`NEAR_RADIUS`] of one of `cut_cells` (global).
     ///
-    /// NOTE: marked in a bit set of the window, a row of each neighbourhood at a time, and read
-    /// out in order (the window's order of its cells is the grid's): the ascending list that
-    /// marking each offset of each cut cell and sorting gave, in a tenth of the time (that took
-    /// 2.4 ms of the 9–12 ms of a rank's hooks at 64³ on 2 ranks, `embedded_ranks`).
+    /// NOTE: marked in a bit set of the box that holds them (the neighbourhoods' bounding box
+    /// within the window), a row of each neighbourhood at a time, and read out in order (a
+    /// box's order of its cells is the grid's): the ascending list that marking each offset of
+    /// each cut cell and sorting gave, in a tenth of the time (that took 2.4 ms of the 9–12 ms
+    /// of a rank's hooks at 64³ on 2 ranks, `embedded_ranks`). The slots are held over that
+    /// box too: over the whole window (the block and [`hook_halo`] cells around it) they were
+    /// an array of 5.2 MB zeroed in each predict at 128³ on 2 ranks, about 1.5 ms a step
+    /// (issue 40 item 4).
     fn new(view: &HookGeometry, cut_cells: &[u32]) -> NearOfView {
         let (grid, window) = (view.grid, view.window);
-        let mut marked = vec![0u64; window.n_cells().div_ceil(64)];
-        for &c in cut_cells {
+        // Each cut cell's neighbourhood within the window, `(lo, hi)` per axis (both included).
+        let span = |c: u32| -> Option<[(usize, usize); 3]> {
             let ijk = grid.ijk(c as usize);
             let span: [(usize, usize); 3] = std::array::from_fn(|a| {
                 let r = if a < grid.dim { NEAR_RADIUS } else { 0 };
                 let lo = ijk[a].saturating_sub(r).max(window.lo[a]);
                 (lo, (ijk[a] + r).min(window.hi[a] - 1))
             });
-            if span.iter().any(|&(lo, hi)| lo > hi) {
-                continue;
+            span.iter().all(|&(lo, hi)| lo <= hi).then_some(span)
+        };
+        let mut slot_box: Option<CellBox> = None;
+        for s in cut_cells.iter().filter_map(|&c| span(c)) {
+            let b = slot_box.get_or_insert(CellBox {
+                lo: s.map(|a| a.0),
+                hi: s.map(|a| a.1 + 1),
+            });
+            for a in 0..3 {
+                b.lo[a] = b.lo[a].min(s[a].0);
+                b.hi[a] = b.hi[a].max(s[a].1 + 1);
             }
-            let (x, y, z) = (span[0], span[1], span[2]);
+        }
+        let slot_box = slot_box.unwrap_or_default();
+        let mut marked = vec![0u64; slot_box.n_cells().div_ceil(64)];
+        for s in cut_cells.iter().filter_map(|&c| span(c)) {
+            let (x, y, z) = (s[0], s[1], s[2]);
             for k in z.0..=z.1 {
                 for j in y.0..=y.1 {
                     mark_run(
                         &mut marked,
-                        window.index([x.0, j, k]),
-                        window.index([x.1, j, k]),
+                        slot_box.index([x.0, j, k]),
+                        slot_box.index([x.1, j, k]),
                     );
                 }
             }
         }
-        let size = [window.size(0), window.size(1)];
-        let mut slot_of = vec![0u32; window.n_cells()];
+        let size = [slot_box.size(0), slot_box.size(1)];
+        let mut slot_of = vec![0u32; slot_box.n_cells()];
         let mut cells = Vec::new();
         for w in marked_cells(&marked) {
             let (i, j, k) = (
@@ -305,17 +337,22 @@ impl NearOfView {
                 (w / size[0]) % size[1],
                 w / (size[0] * size[1]),
             );
-            let lo = window.lo;
+            let lo = slot_box.lo;
             cells.push(grid.index(lo[0] + i, lo[1] + j, lo[2] + k) as u32);
             slot_of[w] = cells.len() as u32;
         }
-        NearOfView { cells, slot_of }
+        NearOfView {
+            cells,
+            slot_of,
+            slot_box,
+        }
     }
 
     fn as_ref(&self) -> NearView<'_> {
         NearView {
             cells: &self.cells,
             slot_of: &self.slot_of,
+            slot_box: self.slot_box,
         }
     }
 }
@@ -369,7 +406,7 @@ impl HookGeometry<'_> {
     /// were 4 % of the fluid node's time, on one thread while the other waited.
     fn near_walls(&self, near: &NearView, current: &SolidFrame) -> (NearWalls, Vec<bool>) {
         let grid = self.grid;
-        let slot = |c: u32| near.slot_of[self.window.index(grid.ijk(c as usize))] as usize - 1;
+        let slot = |c: u32| near.slot_of(grid.ijk(c as usize)) as usize - 1;
         let subfaces = self.subfaces;
         // Where each cell's run of sub-faces starts, and the end of the last.
         let mut bounds: Vec<usize> = (0..subfaces.len())
@@ -484,16 +521,9 @@ impl HookGeometry<'_> {
         walls: &mut Vec<WallRun>,
     ) {
         let grid = self.grid;
-        let window = self.window;
         let n = grid.cells[axis] as isize;
         let ng = ng as isize;
-        let slot_of = |q: [usize; 3]| -> usize {
-            if window.contains(q) {
-                near.slot_of[window.index(q)] as usize
-            } else {
-                0
-            }
-        };
+        let slot_of = |q: [usize; 3]| -> usize { near.slot_of(q) as usize };
         // A crack cell is vacuum fluid to the sweeps, not a covered cell.
         let covered = |q: [usize; 3]| {
             self.lambda(q) >= 1.0 - COVERED_TOLERANCE

@@ -126,6 +126,7 @@ impl Embedded {
                 let near = NearView {
                     cells: &near.cells,
                     slot_of: near.slot_of.whole_grid(),
+                    slot_box: CellBox::whole(grid),
                 };
                 view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
