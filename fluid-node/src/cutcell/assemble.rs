@@ -230,6 +230,18 @@ impl Sink for Dense<'_> {
 impl Sink for HeldFractions {
     fn cells(&mut self, run: Run) {
         self.cell_runs.push(run);
+        self.write_cells(run);
+    }
+
+    fn faces(&mut self, axis: usize, run: Run) {
+        self.face_runs[axis].push(run);
+        self.write_faces(axis, run);
+    }
+}
+
+impl HeldFractions {
+    /// Writes the values of `run` of Λ that lie in the held box.
+    fn write_cells(&mut self, run: Run) {
         let held = self.held;
         write_row(
             run,
@@ -240,8 +252,8 @@ impl Sink for HeldFractions {
         );
     }
 
-    fn faces(&mut self, axis: usize, run: Run) {
-        self.face_runs[axis].push(run);
+    /// Writes the values of `run` of λ along `axis` that lie in the held box's faces.
+    fn write_faces(&mut self, axis: usize, run: Run) {
         let held = self.held;
         let mut shape = self.cells;
         shape[axis] += 1;
@@ -269,13 +281,18 @@ fn write_row(
     out: &mut [f64],
 ) {
     let first = run.at as usize;
-    let (i, j, k) = (
-        first % shape[0],
-        (first / shape[0]) % shape[1],
-        first / (shape[0] * shape[1]),
-    );
+    // The plane first: on a decomposed grid most runs lie in the other blocks' planes (one
+    // division for those, not three).
+    let plane = shape[0] * shape[1];
+    let k = first / plane;
+    if !(lo[2]..hi[2]).contains(&k) {
+        return;
+    }
+    let in_plane = first - k * plane;
+    let j = in_plane / shape[0];
+    let i = in_plane - j * shape[0];
     let (from, to) = (i.max(lo[0]), (i + run.len as usize).min(hi[0]));
-    if (lo[1]..hi[1]).contains(&j) && (lo[2]..hi[2]).contains(&k) && from < to {
+    if (lo[1]..hi[1]).contains(&j) && from < to {
         let p = at([from, j, k]);
         out[p..p + (to - from)].fill(f64::from_bits(run.bits));
     }
@@ -472,13 +489,17 @@ impl HeldFractions {
             && self.solid_fraction.len() == self.held.n_cells()
             && (0..3).all(|a| self.face_fraction[a].len() == self.held.n_faces(grid, a));
         if fits {
-            for run in std::mem::take(&mut self.cell_runs) {
-                self.cells(Run { bits: 0, ..run });
+            let cell_runs = std::mem::take(&mut self.cell_runs);
+            for &run in &cell_runs {
+                self.write_cells(Run { bits: 0, ..run });
             }
+            self.cell_runs = cell_runs;
             for axis in 0..3 {
-                for run in std::mem::take(&mut self.face_runs[axis]) {
-                    self.faces(axis, Run { bits: 0, ..run });
+                let face_runs = std::mem::take(&mut self.face_runs[axis]);
+                for &run in &face_runs {
+                    self.write_faces(axis, Run { bits: 0, ..run });
                 }
+                self.face_runs[axis] = face_runs;
             }
         } else {
             self.cells = grid.cells;
