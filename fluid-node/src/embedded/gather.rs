@@ -15,6 +15,7 @@ use crate::fv::FluidSolver;
 use crate::fv::comm::HaloExchange;
 use crate::fv::euler::NQ;
 use crate::fv::slab::rank_of;
+use crate::fv::state::copy_cell;
 
 /// Eq. (12–13) in one near cell: its content, and what its weighted fluxes through open domain
 /// sides add to the outflow, in the order one thread adds them (a low side's amount negated:
@@ -65,7 +66,10 @@ impl Embedded {
         }
         let all = solver.gather_owned(&cells, mine);
         for (i, &k) in updated.iter().enumerate() {
-            self.scratch.content[k][..nvar].copy_from_slice(&all[i * nvar..(i + 1) * nvar]);
+            copy_cell(
+                &mut self.scratch.content[k][..nvar],
+                &all[i * nvar..(i + 1) * nvar],
+            );
         }
     }
 }

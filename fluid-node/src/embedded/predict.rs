@@ -9,6 +9,7 @@ use super::state::NearCells;
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::CellBox;
 use crate::fv::euler::NQ;
+use crate::fv::state::extend_cell;
 use crate::fv::sweep::{frame, from_local, to_local};
 use crate::fv::{FluidSolver, GhostFill, StepReport, mirror};
 
@@ -271,7 +272,7 @@ impl Embedded {
             let stale = geom.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 && ghosted.binary_search(&c).is_err();
             if !stale {
-                mine.extend_from_slice(&u[k * nvar..(k + 1) * nvar]);
+                extend_cell(&mut mine, &u[k * nvar..(k + 1) * nvar]);
             } else if let Ok(i) = later.binary_search_by_key(&c, |g| g.0) {
                 mine.extend_from_slice(&later[i].1[..nvar]);
             } else {

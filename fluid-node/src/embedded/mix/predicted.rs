@@ -3,6 +3,7 @@
 
 use super::Predicted;
 use crate::fv::FluidSolver;
+use crate::fv::state::extend_cell;
 
 impl Predicted {
     /// Reads the cells of `cells` not read yet (collective: every rank computes every group in
@@ -25,11 +26,11 @@ impl Predicted {
         while i < self.reads.len() || j < missing.len() {
             if j == missing.len() || (i < self.reads.len() && self.reads[i] < missing[j]) {
                 reads.push(self.reads[i]);
-                values.extend_from_slice(&self.values[i * nvar..(i + 1) * nvar]);
+                extend_cell(&mut values, &self.values[i * nvar..(i + 1) * nvar]);
                 i += 1;
             } else {
                 reads.push(missing[j]);
-                values.extend_from_slice(&read[j * nvar..(j + 1) * nvar]);
+                extend_cell(&mut values, &read[j * nvar..(j + 1) * nvar]);
                 j += 1;
             }
         }

@@ -8,6 +8,7 @@ use crate::fv::euler::NQ;
 use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::cell_primitive;
 use crate::fv::solver::hooks::{GhostFill, SplitHooks};
+use crate::fv::state::{copy_cell, extend_cell};
 use crate::fv::sweep::{Pencils, frame, from_local, mirror, to_local};
 
 impl FluidSolver {
@@ -270,7 +271,7 @@ impl FluidSolver {
         let mut mine = Vec::new();
         for &c in cells {
             if let Some(c) = self.slab.to_local(c as usize) {
-                mine.extend_from_slice(&self.state.u[c * nvar..(c + 1) * nvar]);
+                extend_cell(&mut mine, &self.state.u[c * nvar..(c + 1) * nvar]);
             }
         }
         mine
@@ -300,8 +301,10 @@ impl FluidSolver {
             assert_eq!(parts[rank].len(), slots.len() * nvar, "rank {rank}'s cells");
             for (i, &k) in slots.iter().enumerate() {
                 let k = k as usize;
-                all[k * nvar..(k + 1) * nvar]
-                    .copy_from_slice(&parts[rank][i * nvar..(i + 1) * nvar]);
+                copy_cell(
+                    &mut all[k * nvar..(k + 1) * nvar],
+                    &parts[rank][i * nvar..(i + 1) * nvar],
+                );
             }
         }
         all
