@@ -261,6 +261,7 @@ fn main() {
         part("near cells' slots", &|t| t.memory.slot_of);
         part("near surface", &|t| t.memory.near_surface);
         part("sparse geometry", &|t| t.memory.sparse_geometry);
+        part("block geometry kept", &|t| t.memory.block_buffers);
         part("embedded, total", &|t| t.memory.total());
     }
 }

@@ -242,14 +242,20 @@ impl BlockGeometry {
         let [f0, f1, f2] = &mut self.face_fraction;
         self.written
             .zero_written([&mut self.solid_fraction, f0, f1, f2]);
-        self.solid_fraction.resize(window.n_cells(), 0.0);
+        // (Grown exactly: a `resize` alone may double the capacity when the loads' window,
+        // one cell wider, follows the correct's.)
+        let zeroed = |v: &mut Vec<f64>, n: usize| {
+            v.reserve_exact(n.saturating_sub(v.len()));
+            v.resize(n, 0.0);
+        };
+        zeroed(&mut self.solid_fraction, window.n_cells());
         for (a, faces) in self.face_fraction.iter_mut().enumerate() {
             let n = if a == 0 || faces_across {
                 window.n_faces(grid, a)
             } else {
                 0
             };
-            faces.resize(n, 0.0);
+            zeroed(faces, n);
         }
         self.written.reset(grid, window);
         self.block = block;
@@ -281,6 +287,11 @@ impl BlockGeometry {
             (values.chunks(w.row[a].max(1)).enumerate())
                 .all(|(r, row)| w.may_hold(a, r) || row.iter().all(|v| v.to_bits() == 0))
         })
+    }
+
+    /// Heap bytes of Λ and λ (capacities).
+    pub fn dense_bytes(&self) -> usize {
+        vec_bytes(&self.solid_fraction) + self.face_fraction.iter().map(vec_bytes).sum::<usize>()
     }
 
     /// Heap bytes (capacities).

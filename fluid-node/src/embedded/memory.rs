@@ -19,12 +19,20 @@ pub struct EmbeddedMemory {
     /// Surface-sized geometry: sub-faces, cut-cell lists, clipping scratch and swept entries of
     /// both geometries, the accepted frame and the last loads.
     pub sparse_geometry: usize,
+    /// On a decomposed grid, the last block geometry this rank computed (the loads' trial
+    /// surface on the block and one cell around it, or the correct's block of `F^{n+1}`), kept
+    /// for the buffers of the next: Λ and λ over the block, and its sub-faces. Zero on one rank.
+    pub block_buffers: usize,
 }
 
 impl EmbeddedMemory {
     /// All parts together.
     pub fn total(&self) -> usize {
-        self.dense_geometry + self.slot_of + self.near_surface + self.sparse_geometry
+        self.dense_geometry
+            + self.slot_of
+            + self.near_surface
+            + self.sparse_geometry
+            + self.block_buffers
     }
 }
 
@@ -56,6 +64,7 @@ impl Embedded {
             slot_of: near.slot_of.memory_bytes(),
             near_surface,
             sparse_geometry,
+            block_buffers: scratch.block.memory_bytes(),
         }
     }
 
