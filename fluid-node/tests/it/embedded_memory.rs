@@ -50,9 +50,10 @@ fn memory_accessors_count_the_dense_buffers_2d() {
         "accepted and trial geometries"
     );
     assert!(m.near_surface > 0 && m.sparse_geometry > 0, "{m:?}");
+    assert_eq!(m.block_buffers, 0, "no block geometry on one rank");
     assert_eq!(
         m.total(),
-        m.dense_geometry + m.slot_of + m.near_surface + m.sparse_geometry
+        m.dense_geometry + m.slot_of + m.near_surface + m.sparse_geometry + m.block_buffers
     );
     assert_eq!(
         solver.memory_bytes(),
