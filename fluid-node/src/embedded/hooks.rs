@@ -303,8 +303,9 @@ impl NearOfView {
             });
             span.iter().all(|&(lo, hi)| lo <= hi).then_some(span)
         };
+        let spans: Vec<[(usize, usize); 3]> = cut_cells.iter().filter_map(|&c| span(c)).collect();
         let mut slot_box: Option<CellBox> = None;
-        for s in cut_cells.iter().filter_map(|&c| span(c)) {
+        for s in &spans {
             let b = slot_box.get_or_insert(CellBox {
                 lo: s.map(|a| a.0),
                 hi: s.map(|a| a.1 + 1),
@@ -316,7 +317,7 @@ impl NearOfView {
         }
         let slot_box = slot_box.unwrap_or_default();
         let mut marked = vec![0u64; slot_box.n_cells().div_ceil(64)];
-        for s in cut_cells.iter().filter_map(|&c| span(c)) {
+        for s in &spans {
             let (x, y, z) = (s[0], s[1], s[2]);
             for k in z.0..=z.1 {
                 for j in y.0..=y.1 {
