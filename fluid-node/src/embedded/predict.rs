@@ -72,7 +72,8 @@ impl Embedded {
             };
             mine.push(p);
         }
-        self.near.wall_pressure = solver.gather_owned_by(&self.near.cells, mine, 1);
+        let near = &mut self.near;
+        solver.gather_owned_into(&near.cells, mine, 1, &mut near.wall_pressure);
     }
 
     /// Whether the uncovered near cell in slot `k` held vacuum at `t^n`: a wet face there takes
@@ -279,7 +280,8 @@ impl Embedded {
                 mine.extend(std::iter::repeat_n(0.0, nvar));
             }
         }
-        self.near.saved = solver.gather_owned(&self.near.cells, mine);
+        let near = &mut self.near;
+        solver.gather_owned_into(&near.cells, mine, nvar, &mut near.saved);
     }
 
     /// The ghost state of each covered near cell of this rank that the first sweep leaves

@@ -40,6 +40,22 @@ pub trait Comm: Send {
     fn exchange_halo(&self, halo: HaloExchange<'_>);
     /// Every rank's `mine`, in rank order, on every rank.
     fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>>;
+    /// Every rank's `mine`, in rank order, one after the other in `out` (its length set to their
+    /// total, what it held overwritten, its allocation kept from call to call); returns how
+    /// many values each rank gave. The same values as [`Comm::all_gather`] of their bytes.
+    fn all_gather_f64_into(&self, mine: &[f64], out: &mut Vec<f64>) -> Vec<usize> {
+        let parts = self.all_gather(&f64_bytes(mine));
+        out.clear();
+        let mut counts = Vec::with_capacity(parts.len());
+        for part in &parts {
+            counts.push(part.len() / 8);
+            out.extend(
+                part.chunks_exact(8)
+                    .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))),
+            );
+        }
+        counts
+    }
     /// Every rank's `mine`, in rank order, on `root` (`None` elsewhere).
     fn gather(&self, root: usize, mine: &[u8]) -> Option<Vec<Vec<u8>>>;
     /// `root`'s `buf` on every rank (other ranks' `buf` is replaced).

@@ -181,6 +181,22 @@ impl Comm for MpiComm {
         split(&buf, &counts)
     }
 
+    fn all_gather_f64_into(&self, mine: &[f64], out: &mut Vec<f64>) -> Vec<usize> {
+        let counts = self.counts(mine.len());
+        let total = counts.iter().map(|&n| n as usize).sum();
+        // NOTE: received in place, into the caller's kept allocation: only what it grows by is
+        // zeroed first. A fresh buffer, split into one vector per rank and then copied again
+        // into the caller's, was four copies and three fresh allocations of every near cell's
+        // state a step (`FluidSolver::gather_owned_into`).
+        out.resize(total, 0.0);
+        if total > 0 {
+            let displs = displacements(&counts);
+            let mut partition = PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+            self.world.all_gather_varcount_into(mine, &mut partition);
+        }
+        counts.iter().map(|&n| n as usize).collect()
+    }
+
     fn gather(&self, root: usize, mine: &[u8]) -> Option<Vec<Vec<u8>>> {
         // Every rank learns the counts (one small all-gather), so that only the root allocates.
         let counts = self.counts(mine.len());

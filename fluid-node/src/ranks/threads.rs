@@ -148,3 +148,46 @@ impl Comm for ThreadComm {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ThreadRanks;
+    use crate::fv::comm::Comm;
+
+    /// Ranks giving 2, 0 and 3 values: every rank receives them one after the other with their
+    /// counts, as bits, into a buffer that held more values than that and into one that held
+    /// fewer.
+    #[test]
+    fn the_f64_all_gather_puts_every_ranks_values_in_rank_order() {
+        let values = |r: usize| -> Vec<f64> {
+            match r {
+                0 => vec![1.5, -0.0],
+                1 => vec![],
+                _ => vec![f64::MIN_POSITIVE, 3e300, -7.25],
+            }
+        };
+        let expected: Vec<u64> = (0..3).flat_map(values).map(f64::to_bits).collect();
+        let handles: Vec<_> = (ThreadRanks::new(3).into_iter())
+            .map(|comm| {
+                std::thread::spawn(move || {
+                    let mine = values(comm.rank());
+                    let mut longer = vec![9.0; 11];
+                    let counts = comm.all_gather_f64_into(&mine, &mut longer);
+                    let mut shorter = vec![9.0; 1];
+                    comm.all_gather_f64_into(&mine, &mut shorter);
+                    (counts, longer, shorter)
+                })
+            })
+            .collect();
+        for h in handles {
+            let (counts, longer, shorter) = h.join().expect("rank");
+            assert_eq!(counts, [2, 0, 3]);
+            for out in [longer, shorter] {
+                assert_eq!(
+                    out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    expected
+                );
+            }
+        }
+    }
+}

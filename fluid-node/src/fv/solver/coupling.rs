@@ -3,7 +3,7 @@
 //! pressures recorded, and the kept fluxes of the faces on the blocks' low sides exchanged
 //! (issue 16; issue 40 item 1: no longer every kept flux and pressure to every rank).
 
-use crate::fv::comm::{HaloExchange, bytes_f64, f64_bytes};
+use crate::fv::comm::HaloExchange;
 use crate::fv::euler::NQ;
 use crate::fv::solver::FluidSolver;
 use crate::fv::solver::cell::cell_primitive;
@@ -286,28 +286,57 @@ impl FluidSolver {
 
     /// [`FluidSolver::gather_owned`] with `nvar` values per cell.
     pub fn gather_owned_by(&self, cells: &[u32], mine: Vec<f64>, nvar: usize) -> Vec<f64> {
+        let mut all = Vec::new();
+        self.gather_owned_into(cells, mine, nvar, &mut all);
+        all
+    }
+
+    /// [`FluidSolver::gather_owned_by`] into `all` (what it held overwritten, its allocation
+    /// kept from call to call).
+    ///
+    /// NOTE: on slabs each rank owns one range of the global numbering, in rank order, so the
+    /// ranks' values one after the other are the cells' in order: they are received straight
+    /// into `all` ([`Comm::all_gather_f64_into`]). On other blocks they are received into a
+    /// buffer and put at each rank's slots.
+    pub fn gather_owned_into(
+        &self,
+        cells: &[u32],
+        mine: Vec<f64>,
+        nvar: usize,
+        all: &mut Vec<f64>,
+    ) {
         debug_assert!(cells.is_sorted());
         if self.slab.ranks == 1 || cells.is_empty() {
-            return mine;
+            *all = mine;
+            return;
         }
-        let parts: Vec<Vec<f64>> = self
-            .comm
-            .all_gather(&f64_bytes(&mine))
-            .iter()
-            .map(|b| bytes_f64(b))
-            .collect();
-        let mut all = vec![0.0; cells.len() * nvar];
-        for (rank, slots) in self.slots_by_rank(cells).iter().enumerate() {
-            assert_eq!(parts[rank].len(), slots.len() * nvar, "rank {rank}'s cells");
-            for (i, &k) in slots.iter().enumerate() {
+        if self.slab.slabs() {
+            let counts = self.comm.all_gather_f64_into(&mine, all);
+            assert_eq!(
+                all.len(),
+                cells.len() * nvar,
+                "the ranks' cells: {counts:?}"
+            );
+            return;
+        }
+        let slots = self.slots_by_rank(cells);
+        let by_rank = |counts: &[usize]| {
+            for (rank, slots) in slots.iter().enumerate() {
+                assert_eq!(counts[rank], slots.len() * nvar, "rank {rank}'s cells");
+            }
+        };
+        let mut flat = Vec::new();
+        let counts = self.comm.all_gather_f64_into(&mine, &mut flat);
+        by_rank(&counts);
+        all.resize(cells.len() * nvar, 0.0);
+        let mut at = 0;
+        for slots in &slots {
+            for &k in slots {
                 let k = k as usize;
-                copy_cell(
-                    &mut all[k * nvar..(k + 1) * nvar],
-                    &parts[rank][i * nvar..(i + 1) * nvar],
-                );
+                copy_cell(&mut all[k * nvar..(k + 1) * nvar], &flat[at..at + nvar]);
+                at += nvar;
             }
         }
-        all
     }
 
     /// The cells (whole grid) any rank asks for in `wanted` (ascending), ascending, with their
