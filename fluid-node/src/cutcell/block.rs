@@ -158,16 +158,18 @@ pub struct BlockGeometry {
     pub(crate) written: WrittenRows,
 }
 
-/// The rows along x of a window's arrays that a computation wrote (with any value), per array:
-/// Λ, then λ along x, y and z; every other row of an array is zero (its arrays start from zero).
-/// What lets a block's share ([`crate::cutcell::block_part`]) read only those rows instead of
-/// every value of the window. Empty: not known (every row may hold values).
+/// Where along each row along x of a window's arrays a computation wrote (with any value), per
+/// array: Λ, then λ along x, y and z; every value of an array outside those spans is zero (its
+/// arrays start from zero). What lets a block's share ([`crate::cutcell::block_part`]) read, and
+/// the next computation into the same buffers zero, only those spans instead of every value of
+/// the window. Empty: not known (every value may be written).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WrittenRows {
     /// Values per row of each array.
     row: [usize; 4],
-    /// Per array and row (`j + ny k` over the array's rows), whether it was written.
-    marked: [Vec<bool>; 4],
+    /// Per array and row (`j + ny k` over the array's rows), the span `lo..hi` of the row's
+    /// values written (none: `lo >= hi`).
+    spans: [Vec<(u32, u32)>; 4],
 }
 
 impl WrittenRows {
@@ -184,36 +186,55 @@ impl WrittenRows {
         (row, std::array::from_fn(|a| values(a) / row[a].max(1)))
     }
 
-    /// Marks the row of value `at` of `array` (0: Λ, 1 + axis: λ along `axis`).
+    /// Marks value `at` of `array` (0: Λ, 1 + axis: λ along `axis`) written.
     #[inline]
     pub(crate) fn mark(&mut self, array: usize, at: usize) {
-        if let Some(m) = self.marked[array].get_mut(at / self.row[array]) {
-            *m = true;
+        self.mark_range(array, at, 1);
+    }
+
+    /// Marks values `at..at + len` of `array` written (within one row).
+    #[inline]
+    pub(crate) fn mark_range(&mut self, array: usize, at: usize, len: usize) {
+        let row = self.row[array].max(1);
+        let x = (at % row) as u32;
+        if let Some(s) = self.spans[array].get_mut(at / row) {
+            let end = x + len as u32;
+            debug_assert!(end as usize <= row, "a mark within one row");
+            *s = if s.0 >= s.1 {
+                (x, end)
+            } else {
+                (s.0.min(x), s.1.max(end))
+            };
         }
     }
 
-    /// Whether row `row` of `array` may hold values (always, when nothing was recorded).
+    /// The span of row `row` of `array` that may hold values: the one written, or the whole
+    /// row when nothing was recorded.
     #[inline]
-    pub(crate) fn may_hold(&self, array: usize, row: usize) -> bool {
-        self.marked[array].get(row).is_none_or(|&m| m)
+    pub(crate) fn span(&self, array: usize, row: usize) -> std::ops::Range<usize> {
+        match self.spans[array].get(row) {
+            Some(&(lo, hi)) if lo < hi => lo as usize..hi as usize,
+            Some(_) => 0..0,
+            None => 0..self.row[array],
+        }
     }
 
-    /// Zeroes every row of `arrays` (Λ, then λ along x, y and z, as recorded) that may hold
-    /// values, so that all of their values are zero: the rows recorded as written, or the whole
+    /// Zeroes every value of `arrays` (Λ, then λ along x, y and z, as recorded) that may be
+    /// non-zero, so that all of them are zero: the spans recorded as written, or the whole
     /// array where nothing was recorded.
     fn zero_written(&self, arrays: [&mut Vec<f64>; 4]) {
         for (a, values) in arrays.into_iter().enumerate() {
             let row = self.row[a].max(1);
-            if self.marked[a].is_empty() {
+            if self.spans[a].is_empty() {
                 values.fill(0.0);
                 continue;
             }
-            for (r, &m) in self.marked[a].iter().enumerate() {
-                if !m {
+            for (r, &(lo, hi)) in self.spans[a].iter().enumerate() {
+                if lo >= hi {
                     continue;
                 }
-                let end = ((r + 1) * row).min(values.len());
-                values[(r * row).min(end)..end].fill(0.0);
+                let end = (r * row + hi as usize).min(values.len());
+                values[(r * row + lo as usize).min(end)..end].fill(0.0);
             }
         }
     }
@@ -222,9 +243,9 @@ impl WrittenRows {
     fn reset(&mut self, grid: &Grid, window: CellBox) {
         let fresh = WrittenRows::new_counts(grid, window);
         self.row = fresh.0;
-        for (m, n) in self.marked.iter_mut().zip(fresh.1) {
+        for (m, n) in self.spans.iter_mut().zip(fresh.1) {
             m.clear();
-            m.resize(n, false);
+            m.resize(n, (0, 0));
         }
     }
 }
@@ -278,14 +299,16 @@ impl BlockGeometry {
         self.face_fraction[axis][self.window.face_index(axis, ijk)]
     }
 
-    /// Whether every value of each row of Λ and λ that the computation did not record as
-    /// written is zero, what [`crate::cutcell::block_part`] relies on to skip those rows.
-    pub fn unwritten_rows_are_zero(&self) -> bool {
+    /// Whether every value of Λ and λ outside the spans the computation recorded as written is
+    /// zero, what [`crate::cutcell::block_part`] relies on to read only those spans.
+    pub fn unwritten_values_are_zero(&self) -> bool {
         let w = &self.written;
         let arrays = std::iter::once(&self.solid_fraction).chain(&self.face_fraction);
         arrays.enumerate().all(|(a, values)| {
-            (values.chunks(w.row[a].max(1)).enumerate())
-                .all(|(r, row)| w.may_hold(a, r) || row.iter().all(|v| v.to_bits() == 0))
+            (values.chunks(w.row[a].max(1)).enumerate()).all(|(r, row)| {
+                let span = w.span(a, r);
+                (row.iter().enumerate()).all(|(x, v)| span.contains(&x) || v.to_bits() == 0)
+            })
         })
     }
 
@@ -730,7 +753,7 @@ pub(crate) fn fill_covered_faces(
                 if window.has_face(axis, at) {
                     let f = window.face_index(axis, at);
                     out.face_fraction[axis][f..f + len].fill(value);
-                    out.written.mark(1 + axis, f);
+                    out.written.mark_range(1 + axis, f, len);
                 }
             }
         }
@@ -782,7 +805,7 @@ impl SweepSink for BlockSink<'_> {
         if self.window.has_face(0, ijk) {
             let face = self.window.face_index(0, ijk);
             self.faces[face..face + (to_faces - from) as usize].fill(lambda);
-            self.written.mark(1, face);
+            self.written.mark_range(1, face, (to_faces - from) as usize);
         }
         if from >= to {
             return;
@@ -790,7 +813,7 @@ impl SweepSink for BlockSink<'_> {
         if self.window.contains(ijk) {
             let cell = self.window.index(ijk);
             self.cells[cell..cell + (to - from) as usize].fill(lambda);
-            self.written.mark(0, cell);
+            self.written.mark_range(0, cell, (to - from) as usize);
         }
         self.covered_runs.push((row, from, to, lambda));
     }

@@ -48,7 +48,7 @@ pub(crate) fn assert_block_is_whole(
     let w = b.window;
     let dim = grid.dim;
     assert!(
-        b.unwritten_rows_are_zero(),
+        b.unwritten_values_are_zero(),
         "{what}: a row written unrecorded"
     );
     for c in 0..grid.n_cells() {
@@ -160,12 +160,12 @@ fn check(name: &str, grid: &Grid, solid: &SolidFrame, dt: f64, decomps: &[[usize
                     let buffers = std::mem::take(&mut reused);
                     reused = compute_block_reusing(grid, &surface, block, halo, buffers);
                     let same = geometry_bits(&reused) == geometry_bits(&b);
-                    assert!(same && reused.unwritten_rows_are_zero(), "{what}: reused");
+                    assert!(same && reused.unwritten_values_are_zero(), "{what}: reused");
                     let buffers = std::mem::take(&mut reused);
                     reused = compute_block_cells_reusing(grid, &surface, block, halo, buffers);
                     let same = geometry_bits(&reused) == geometry_bits(&cells);
                     assert!(
-                        same && reused.unwritten_rows_are_zero(),
+                        same && reused.unwritten_values_are_zero(),
                         "{what}: cells reused"
                     );
                     assert_eq!(cells.whole_rows, 0, "{what}: compute_block_cells");
