@@ -262,6 +262,7 @@ fn main() {
         part("near surface", &|t| t.memory.near_surface);
         part("sparse geometry", &|t| t.memory.sparse_geometry);
         part("block geometry kept", &|t| t.memory.block_buffers);
+        part("blocks' shares kept", &|t| t.memory.shares);
         part("embedded, total", &|t| t.memory.total());
     }
 }

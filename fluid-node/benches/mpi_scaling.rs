@@ -64,10 +64,7 @@ fn main() {
     let mine = fluid_node::fv::comm::f64_bytes(&[halo, bytes]);
     let all = calls.all_gather(&mine);
     if rank == 0 {
-        let per_rank: Vec<Vec<f64>> = all
-            .iter()
-            .map(|b| fluid_node::fv::comm::bytes_f64(b))
-            .collect();
+        let per_rank: Vec<Vec<f64>> = all.iter().map(fluid_node::fv::comm::bytes_f64).collect();
         let halo_s: Vec<f64> = per_rank.iter().map(|v| v[0]).collect();
         let halo_bytes: Vec<f64> = per_rank.iter().map(|v| v[1]).collect();
         let cells = f64::from(n).powi(3);

@@ -103,6 +103,14 @@ fn block_part_with(grid: &Grid, b: &BlockGeometry, with_vertices: bool) -> Vec<u
     let own: Vec<&SubFace> = (b.subfaces.iter())
         .filter(|s| block.contains(grid.ijk(s.cell as usize)))
         .collect();
+    let carried = |s: &SubFace| {
+        if with_vertices {
+            s.n_vertices as usize
+        } else {
+            0
+        }
+    };
+    out.reserve_exact(8 + own.iter().map(|s| 72 + 24 * carried(s)).sum::<usize>());
     let flag = if with_vertices { 0 } else { NO_VERTICES };
     out.extend((own.len() as u64 | flag).to_le_bytes());
     for s in own {
@@ -111,12 +119,7 @@ fn block_part_with(grid: &Grid, b: &BlockGeometry, with_vertices: bool) -> Vec<u
         }
         let reals = std::iter::once(s.area).chain(s.normal).chain(s.centroid);
         let first = s.first_vertex as usize;
-        let n = if with_vertices {
-            s.n_vertices as usize
-        } else {
-            0
-        };
-        let vertices = &b.subface_vertices[first..first + n];
+        let vertices = &b.subface_vertices[first..first + carried(s)];
         for x in reals.chain(vertices.iter().flatten().copied()) {
             out.extend(x.to_bits().to_le_bytes());
         }
@@ -167,6 +170,7 @@ struct Run {
 }
 
 fn put_runs(out: &mut Vec<u8>, runs: &[Run]) {
+    out.reserve(8 + 16 * runs.len());
     out.extend((runs.len() as u64).to_le_bytes());
     for r in runs {
         out.extend(r.at.to_le_bytes());
@@ -311,7 +315,7 @@ impl CutGeometry {
     /// another layout, and the diagnostics left empty.
     ///
     /// Pure. Cost: the runs and sub-faces of the parts, and the sort of the sub-faces by cell.
-    pub fn assemble(&mut self, grid: &Grid, parts: &[Vec<u8>]) {
+    pub fn assemble(&mut self, grid: &Grid, parts: &[impl AsRef<[u8]>]) {
         self.reset(grid);
         let mut vertices = std::mem::take(&mut self.subface_vertices);
         let subfaces = read_parts(parts, &mut vertices, &mut Dense(self), None);
@@ -322,7 +326,12 @@ impl CutGeometry {
     /// [`CutGeometry::assemble`] without the whole grid's dense arrays (left empty): the
     /// sub-faces and cut cells of the whole grid here, Λ and λ in `held` (dense in its box, as
     /// runs elsewhere), with the same bits.
-    pub fn assemble_held(&mut self, grid: &Grid, parts: &[Vec<u8>], held: &mut HeldFractions) {
+    pub fn assemble_held(
+        &mut self,
+        grid: &Grid,
+        parts: &[impl AsRef<[u8]>],
+        held: &mut HeldFractions,
+    ) {
         self.assemble_held_from(grid, parts, held, None);
     }
 
@@ -333,7 +342,7 @@ impl CutGeometry {
     pub fn assemble_held_own(
         &mut self,
         grid: &Grid,
-        parts: &[Vec<u8>],
+        parts: &[impl AsRef<[u8]>],
         held: &mut HeldFractions,
         own: (usize, &[[f64; 3]]),
     ) {
@@ -344,7 +353,7 @@ impl CutGeometry {
     fn assemble_held_from(
         &mut self,
         grid: &Grid,
-        parts: &[Vec<u8>],
+        parts: &[impl AsRef<[u8]>],
         held: &mut HeldFractions,
         own: Option<(usize, &[[f64; 3]])>,
     ) {
@@ -380,13 +389,14 @@ impl CutGeometry {
 /// Reads every part: its runs into `sink`, its sub-faces' vertices onto `vertices` (part
 /// `own.0`'s from `own.1` where it carries none); returns the sub-faces, in the parts' order.
 fn read_parts(
-    parts: &[Vec<u8>],
+    parts: &[impl AsRef<[u8]>],
     vertices: &mut Vec<[f64; 3]>,
     sink: &mut impl Sink,
     own: Option<(usize, &[[f64; 3]])>,
 ) -> Vec<SubFace> {
     let mut subfaces: Vec<SubFace> = Vec::new();
     for (p, part) in parts.iter().enumerate() {
+        let part = part.as_ref();
         let mut own_vertices = own.filter(|o| o.0 == p).map(|o| o.1.iter());
         let mut r = Reader { bytes: part, at: 0 };
         for run in r.runs() {

@@ -92,9 +92,9 @@ pub(super) fn gather_swept(solver: &FluidSolver, swept: &mut SubfaceSwept) {
     let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8"));
     swept.entries.clear();
     (swept.n_skipped_subfaces, swept.n_pieces) = (0, 0);
-    for part in solver.comm().all_gather(&bytes) {
-        swept.n_skipped_subfaces += u64_at(&part, 0) as usize;
-        swept.n_pieces += u64_at(&part, 8) as usize;
+    for part in &solver.comm().all_gather(&bytes) {
+        swept.n_skipped_subfaces += u64_at(part, 0) as usize;
+        swept.n_pieces += u64_at(part, 8) as usize;
         swept
             .entries
             .extend(part[16..].chunks_exact(16).map(|t| SubfaceSweptEntry {
@@ -203,9 +203,9 @@ pub(super) fn gather_sources(
     }
     let u64_at = |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().expect("8"));
     let (mut all, mut uncovered, mut dropped) = (Vec::new(), 0, dropped);
-    for part in solver.comm().all_gather(&bytes) {
-        uncovered += u64_at(&part, 0) as usize;
-        dropped = dropped.max(f64::from_bits(u64_at(&part, 8)));
+    for part in &solver.comm().all_gather(&bytes) {
+        uncovered += u64_at(part, 0) as usize;
+        dropped = dropped.max(f64::from_bits(u64_at(part, 8)));
         all.extend(
             (part[16..].chunks_exact(4))
                 .map(|p| u32::from_le_bytes(p.try_into().expect("4")) as usize),
@@ -240,7 +240,7 @@ pub(super) fn gather_roots(
         f64::from_bits(u64::from_le_bytes(b[at..at + 8].try_into().expect("8")))
     };
     let mut all = Vec::new();
-    for part in solver.comm().all_gather(&bytes) {
+    for part in &solver.comm().all_gather(&bytes) {
         for p in part.chunks_exact(size) {
             let (root, k) = (u32_at(p, 0) as usize, u32_at(p, 4) as usize);
             for q in 0..nvar {
@@ -269,7 +269,8 @@ pub(super) fn assemble_by_block(
 ) {
     let grid = &solver.slab().global;
     let (part, vertices) = chained_block_part(solver, surface, block, reuse);
-    let parts = solver.comm().all_gather(&part);
+    solver.comm().all_gather_into(&part, &mut geom.shares);
+    let parts: Vec<&[u8]> = geom.shares.iter().collect();
     let fractions = (geom.fractions).get_or_insert_with(|| HeldFractions::new(grid, held));
     let own = (solver.comm().rank(), &vertices[..]);
     solver.install(|| geom.cut.assemble_held_own(grid, &parts, fractions, own));

@@ -13,6 +13,7 @@
 use std::ops::Deref;
 
 use crate::cutcell::{CutGeometry, HeldFractions};
+use crate::fv::comm::Gathered;
 
 /// The geometry of `F^n` or `F^{n+1}` as this rank holds it (module docs). Its [`CutGeometry`]
 /// (by `Deref`) holds the whole grid's sub-faces and cut cells; read Λ and λ through
@@ -22,6 +23,8 @@ pub(super) struct Held {
     pub(super) cut: CutGeometry,
     /// Λ and λ on a decomposed grid (`None` on one rank: `cut`'s dense arrays).
     pub(super) fractions: Option<HeldFractions>,
+    /// The blocks' shares it was put together from (a decomposed grid), kept for their buffer.
+    pub(super) shares: Gathered,
 }
 
 impl Deref for Held {

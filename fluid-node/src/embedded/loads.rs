@@ -216,8 +216,8 @@ fn gather_terms(
     sum.clear();
     let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
     let mut first = none;
-    for part in solver.comm().all_gather(&bytes) {
-        let failed = (u32_at(&part, 0), u32_at(&part, 4), u32_at(&part, 8));
+    for part in &solver.comm().all_gather(&bytes) {
+        let failed = (u32_at(part, 0), u32_at(part, 4), u32_at(part, 8));
         first = first.min(failed);
         sum.extend(part[12..].chunks_exact(12).map(|t| {
             let bits = u64::from_le_bytes(t[4..12].try_into().expect("8 bytes"));

@@ -23,6 +23,9 @@ pub struct EmbeddedMemory {
     /// surface on the block and one cell around it, or the correct's block of `F^{n+1}`), kept
     /// for the buffers of the next: Λ and λ over the block, and its sub-faces. Zero on one rank.
     pub block_buffers: usize,
+    /// On a decomposed grid, the blocks' shares each geometry was put together from (their
+    /// all-gather's buffer, kept for the next). Zero on one rank.
+    pub shares: usize,
 }
 
 impl EmbeddedMemory {
@@ -33,6 +36,7 @@ impl EmbeddedMemory {
             + self.near_surface
             + self.sparse_geometry
             + self.block_buffers
+            + self.shares
     }
 }
 
@@ -65,6 +69,7 @@ impl Embedded {
             near_surface,
             sparse_geometry,
             block_buffers: scratch.block.memory_bytes(),
+            shares: state.geom.shares.capacity_bytes() + scratch.trial.shares.capacity_bytes(),
         }
     }
 

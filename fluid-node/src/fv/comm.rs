@@ -38,8 +38,15 @@ pub trait Comm: Send {
     /// neighbours do not wait for each other). Two ranks with periodic sides are each other's
     /// neighbour on both sides; the tags [`TAG_UP`] and [`TAG_DOWN`] keep the two apart.
     fn exchange_halo(&self, halo: HaloExchange<'_>);
+    /// Every rank's `mine`, in rank order, on every rank, into `out` (what it held replaced,
+    /// its allocation kept from call to call).
+    fn all_gather_into(&self, mine: &[u8], out: &mut Gathered);
     /// Every rank's `mine`, in rank order, on every rank.
-    fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>>;
+    fn all_gather(&self, mine: &[u8]) -> Gathered {
+        let mut out = Gathered::default();
+        self.all_gather_into(mine, &mut out);
+        out
+    }
     /// Every rank's `mine`, in rank order, one after the other in `out` (its length set to their
     /// total, what it held overwritten, its allocation kept from call to call); returns how
     /// many values each rank gave. The same values as [`Comm::all_gather`] of their bytes.
@@ -47,7 +54,7 @@ pub trait Comm: Send {
         let parts = self.all_gather(&f64_bytes(mine));
         out.clear();
         let mut counts = Vec::with_capacity(parts.len());
-        for part in &parts {
+        for part in parts.iter() {
             counts.push(part.len() / 8);
             out.extend(
                 part.chunks_exact(8)
@@ -85,8 +92,8 @@ impl Comm for Serial {
         );
     }
 
-    fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
-        vec![mine.to_vec()]
+    fn all_gather_into(&self, mine: &[u8], out: &mut Gathered) {
+        out.set(&[mine]);
     }
 
     fn gather(&self, root: usize, mine: &[u8]) -> Option<Vec<Vec<u8>>> {
@@ -98,6 +105,106 @@ impl Comm for Serial {
         assert_eq!(root, 0, "a single rank is rank 0");
     }
 }
+
+/// The bytes of every rank, in rank order, of one all-gather: one buffer, each rank's part a
+/// slice of it ([`Gathered::iter`], `gathered[rank]`).
+#[derive(Clone, Debug, Default)]
+pub struct Gathered {
+    bytes: Vec<u8>,
+    /// Where each rank's part ends in `bytes`.
+    ends: Vec<usize>,
+}
+
+impl Gathered {
+    /// The parts, in rank order.
+    pub fn iter(&self) -> Parts<'_> {
+        Parts {
+            gathered: self,
+            next: 0,
+        }
+    }
+
+    /// Number of parts (ranks).
+    pub fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    /// Whether there is no part.
+    pub fn is_empty(&self) -> bool {
+        self.ends.is_empty()
+    }
+
+    /// Heap bytes held (capacities).
+    pub fn capacity_bytes(&self) -> usize {
+        self.bytes.capacity() + self.ends.capacity() * std::mem::size_of::<usize>()
+    }
+
+    /// `parts` one after the other (buffers reused).
+    pub fn set(&mut self, parts: &[&[u8]]) {
+        self.bytes.clear();
+        self.ends.clear();
+        for p in parts {
+            self.bytes.extend_from_slice(p);
+            self.ends.push(self.bytes.len());
+        }
+    }
+
+    /// The buffer, `total` bytes long (what it held is to be overwritten: only what it grows
+    /// by is zeroed), for parts of `counts` bytes, and records where each ends.
+    pub fn receive(&mut self, counts: impl IntoIterator<Item = usize>) -> &mut [u8] {
+        self.ends.clear();
+        let mut end = 0;
+        for n in counts {
+            end += n;
+            self.ends.push(end);
+        }
+        self.bytes.resize(end, 0);
+        &mut self.bytes[..]
+    }
+}
+
+impl std::ops::Index<usize> for Gathered {
+    type Output = [u8];
+
+    fn index(&self, rank: usize) -> &[u8] {
+        let start = if rank == 0 { 0 } else { self.ends[rank - 1] };
+        &self.bytes[start..self.ends[rank]]
+    }
+}
+
+impl<'a> IntoIterator for &'a Gathered {
+    type Item = &'a [u8];
+    type IntoIter = Parts<'a>;
+
+    fn into_iter(self) -> Parts<'a> {
+        self.iter()
+    }
+}
+
+/// The parts of a [`Gathered`], in rank order.
+pub struct Parts<'a> {
+    gathered: &'a Gathered,
+    next: usize,
+}
+
+impl<'a> Iterator for Parts<'a> {
+    type Item = &'a [u8];
+
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let g = self.gathered;
+        (self.next < g.len()).then(|| {
+            self.next += 1;
+            &g[self.next - 1]
+        })
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = self.gathered.len() - self.next;
+        (n, Some(n))
+    }
+}
+
+impl ExactSizeIterator for Parts<'_> {}
 
 /// `f64` values as little-endian bytes (bit for bit).
 pub fn f64_bytes(values: &[f64]) -> Vec<u8> {

@@ -11,7 +11,7 @@ use mpi::environment::Universe;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
-use crate::fv::comm::{Comm, HaloExchange, TAG_DOWN, TAG_UP};
+use crate::fv::comm::{Comm, Gathered, HaloExchange, TAG_DOWN, TAG_UP};
 
 /// Wall time spent in halo exchanges and the bytes they moved, shared with whoever measures
 /// (the scaling benchmark reads the halo share of a step from it).
@@ -165,20 +165,20 @@ impl Comm for MpiComm {
         self.clock.bytes.fetch_add(sent, Ordering::Relaxed);
     }
 
-    fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
+    fn all_gather_into(&self, mine: &[u8], out: &mut Gathered) {
         let counts = self.counts(mine.len());
+        // NOTE: received in place into one buffer, kept by the caller where it gathers often:
+        // a fresh zeroed buffer, then split into one fresh vector per rank, copied every
+        // gathered byte twice (the largest a step: the shares of the blocks' geometry).
+        let buf = out.receive(counts.iter().map(|&n| n as usize));
         // NOTE: Open MPI refuses an all-gather of nothing at all (MPI_ERR_ARG for the empty
         // receive buffer); every rank knows the counts, so every rank skips it.
-        if counts.iter().all(|&n| n == 0) {
-            return vec![Vec::new(); counts.len()];
+        if buf.is_empty() {
+            return;
         }
         let displs = displacements(&counts);
-        let mut buf = vec![0u8; counts.iter().map(|&n| n as usize).sum()];
-        {
-            let mut partition = PartitionMut::new(&mut buf[..], &counts[..], &displs[..]);
-            self.world.all_gather_varcount_into(mine, &mut partition);
-        }
-        split(&buf, &counts)
+        let mut partition = PartitionMut::new(buf, &counts[..], &displs[..]);
+        self.world.all_gather_varcount_into(mine, &mut partition);
     }
 
     fn all_gather_f64_into(&self, mine: &[f64], out: &mut Vec<f64>) -> Vec<usize> {

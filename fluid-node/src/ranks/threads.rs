@@ -6,7 +6,7 @@ use std::sync::Mutex;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::time::Duration;
 
-use crate::fv::comm::{Comm, HaloExchange, TAG_DOWN, TAG_UP};
+use crate::fv::comm::{Comm, Gathered, HaloExchange, TAG_DOWN, TAG_UP};
 
 /// How long a rank waits for a peer's message before it panics naming both (a bug: every
 /// collective is called by every rank).
@@ -111,13 +111,14 @@ impl Comm for ThreadComm {
         }
     }
 
-    fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>> {
+    fn all_gather_into(&self, mine: &[u8], out: &mut Gathered) {
         let all = self.gather(0, mine);
         let mut flat = all
             .map(|parts| crate::fv::comm::pack(&parts))
             .unwrap_or_default();
         self.broadcast(0, &mut flat);
-        crate::fv::comm::unpack(&flat)
+        let parts = crate::fv::comm::unpack(&flat);
+        out.set(&parts.iter().map(Vec::as_slice).collect::<Vec<_>>());
     }
 
     fn gather(&self, root: usize, mine: &[u8]) -> Option<Vec<Vec<u8>>> {

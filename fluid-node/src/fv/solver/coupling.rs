@@ -200,7 +200,7 @@ impl FluidSolver {
         }
         const ENTRY: usize = 12 + 8 * NQ;
         let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
-        for part in self.comm.all_gather(&bytes) {
+        for part in &self.comm.all_gather(&bytes) {
             for e in part.chunks_exact(ENTRY) {
                 let (axis, p, m) = (u32_at(e, 0) as usize, u32_at(e, 4) as usize, u32_at(e, 8));
                 let tap = &mut hooks.taps[axis];

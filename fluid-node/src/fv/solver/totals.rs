@@ -158,7 +158,7 @@ impl FluidSolver {
             self.comm
                 .all_gather(&f64_bytes(&flat))
                 .iter()
-                .flat_map(|b| bytes_f64(b))
+                .flat_map(bytes_f64)
                 .collect()
         };
         let mut total = [CompensatedSum::default(); NQ];
