@@ -299,7 +299,7 @@ impl Embedded {
         let this = &*self;
         let (grid, block, cells) = (&self.config.grid, self.config.block, &self.near.cells);
         let mut updates: Updates = solver.install(|| {
-            (0..n_near)
+            (this.near.own.range())
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
                 .filter(|&k| this.own_slot(k))

@@ -39,8 +39,7 @@ pub(super) type Updates = Vec<(usize, Result<CellUpdate, Box<EmbeddedError>>)>;
 impl Embedded {
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
     pub(super) fn own_slot(&self, k: usize) -> bool {
-        let grid = &self.config.grid;
-        (self.config.block).is_none_or(|b| b.contains(grid.ijk(self.near.cells[k] as usize)))
+        self.near.own.contains(k)
     }
 
     /// The contents of every rank's updated near cells on every rank (collective): each rank

@@ -12,7 +12,7 @@ use super::cells::{
 };
 use super::held::Held;
 use super::slots::SlotOf;
-use super::state::{Config, NearCells};
+use super::state::{Config, NearCells, OwnSlots};
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, MIX_BELOW, WIDEN_RINGS};
 use crate::cutcell::face_index;
 use crate::fv::FluidSolver;
@@ -113,6 +113,7 @@ struct Mixing<'a> {
     grid: &'a Grid,
     slot_of: &'a SlotOf,
     near: &'a [u32],
+    own: &'a OwnSlots,
     /// The geometry of `F^{n+1}` (Λ, λ) and of `F^n` (Λ).
     new: &'a Held,
     old: &'a Held,
@@ -294,17 +295,15 @@ impl Embedded {
     ) -> Vec<usize> {
         let uncovered_before = report.uncovered_cells;
         let nvar = self.config.grid.dim + 2;
-        let (grid, block) = (&self.config.grid, self.config.block);
+        let block = self.config.block;
         let (new, old) = (&self.scratch.trial, &self.state.geom);
         let alpha = |c: usize| fluid_part(new.lambda(c));
         let saved = &self.near.saved;
         let content = &mut self.scratch.content;
         let mut sources: Vec<usize> = Vec::new();
-        for (k, &c) in self.near.cells.iter().enumerate() {
-            let c = c as usize;
-            if self.scratch.kind[k] != CellKind::Updated
-                || block.is_some_and(|b| !b.contains(grid.ijk(c)))
-            {
+        for k in self.near.own.range() {
+            let c = self.near.cells[k] as usize;
+            if self.scratch.kind[k] != CellKind::Updated || !self.near.own.contains(k) {
                 continue;
             }
             let a = alpha(c);
@@ -396,6 +395,7 @@ impl<'a> Mixing<'a> {
             grid,
             slot_of: &near.slot_of,
             near: &near.cells,
+            own: &near.own,
             new: trial,
             old,
             content,
@@ -414,7 +414,7 @@ impl Mixing<'_> {
 
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
     fn own(&self, k: usize) -> bool {
-        self.own_cell(self.near[k] as usize)
+        self.own.contains(k)
     }
 
     /// Whether cell `c` (whole grid) is a cell of this rank (every cell on one rank).

@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use super::cells::{BoxMarks, bounding_box, cells_around, full_state, pencil_axes};
 use super::hooks::{HookGeometry, NearView, wall_hooks_held, wall_hooks_in};
-use super::state::NearCells;
+use super::state::{NearCells, OwnSlots};
 use super::{COVERED_TOLERANCE, Embedded, NEAR_RADIUS};
 use crate::cutcell::CellBox;
 use crate::fv::euler::NQ;
@@ -51,7 +51,7 @@ impl Embedded {
         let (dim, nvar) = (self.config.grid.dim, self.config.grid.dim + 2);
         let (gamma, (vr, _)) = (self.config.gamma, self.config.vacuum);
         let geom = &self.state.geom;
-        let own: Vec<usize> = (0..self.near.cells.len())
+        let own: Vec<usize> = (self.near.own.range())
             .filter(|&k| self.own_slot(k))
             .collect();
         let own_cells: Vec<u32> = own.iter().map(|&k| self.near.cells[k]).collect();
@@ -156,6 +156,7 @@ impl Embedded {
         for (slot, &c) in near.cells.iter().enumerate() {
             near.slot_of.set(c as usize, slot as u32 + 1);
         }
+        near.own = OwnSlots::of(grid, &near.cells, self.config.block);
     }
 
     /// Taps: the faces of the near cells, per axis, grouped by pencil. The axes are their own
@@ -245,8 +246,9 @@ impl Embedded {
         solver.apply_ghosts(first, &self.near.hooks.ghosts[first]);
         solver.apply_vacuum(&self.near.hooks.vacuum);
         let nvar = dim + 2;
-        let own: Vec<u32> = (self.near.cells.iter().copied())
-            .filter(|&c| solver.slab().to_local(c as usize).is_some())
+        let own: Vec<u32> = (self.near.own.range())
+            .filter(|&k| self.own_slot(k))
+            .map(|k| self.near.cells[k])
             .collect();
         let u = solver.own_cells_at(&own);
         let mut ghosted: Vec<u32> = (self.near.hooks.ghosts[first].iter())

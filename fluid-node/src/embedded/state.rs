@@ -93,6 +93,62 @@ pub(super) struct NearCells {
     /// `p̄` of each near cell: the one pressure of the wet faces it holds or faces, on every
     /// axis (see [`Embedded::predict`]).
     pub(super) wall_pressure: Vec<f64>,
+    /// The slots of this rank's own cells.
+    pub(super) own: OwnSlots,
+}
+
+/// The near slots of this rank's own cells, found once per list of near cells.
+///
+/// NOTE: the loops over the near cells that take this rank's own found each owner from the
+/// cell's index (two divisions and a box test a slot, every slot, in some five loops a step);
+/// the near cells being ascending, a block whose cells are one range of the grid's numbering
+/// (a slab: every axis but the last whole) owns one range of slots, which those loops now run
+/// over alone.
+#[derive(Clone, Debug, Default)]
+pub(super) struct OwnSlots {
+    /// The slots from the first own one to the last (all of them on one rank).
+    range: std::ops::Range<usize>,
+    /// Whether each slot of `range` is own; empty when all of them are (a slab).
+    marked: Vec<bool>,
+}
+
+impl OwnSlots {
+    /// The own slots of `cells` (whole grid, ascending) on `block` (`None`: one rank).
+    pub(super) fn of(grid: &Grid, cells: &[u32], block: Option<CellBox>) -> OwnSlots {
+        let Some(b) = block else {
+            return OwnSlots {
+                range: 0..cells.len(),
+                marked: Vec::new(),
+            };
+        };
+        let last = grid.dim - 1;
+        let (first, end) = (grid.index(b.lo[0], b.lo[1], b.lo[2]), {
+            let hi = std::array::from_fn::<usize, 3, _>(|a| b.hi[a].max(1) - 1);
+            grid.index(hi[0], hi[1], hi[2]) + 1
+        });
+        let range = cells.partition_point(|&c| (c as usize) < first)
+            ..cells.partition_point(|&c| (c as usize) < end);
+        let slab = (0..last).all(|a| b.lo[a] == 0 && b.hi[a] == grid.cells[a]);
+        let marked = if slab {
+            Vec::new()
+        } else {
+            (cells[range.clone()].iter())
+                .map(|&c| b.contains(grid.ijk(c as usize)))
+                .collect()
+        };
+        OwnSlots { range, marked }
+    }
+
+    /// The slots from the first own one to the last: every own slot lies in it.
+    pub(super) fn range(&self) -> std::ops::Range<usize> {
+        self.range.clone()
+    }
+
+    /// Whether slot `k` is a cell of this rank.
+    #[inline]
+    pub(super) fn contains(&self, k: usize) -> bool {
+        self.range.contains(&k) && (self.marked.is_empty() || self.marked[k - self.range.start])
+    }
 }
 
 /// Buffers of the stages, kept between steps only to reuse their allocations.
@@ -229,6 +285,7 @@ impl Embedded {
                 saved: Vec::new(),
                 hooks: SplitHooks::default(),
                 wall_pressure: Vec::new(),
+                own: OwnSlots::default(),
             },
             config,
             state: State {
@@ -400,5 +457,55 @@ impl Embedded {
     /// Fluid totals weighted by the fluid fraction of the accepted surface (collective).
     pub fn totals(&self, solver: &FluidSolver) -> crate::fv::Totals {
         solver.totals_with_own_solid(&self.solid_fraction())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::OwnSlots;
+    use crate::cutcell::CellBox;
+    use crate::grid::Grid;
+
+    /// On slabs and on blocks cut along every axis, in 2-D and 3-D, with near cells an
+    /// ascending subset of the grid's (about a third, none, all): a slot is own exactly when its
+    /// cell lies in the rank's block, and every own slot lies in the range.
+    #[test]
+    fn the_own_slots_are_those_whose_cells_lie_in_the_block() {
+        let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let cases: [(&[usize], &[[usize; 3]]); 2] = [
+            (&[12, 10], &[[1, 2, 1], [1, 3, 1], [2, 2, 1], [3, 1, 1]]),
+            (
+                &[6, 5, 8],
+                &[[1, 1, 2], [1, 1, 4], [1, 2, 2], [1, 2, 1], [2, 2, 2]],
+            ),
+        ];
+        for (cells, process_grids) in cases {
+            let grid =
+                Grid::new(&vec![0.0; cells.len()], &vec![1.0; cells.len()], cells).expect("grid");
+            for keep in [0, 3, 1] {
+                let near: Vec<u32> = (0..grid.n_cells() as u32)
+                    .filter(|_| keep == 1 || (keep == 3 && next() % 3 == 0))
+                    .collect();
+                let all = OwnSlots::of(&grid, &near, None);
+                assert!((0..near.len()).all(|k| all.contains(k)) && all.range() == (0..near.len()));
+                for &dims in process_grids {
+                    for r in 0..dims.iter().product() {
+                        let block = CellBox::of_rank(&grid, dims, r);
+                        let own = OwnSlots::of(&grid, &near, Some(block));
+                        for (k, &c) in near.iter().enumerate() {
+                            let inside = block.contains(grid.ijk(c as usize));
+                            assert_eq!(own.contains(k), inside, "{dims:?} rank {r} cell {c}");
+                            assert!(!inside || own.range().contains(&k), "{dims:?} rank {r}");
+                        }
+                    }
+                }
+            }
+        }
     }
 }

@@ -132,10 +132,16 @@ impl Mixing<'_> {
     /// The updated cells that are not mixed: `U = content / α` (a covered one keeps its ghost
     /// state); this rank's only if `own_only` (the others' contents are not at hand then).
     pub(super) fn unmixed(&self, kind: &[CellKind], out: &mut Writes, own_only: bool) {
-        for (k, &c) in self.near.iter().enumerate() {
+        let slots = if own_only {
+            self.own.range()
+        } else {
+            0..self.near.len()
+        };
+        for k in slots {
+            let c = self.near[k];
             if kind[k] != CellKind::Updated
-                || self.sources.binary_search(&k).is_ok()
                 || (own_only && !self.own(k))
+                || self.sources.binary_search(&k).is_ok()
             {
                 continue;
             }
@@ -223,10 +229,11 @@ impl Mixing<'_> {
     ) -> Failure {
         let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
         roots.dedup();
-        for (k, &c) in self.near.iter().enumerate() {
+        for k in self.own.range() {
+            let c = self.near[k];
             if kind[k] == CellKind::Predicted
-                || self.new.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 || !self.own(k)
+                || self.new.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 || self.sources.binary_search(&k).is_ok()
                 || roots.binary_search(&(c as usize)).is_ok()
             {
