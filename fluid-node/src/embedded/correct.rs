@@ -76,9 +76,9 @@ impl Embedded {
         step: u64,
         explicit: bool,
     ) -> Result<CorrectReport, EmbeddedError> {
-        self.sweep(solver, &accepted, step)?;
+        let folded = self.sweep(solver, &accepted, step)?;
         let opening = self.opening_cells(&accepted);
-        let (swept_mass, source_scale) = self.displaced();
+        let swept_mass = self.displaced(solver, step, folded)?;
         let mut report = CorrectReport::default();
         let mut leaving = self.fluid_fluxes(solver, dt, step, explicit, &opening, &mut report)?;
         // What the solid flux and the swept amounts add to each near cell's content (slots
@@ -86,7 +86,7 @@ impl Embedded {
         let mut gained = std::mem::take(&mut self.scratch.odd_content);
         gained.clear();
         let exchanged = self.solid_flux(solver, dt, &accepted, explicit, &mut gained);
-        let swept = self.swept_amounts(step, &source_scale, &mut gained);
+        let swept = self.swept_amounts(step, &mut gained);
         if swept.is_ok() {
             let content = self.scratch.content.as_flattened_mut();
             solver.install(|| add_on_pool(&mut gained, content));
@@ -113,7 +113,9 @@ impl Embedded {
     }
 
     /// The geometry of `F^{n+1}` and the prisms its sub-faces sweep back to `F^n`, checked
-    /// against identity (3). On the fluid's pool.
+    /// against identity (3). On the fluid's pool. On a decomposed grid each rank checks its own
+    /// near cells, and returns the first of them that fails, for [`Embedded::displaced`] to
+    /// agree on with the other ranks.
     ///
     /// Collective on a decomposed grid: each rank computes the geometry of its own block only
     /// (`chained_block_part`: no halo, the running sums of the cut axes passed along the pencils
@@ -130,7 +132,7 @@ impl Embedded {
         solver: &FluidSolver,
         accepted: &SolidFrame,
         step: u64,
-    ) -> Result<(), EmbeddedError> {
+    ) -> Result<Option<usize>, EmbeddedError> {
         let grid = &self.config.grid;
         let dim = grid.dim;
         let current = &self.state.current;
@@ -201,9 +203,12 @@ impl Embedded {
     /// count twice, see [`fluid_part`]); where it is negative beyond round-off the accepted
     /// surface folds over itself (an element turned inside out) and the cell would hold more
     /// fluid than its volume: that stops the run too.
-    fn check_swept(&mut self, step: u64) -> Result<(), EmbeddedError> {
+    ///
+    /// On a decomposed grid each rank checks its own near cells (every rank holds every
+    /// prism's pieces, so the sums of any cell) and returns the first that fails, which
+    /// [`Embedded::displaced`] agrees on; on one rank the error.
+    fn check_swept(&mut self, step: u64) -> Result<Option<usize>, EmbeddedError> {
         let grid = &self.config.grid;
-        let volume = grid.cell_volume();
         self.scratch.content.clear();
         (self.scratch.content).resize(self.near.cells.len(), [0.0; NQ]);
         let pieces = (self.scratch.swept.entries.iter())
@@ -215,45 +220,93 @@ impl Embedded {
                 Some(k) => self.scratch.content[k][0] += v,
             }
         }
-        let sums = &self.scratch.content;
         let (new, old) = (&self.scratch.trial, &self.state.geom);
-        for (k, &c) in self.near.cells.iter().enumerate() {
-            let c = c as usize;
+        let volume = grid.cell_volume();
+        let own = &self.near.own;
+        let folded = (own.range()).filter(|&k| own.contains(k)).find(|&k| {
+            let c = self.near.cells[k] as usize;
             let (new_c, old_c) = (new.lambda(c), old.lambda(c));
-            let defect = (new_c - old_c) * volume - sums[k][0];
-            if defect.abs() > SWEPT_TOLERANCE * volume || new_c < -SWEPT_TOLERANCE {
-                let ijk = grid.ijk(c);
-                return Err(EmbeddedError::Folded {
-                    step,
-                    cell: ijk,
-                    center: grid.cell_center(ijk),
-                    from: old_c,
-                    to: new_c,
-                    swept: sums[k][0] / volume,
-                    defect: defect / volume,
-                });
-            }
+            let defect = (new_c - old_c) * volume - self.scratch.content[k][0];
+            defect.abs() > SWEPT_TOLERANCE * volume || new_c < -SWEPT_TOLERANCE
+        });
+        match folded {
+            Some(k) if self.config.block.is_none() => Err(self.folded(step, k)),
+            _ => Ok(folded),
         }
-        Ok(())
+    }
+
+    /// The error of near slot `k` failing identity (3) (after [`Embedded::check_swept`]).
+    fn folded(&self, step: u64, k: usize) -> EmbeddedError {
+        let grid = &self.config.grid;
+        let volume = grid.cell_volume();
+        let c = self.near.cells[k] as usize;
+        let (from, to) = (self.state.geom.lambda(c), self.scratch.trial.lambda(c));
+        let swept = self.scratch.content[k][0];
+        let ijk = grid.ijk(c);
+        EmbeddedError::Folded {
+            step,
+            cell: ijk,
+            center: grid.cell_center(ijk),
+            from,
+            to,
+            swept: swept / volume,
+            defect: ((to - from) * volume - swept) / volume,
+        }
     }
 
     /// The fluid at t^n in the volume the solid newly covers (every change of Λ is in a near
-    /// cell: the prisms were checked to stay there), and each near cell's [`overlap_scale`].
-    fn displaced(&self) -> (f64, Vec<f64>) {
+    /// cell: the prisms were checked to stay there), summed in the near cells' order.
+    ///
+    /// Collective on a decomposed grid: each rank takes its own near cells, and one all-gather
+    /// gives every rank every rank's terms, which it adds in the near cells' order as one rank
+    /// does, and every rank's first cell failing identity (3) (`folded`, from
+    /// [`Embedded::check_swept`]): the first of them stops the run on every rank, as on one.
+    fn displaced(
+        &self,
+        solver: &FluidSolver,
+        step: u64,
+        folded: Option<usize>,
+    ) -> Result<f64, EmbeddedError> {
         let volume = self.config.grid.cell_volume();
         let nvar = self.config.grid.dim + 2;
         let (new, old) = (&self.scratch.trial, &self.state.geom);
-        let mut swept_mass = 0.0;
-        let mut source_scale = Vec::with_capacity(self.near.cells.len());
-        for (k, &c) in self.near.cells.iter().enumerate() {
-            let (l0, l1) = (old.lambda(c as usize), new.lambda(c as usize));
+        let own = &self.near.own;
+        let terms = (own.range()).filter(|&k| own.contains(k)).filter_map(|k| {
+            let c = self.near.cells[k] as usize;
+            let (l0, l1) = (old.lambda(c), new.lambda(c));
             let gained = l1.min(1.0) - l0.min(1.0);
-            if gained > 0.0 {
-                swept_mass += gained * volume * self.near.saved[k * nvar];
-            }
-            source_scale.push(overlap_scale(l0, l1));
+            (gained > 0.0).then(|| (k as u32, gained * volume * self.near.saved[k * nvar]))
+        });
+        if self.config.block.is_none() {
+            return Ok(terms.fold(0.0, |sum, (_, t)| sum + t));
         }
-        (swept_mass, source_scale)
+        let mut bytes = (folded.map_or(u32::MAX, |k| k as u32))
+            .to_le_bytes()
+            .to_vec();
+        for (k, t) in terms {
+            bytes.extend(k.to_le_bytes());
+            bytes.extend(t.to_bits().to_le_bytes());
+        }
+        let parts = solver.comm().all_gather(&bytes);
+        let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+        if let Some(k) = (parts.iter())
+            .map(|p| u32_at(p, 0))
+            .min()
+            .filter(|&k| k != u32::MAX)
+        {
+            return Err(self.folded(step, k as usize));
+        }
+        let mut all: Vec<(u32, f64)> = (parts.iter())
+            .flat_map(|p| {
+                p[4..].chunks_exact(12).map(|t| {
+                    let bits = u64::from_le_bytes(t[4..12].try_into().expect("8 bytes"));
+                    (u32_at(t, 0), f64::from_bits(bits))
+                })
+            })
+            .collect();
+        // (In the near cells' order: on slabs the ranks' terms come in it already.)
+        all.sort_unstable_by_key(|t| t.0);
+        Ok(all.iter().fold(0.0, |sum, (_, t)| sum + t))
     }
 
     /// Content `(1 − Λ^{n+1}) U^n` plus the fluid fluxes of every near cell the solid touches
@@ -653,23 +706,29 @@ impl Embedded {
     /// unit volume (the flush cube at 100^3, in a crack of such cells with no fluid to mix it
     /// into). Each piece of such a prism goes to the cell it lies in instead: the same sums, so
     /// just as conservative, and that cell keeps `(1 − Λ^n) U^n` of its own.
-    fn swept_amounts(
-        &self,
-        step: u64,
-        source_scale: &[f64],
-        gained: &mut OddSum,
-    ) -> Result<(), EmbeddedError> {
+    fn swept_amounts(&self, step: u64, gained: &mut OddSum) -> Result<(), EmbeddedError> {
         let grid = &self.config.grid;
         let nvar = grid.dim + 2;
         let volume = grid.cell_volume();
         let (near, kind) = (&self.near, &self.scratch.kind);
-        let old = &self.state.geom;
+        let (new, old) = (&self.scratch.trial, &self.state.geom);
+        // Each near cell's [`overlap_scale`], where a term of this rank's cells needs it.
+        let source_scale = |k: usize| {
+            let c = near.cells[k] as usize;
+            overlap_scale(old.lambda(c), new.lambda(c))
+        };
         let mut entry = 0;
         let entries = &self.scratch.swept.entries;
         for (s_idx, s) in self.scratch.trial.subfaces.iter().enumerate() {
             let k = near.slot_of[s.cell as usize] as usize - 1;
-            let inside = source_scale[k] == 0.0
-                || (self.config.fracture && old.lambda(s.cell as usize) >= 1.0 - COVERED_TOLERANCE);
+            let inside = std::cell::OnceCell::new();
+            let inside = || {
+                *inside.get_or_init(|| {
+                    source_scale(k) == 0.0
+                        || (self.config.fracture
+                            && old.lambda(s.cell as usize) >= 1.0 - COVERED_TOLERANCE)
+                })
+            };
             while entry < entries.len() && (entries[entry].subface as usize) < s_idx {
                 entry += 1;
             }
@@ -678,29 +737,33 @@ impl Embedded {
                 let Some(kp) = near.slot(e.cell as usize) else {
                     return Err(self.outside_near(Some(step), Reach::SweptPrism, e.cell));
                 };
-                let src = kp * nvar;
-                let f = e.volume / volume * source_scale[kp];
+                entry += 1;
+                // NOTE: a term goes to the piece's cell or the sub-face's; where this rank owns
+                // neither, it takes no term, and reads none of the two cells' Λ for it.
+                if !self.own_slot(kp) && !self.own_slot(k) {
+                    continue;
+                }
                 // (Only into a cell the correct writes: a piece in a cell it leaves predicted,
                 // fluid at both times, stays with the sub-face's cell.)
-                let to = if inside && kind[kp] == CellKind::Updated {
+                let to = if kind[kp] == CellKind::Updated && inside() {
                     kp
                 } else {
                     k
                 };
                 if self.own_slot(to) {
+                    let f = e.volume / volume * source_scale(kp);
                     for q in 0..nvar {
-                        gained.push(to * NQ + q, f * near.saved[src + q]);
+                        gained.push(to * NQ + q, f * near.saved[kp * nvar + q]);
                     }
                 }
-                entry += 1;
             }
         }
         // The pieces of prisms of sub-faces beyond the domain stay in the cell they lie in, as
         // the pieces above of a sub-face in a cell without fluid do.
         for &(cell, v) in &self.scratch.beyond {
             let kp = near.slot_of[cell as usize] as usize - 1;
-            let f = v / volume * source_scale[kp];
             if self.own_slot(kp) {
+                let f = v / volume * source_scale(kp);
                 for q in 0..nvar {
                     gained.push(kp * NQ + q, f * near.saved[kp * nvar + q]);
                 }

@@ -86,6 +86,41 @@ fn a_fold_inside_the_domain_is_not_blamed_on_the_boundary() {
     );
 }
 
+/// The fold above on 2 and 4 ranks (slabs along each axis, 2 × 2 blocks): every rank refuses it with
+/// one rank's error, though each checks its own cells only (`Embedded::check_swept`) and the
+/// folded cells lie on some of them.
+#[test]
+fn a_fold_is_refused_on_every_rank_with_one_ranks_error() {
+    let one = solver(&at_rest_in_unit_box("boundary", &[20, 20]));
+    let (grid, params, state) = (one.grid(), one.params(), one.state());
+    let inside = [[0.4, 0.48], [0.6, 0.48], [0.6, 0.52], [0.4, 0.52]];
+    let folded = [[0.4, 0.48], [0.6, 0.48], [0.6, 0.44], [0.4, 0.52]];
+    let refusal = |dims: [usize; 3]| -> Vec<String> {
+        let ranks = dims.iter().product();
+        crate::fv_ranks::on_thread_ranks(ranks, |comm| {
+            let (g, p, st) = (grid.clone(), params.clone(), state.clone());
+            let dims = (ranks > 1).then_some(dims);
+            let mut solver =
+                FluidSolver::decomposed_as(g, p, st, 1, Box::new(comm), dims).expect("solver");
+            let surface = polygon_2d(&inside, [0.0, 0.0], 0.0);
+            let mut embedded = Embedded::new(&solver, surface).expect("embedded");
+            let dt = 0.5 * solver.max_dt();
+            assert!(embedded.predict(&mut solver, dt).ok());
+            let next = polygon_2d(&folded, [0.0, 0.0], 0.0);
+            (embedded.correct(&mut solver, dt, next, 0, false))
+                .expect_err("a loop crossing itself is refused")
+                .to_string()
+        })
+    };
+    let expected = refusal([1, 1, 1]).remove(0);
+    assert!(expected.contains("folds over itself"), "{expected}");
+    for dims in [[1, 2, 1], [2, 1, 1], [2, 2, 1]] {
+        for (r, err) in refusal(dims).iter().enumerate() {
+            assert_eq!(err, &expected, "{dims:?} rank {r}");
+        }
+    }
+}
+
 /// The same in 3-D: a cube of side 0.25 centred on (0.5, 0.5, 0.02), 0.105 m of it below the wall
 /// z = 0, turning about y.
 #[test]
