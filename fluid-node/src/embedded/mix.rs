@@ -120,7 +120,7 @@ struct Mixing<'a> {
     content: &'a [[f64; NQ]],
     /// Near slots to mix, ascending.
     sources: &'a [usize],
-    /// Wall normal `Σ A ν` of each near cell's sub-faces at t^{n+1}.
+    /// Wall normal `Σ A ν` of each source's sub-faces at t^{n+1}, in the sources' order.
     normal: &'a [[f64; 3]],
     /// Offsets of the neighbours within one cell.
     span: Vec<[isize; 3]>,
@@ -177,7 +177,7 @@ impl Embedded {
     ) -> Result<Mixed, EmbeddedError> {
         let near_scale = max_abs(&self.near.saved);
         let sources = self.mix_sources(solver, report, near_scale);
-        let normal = self.wall_normals();
+        let normal = self.wall_normals(&sources);
         let nvar = self.config.grid.dim + 2;
         // The mixing's view of the state, taken anew after each step that changes the contents
         // (the fields, not `self`, are borrowed, so that `scratch.kind` stays writable).
@@ -360,16 +360,22 @@ impl Embedded {
         sources
     }
 
-    /// Wall normal of each near cell (`Σ A ν` of its sub-faces at t^{n+1}), apart from their
-    /// order.
-    fn wall_normals(&mut self) -> Vec<[f64; 3]> {
-        let mut normal = vec![[0.0f64; 3]; self.near.cells.len()];
+    /// Wall normal of each source (`Σ A ν` of its cell's sub-faces at t^{n+1}), apart from
+    /// their order, in the order of `sources` (ascending slots).
+    ///
+    /// NOTE: the walks read the normals of sources only (`Mixing::direction`); every near
+    /// cell's, on every rank, was a sort of every sub-face's three terms and an array of every
+    /// near cell a step. Each source's sum takes the same terms, so the same bits.
+    fn wall_normals(&mut self, sources: &[usize]) -> Vec<[f64; 3]> {
+        let mut normal = vec![[0.0f64; 3]; sources.len()];
         let mut terms = std::mem::take(&mut self.scratch.odd);
         terms.clear();
         for s in &self.scratch.trial.subfaces {
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
-            for a in 0..3 {
-                terms.push(3 * k + a, s.area * s.normal[a]);
+            if let Ok(i) = sources.binary_search(&k) {
+                for a in 0..3 {
+                    terms.push(3 * i + a, s.area * s.normal[a]);
+                }
             }
         }
         terms.add_into(normal.as_flattened_mut());
@@ -480,7 +486,8 @@ impl Mixing<'_> {
     /// The direction of the walk from near slot `k`: its wall normal, else the fluid fractions
     /// of its neighbours, weighted.
     fn direction(&self, k: usize) -> [f64; 3] {
-        let g = self.normal[k];
+        let i = (self.sources.binary_search(&k)).expect("a walk's direction is a source's");
+        let g = self.normal[i];
         if g != [0.0; 3] {
             return g;
         }
