@@ -62,11 +62,9 @@ impl Embedded {
         // to the crack carried that state's pressure into a cell with no mass (-5e-6 of y
         // momentum per unit volume in a cell 8e-5 open, the flush cube at 100^3).
         if self.config.fracture {
-            let crack = self.crack_cells(&self.scratch.trial, accepted);
-            for (k, &c) in self.near.cells.iter().enumerate() {
-                let c = c as usize;
-                if crack[k]
-                    && self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE
+            for k in self.crack_cells(&self.scratch.trial, accepted) {
+                let c = self.near.cells[k] as usize;
+                if self.state.geom.lambda(c) >= 1.0 - COVERED_TOLERANCE
                     && fluid_part(self.scratch.trial.lambda(c)) > COVERED_TOLERANCE
                 {
                     opening[k] = true;
@@ -89,33 +87,40 @@ impl Embedded {
         opening
     }
 
-    /// Near cells (by slot) between two faces of a crack in `geom`: a wet sub-face of one
-    /// particle and, in the same cell or in the cell it faces along its normal's largest
+    /// Near cells (by slot, ascending) between two faces of a crack in `geom`: a wet sub-face of
+    /// one particle and, in the same cell or in the cell it faces along its normal's largest
     /// component, a wet sub-face of another particle facing back along that axis (the tie rule
     /// puts the two faces of a crack on a grid plane into two cells).
-    fn crack_cells(&self, geom: &CutGeometry, frame: &SolidFrame) -> Vec<bool> {
+    ///
+    /// NOTE: the faces are listed by slot for the cells that hold wet sub-faces only (a list
+    /// per near cell was an allocation for each, and an array of every near cell, a step).
+    fn crack_cells(&self, geom: &CutGeometry, frame: &SolidFrame) -> Vec<usize> {
         let grid = &self.config.grid;
         let near = &self.near;
-        // Per near slot: (particle, 2 axis + side) of its wet sub-faces, side 1 for ν_a < 0.
-        let mut faces: Vec<Vec<(u32, usize)>> = vec![Vec::new(); near.cells.len()];
+        // (slot, particle, 2 axis + side) of the wet sub-faces, side 1 for ν_a < 0, each once.
+        let mut faces: Vec<(usize, u32, usize)> = Vec::new();
         for s in &geom.subfaces {
             let k = near.slot_of[s.cell as usize] as usize;
             if k == 0 || !frame.wet[s.element as usize] || domain_face(grid, s).is_some() {
                 continue;
             }
             let a = dominant_axis(grid.dim, s.normal);
-            let key = (s.particle, 2 * a + usize::from(s.normal[a] < 0.0));
-            if !faces[k - 1].contains(&key) {
-                faces[k - 1].push(key);
-            }
+            faces.push((k - 1, s.particle, 2 * a + usize::from(s.normal[a] < 0.0)));
         }
-        let mut crack = vec![false; near.cells.len()];
-        for (k, &c) in near.cells.iter().enumerate() {
-            let ijk = grid.ijk(c as usize);
-            crack[k] = faces[k].iter().any(|&(p, f)| {
+        faces.sort_unstable();
+        faces.dedup();
+        let of = |k: usize| {
+            let from = faces.partition_point(|f| f.0 < k);
+            &faces[from..from + faces[from..].partition_point(|f| f.0 == k)]
+        };
+        let mut crack: Vec<usize> = Vec::new();
+        for cell in faces.chunk_by(|a, b| a.0 == b.0) {
+            let k = cell[0].0;
+            let ijk = grid.ijk(near.cells[k] as usize);
+            let cracked = cell.iter().any(|&(_, p, f)| {
                 let (a, back) = (f / 2, f ^ 1);
                 let faces_back =
-                    |slot: usize| faces[slot].iter().any(|&(q, g)| q != p && g == back);
+                    |slot: usize| of(slot).iter().any(|&(_, q, g)| q != p && g == back);
                 let mut d = [0isize; 3];
                 d[a] = if f % 2 == 1 { -1 } else { 1 };
                 faces_back(k)
@@ -124,6 +129,9 @@ impl Embedded {
                         kq > 0 && faces_back(kq - 1)
                     })
             });
+            if cracked {
+                crack.push(k);
+            }
         }
         crack
     }
