@@ -92,35 +92,48 @@ impl Embedded {
     /// component, a wet sub-face of another particle facing back along that axis (the tie rule
     /// puts the two faces of a crack on a grid plane into two cells).
     ///
-    /// NOTE: the faces are listed by slot for the cells that hold wet sub-faces only (a list
-    /// per near cell was an allocation for each, and an array of every near cell, a step).
+    /// NOTE: the faces are listed for the cells that hold wet sub-faces only, grouped by slot
+    /// in the sub-faces' order (by cell, so by slot: the near cells are ascending), each face
+    /// once (a list per near cell was an array of every near cell and an allocation for each
+    /// cell with a face, a step).
     fn crack_cells(&self, geom: &CutGeometry, frame: &SolidFrame) -> Vec<usize> {
         let grid = &self.config.grid;
         let near = &self.near;
-        // (slot, particle, 2 axis + side) of the wet sub-faces, side 1 for ν_a < 0, each once.
-        let mut faces: Vec<(usize, u32, usize)> = Vec::new();
+        // (particle, 2 axis + side) of the wet sub-faces, side 1 for ν_a < 0; and each slot's
+        // `(slot, first, end)` of them, ascending.
+        let mut faces: Vec<(u32, usize)> = Vec::new();
+        let mut slots: Vec<(usize, usize, usize)> = Vec::new();
         for s in &geom.subfaces {
             let k = near.slot_of[s.cell as usize] as usize;
             if k == 0 || !frame.wet[s.element as usize] || domain_face(grid, s).is_some() {
                 continue;
             }
             let a = dominant_axis(grid.dim, s.normal);
-            faces.push((k - 1, s.particle, 2 * a + usize::from(s.normal[a] < 0.0)));
+            let key = (s.particle, 2 * a + usize::from(s.normal[a] < 0.0));
+            match slots.last_mut() {
+                Some(last) if last.0 == k - 1 => {
+                    if !faces[last.1..last.2].contains(&key) {
+                        faces.push(key);
+                        last.2 += 1;
+                    }
+                }
+                last => {
+                    debug_assert!(last.is_none_or(|l| l.0 < k - 1), "sub-faces by cell");
+                    slots.push((k - 1, faces.len(), faces.len() + 1));
+                    faces.push(key);
+                }
+            }
         }
-        faces.sort_unstable();
-        faces.dedup();
-        let of = |k: usize| {
-            let from = faces.partition_point(|f| f.0 < k);
-            &faces[from..from + faces[from..].partition_point(|f| f.0 == k)]
+        let of = |k: usize| match slots.binary_search_by_key(&k, |s| s.0) {
+            Ok(i) => &faces[slots[i].1..slots[i].2],
+            Err(_) => &[],
         };
         let mut crack: Vec<usize> = Vec::new();
-        for cell in faces.chunk_by(|a, b| a.0 == b.0) {
-            let k = cell[0].0;
+        for &(k, first, end) in &slots {
             let ijk = grid.ijk(near.cells[k] as usize);
-            let cracked = cell.iter().any(|&(_, p, f)| {
+            let cracked = faces[first..end].iter().any(|&(p, f)| {
                 let (a, back) = (f / 2, f ^ 1);
-                let faces_back =
-                    |slot: usize| of(slot).iter().any(|&(_, q, g)| q != p && g == back);
+                let faces_back = |slot: usize| of(slot).iter().any(|&(q, g)| q != p && g == back);
                 let mut d = [0isize; 3];
                 d[a] = if f % 2 == 1 { -1 } else { 1 };
                 faces_back(k)
