@@ -465,46 +465,36 @@ mod tests {
     use super::OwnSlots;
     use crate::cutcell::CellBox;
     use crate::grid::Grid;
+    use proptest::prelude::*;
 
-    /// On slabs and on blocks cut along every axis, in 2-D and 3-D, with near cells an
-    /// ascending subset of the grid's (about a third, none, all): a slot is own exactly when its
-    /// cell lies in the rank's block, and every own slot lies in the range.
-    #[test]
-    fn the_own_slots_are_those_whose_cells_lie_in_the_block() {
-        let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
-        let mut next = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
-        };
-        let cases: [(&[usize], &[[usize; 3]]); 2] = [
-            (&[12, 10], &[[1, 2, 1], [1, 3, 1], [2, 2, 1], [3, 1, 1]]),
-            (
-                &[6, 5, 8],
-                &[[1, 1, 2], [1, 1, 4], [1, 2, 2], [1, 2, 1], [2, 2, 2]],
-            ),
-        ];
-        for (cells, process_grids) in cases {
-            let grid =
-                Grid::new(&vec![0.0; cells.len()], &vec![1.0; cells.len()], cells).expect("grid");
-            for keep in [0, 3, 1] {
-                let near: Vec<u32> = (0..grid.n_cells() as u32)
-                    .filter(|_| keep == 1 || (keep == 3 && next() % 3 == 0))
-                    .collect();
-                let all = OwnSlots::of(&grid, &near, None);
-                assert!((0..near.len()).all(|k| all.contains(k)) && all.range() == (0..near.len()));
-                for &dims in process_grids {
-                    for r in 0..dims.iter().product() {
-                        let block = CellBox::of_rank(&grid, dims, r);
-                        let own = OwnSlots::of(&grid, &near, Some(block));
-                        for (k, &c) in near.iter().enumerate() {
-                            let inside = block.contains(grid.ijk(c as usize));
-                            assert_eq!(own.contains(k), inside, "{dims:?} rank {r} cell {c}");
-                            assert!(!inside || own.range().contains(&k), "{dims:?} rank {r}");
-                        }
-                    }
-                }
+    proptest! {
+        /// Whatever the grid (2-D or 3-D), the block (a slab, cut along any axes, or the whole
+        /// grid) and the near cells (any ascending subset): a slot is own exactly when its cell
+        /// lies in the block, every own slot lies in the range, and on one rank every slot is.
+        #[test]
+        fn the_own_slots_are_those_whose_cells_lie_in_the_block(
+            dim in 2usize..4,
+            cells in prop::array::uniform3(1usize..7),
+            lo in prop::array::uniform3(0usize..7),
+            size in prop::array::uniform3(1usize..7),
+            picks in prop::collection::vec(any::<bool>(), 216),
+        ) {
+            let cells = &cells[..dim];
+            let grid = Grid::new(&vec![0.0; dim], &vec![1.0; dim], cells).expect("grid");
+            let n = |a: usize| if a < dim { cells[a] } else { 1 };
+            let block = CellBox {
+                lo: std::array::from_fn(|a| lo[a].min(n(a) - 1)),
+                hi: std::array::from_fn(|a| (lo[a].min(n(a) - 1) + size[a]).min(n(a))),
+            };
+            let near: Vec<u32> = (0..grid.n_cells() as u32).filter(|&c| picks[c as usize]).collect();
+            let all = OwnSlots::of(&grid, &near, None);
+            prop_assert_eq!(all.range(), 0..near.len());
+            prop_assert!((0..near.len()).all(|k| all.contains(k)));
+            let own = OwnSlots::of(&grid, &near, Some(block));
+            for (k, &c) in near.iter().enumerate() {
+                let inside = block.contains(grid.ijk(c as usize));
+                prop_assert_eq!(own.contains(k), inside, "{:?}, cell {}", block, c);
+                prop_assert!(!inside || own.range().contains(&k));
             }
         }
     }
