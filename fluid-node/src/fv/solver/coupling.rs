@@ -296,7 +296,7 @@ impl FluidSolver {
     ///
     /// NOTE: on slabs each rank owns one range of the global numbering, in rank order, so the
     /// ranks' values one after the other are the cells' in order: they are received straight
-    /// into `all` ([`Comm::all_gather_f64_into`]). On other blocks they are received into a
+    /// into `all` ([`crate::fv::comm::Comm::all_gather_f64_into`]). On other blocks they are received into a
     /// buffer and put at each rank's slots.
     pub fn gather_owned_into(
         &self,
