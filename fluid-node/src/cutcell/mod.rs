@@ -90,6 +90,7 @@ pub(crate) mod sweep;
 mod swept;
 #[cfg(test)]
 mod tests;
+mod written;
 
 pub use assemble::{HeldFractions, block_part, block_part_shared};
 pub use block::{
