@@ -86,6 +86,7 @@ mod frame;
 mod gather;
 mod held;
 mod hooks;
+mod identity;
 mod levers;
 mod loads;
 mod memory;
