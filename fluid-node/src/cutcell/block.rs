@@ -259,7 +259,7 @@ impl BlockGeometry {
 /// Pure. Cost: the elements that reach the window (in 2-D with x cut: its band of rows), plus
 /// those of the rows swept whole.
 pub fn compute_block(grid: &Grid, surface: &Surface, block: CellBox, halo: usize) -> BlockGeometry {
-    block_geometry(grid, surface, block, halo, true, BlockGeometry::default())
+    compute_block_reusing(grid, surface, block, halo, BlockGeometry::default())
 }
 
 /// [`compute_block`] into the buffers of `reuse`, as [`compute_block_cells_reusing`] does.
@@ -286,7 +286,7 @@ pub fn compute_block_cells(
     block: CellBox,
     halo: usize,
 ) -> BlockGeometry {
-    block_geometry(grid, surface, block, halo, false, BlockGeometry::default())
+    compute_block_cells_reusing(grid, surface, block, halo, BlockGeometry::default())
 }
 
 /// [`compute_block_cells`] into the buffers of `reuse`, an earlier block geometry of any block

@@ -33,7 +33,7 @@ impl Embedded {
         let (new, old) = (&self.scratch.trial, &self.state.geom);
         let volume = grid.cell_volume();
         let own = &self.near.own;
-        let folded = (own.range()).filter(|&k| own.contains(k)).find(|&k| {
+        let folded = own.iter().find(|&k| {
             let c = self.near.cells[k] as usize;
             let (new_c, old_c) = (new.lambda(c), old.lambda(c));
             let defect = (new_c - old_c) * volume - self.scratch.content[k][0];
@@ -81,7 +81,7 @@ impl Embedded {
         let nvar = self.config.grid.dim + 2;
         let (new, old) = (&self.scratch.trial, &self.state.geom);
         let own = &self.near.own;
-        let terms = (own.range()).filter(|&k| own.contains(k)).filter_map(|k| {
+        let terms = own.iter().filter_map(|k| {
             let c = self.near.cells[k] as usize;
             let (l0, l1) = (old.lambda(c), new.lambda(c));
             let gained = l1.min(1.0) - l0.min(1.0);

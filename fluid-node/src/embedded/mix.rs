@@ -301,9 +301,9 @@ impl Embedded {
         let saved = &self.near.saved;
         let content = &mut self.scratch.content;
         let mut sources: Vec<usize> = Vec::new();
-        for k in self.near.own.range() {
+        for k in self.near.own.iter() {
             let c = self.near.cells[k] as usize;
-            if self.scratch.kind[k] != CellKind::Updated || !self.near.own.contains(k) {
+            if self.scratch.kind[k] != CellKind::Updated {
                 continue;
             }
             let a = alpha(c);

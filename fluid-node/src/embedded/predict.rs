@@ -51,9 +51,7 @@ impl Embedded {
         let (dim, nvar) = (self.config.grid.dim, self.config.grid.dim + 2);
         let (gamma, (vr, _)) = (self.config.gamma, self.config.vacuum);
         let geom = &self.state.geom;
-        let own: Vec<usize> = (self.near.own.range())
-            .filter(|&k| self.own_slot(k))
-            .collect();
+        let own: Vec<usize> = self.near.own.iter().collect();
         let own_cells: Vec<u32> = own.iter().map(|&k| self.near.cells[k]).collect();
         let predicted = solver.own_cells_at(&own_cells);
         let near = &self.near;
@@ -246,10 +244,7 @@ impl Embedded {
         solver.apply_ghosts(first, &self.near.hooks.ghosts[first]);
         solver.apply_vacuum(&self.near.hooks.vacuum);
         let nvar = dim + 2;
-        let own: Vec<u32> = (self.near.own.range())
-            .filter(|&k| self.own_slot(k))
-            .map(|k| self.near.cells[k])
-            .collect();
+        let own: Vec<u32> = (self.near.own.iter()).map(|k| self.near.cells[k]).collect();
         let u = solver.own_cells_at(&own);
         let mut ghosted: Vec<u32> = (self.near.hooks.ghosts[first].iter())
             .map(|g| g.cell)

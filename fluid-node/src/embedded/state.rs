@@ -144,6 +144,11 @@ impl OwnSlots {
         self.range.clone()
     }
 
+    /// The own slots, ascending.
+    pub(super) fn iter(&self) -> impl Iterator<Item = usize> + '_ {
+        self.range().filter(|&k| self.contains(k))
+    }
+
     /// Whether slot `k` is a cell of this rank.
     #[inline]
     pub(super) fn contains(&self, k: usize) -> bool {

@@ -222,34 +222,11 @@ impl FluidSolver {
         }
     }
 
-    /// The slots of `cells` (whole grid, ascending) each rank owns, in order.
-    ///
-    /// NOTE: on slabs each rank owns one range of the global numbering, in rank order, so the
-    /// ascending cells are cut where each range ends, without finding each cell's owner (two
-    /// divisions a cell in [`Slab::owner`]: with the loop around it about 1.8 ms a step of a
-    /// rank at 128³ on 2 ranks, in the gathers of the near cells' states).
+    /// The slots of `cells` (whole grid, ascending) each rank owns, in order (blocks other than
+    /// slabs: on slabs each rank's slots are one range, see [`FluidSolver::gather_owned_into`]).
     fn slots_by_rank(&self, cells: &[u32]) -> Vec<Vec<u32>> {
         let slab = &self.slab;
         let mut out = vec![Vec::new(); slab.ranks];
-        if slab.slabs() {
-            let last = slab.global.dim - 1;
-            let plane: usize = slab.global.cells[..last].iter().product();
-            let mut rank = 0;
-            let end = |r: usize| {
-                let (first, own) = slab.block_of_rank(r);
-                (first[last] + own[last]) * plane
-            };
-            let mut rank_end = end(0);
-            for (k, &c) in cells.iter().enumerate() {
-                while c as usize >= rank_end && rank + 1 < slab.ranks {
-                    rank += 1;
-                    rank_end = end(rank);
-                }
-                debug_assert_eq!(slab.owner(c as usize), rank, "the owner of cell {c}");
-                out[rank].push(k as u32);
-            }
-            return out;
-        }
         for (k, &c) in cells.iter().enumerate() {
             out[slab.owner(c as usize)].push(k as u32);
         }
