@@ -22,6 +22,7 @@ use crate::Error;
 use crate::embedded::{COVERED_TOLERANCE, Embedded, EmbeddedError, InterfaceBudget, SolidFrame};
 use crate::fv::FluidSolver;
 use crate::fv::comm::{Comm, Serial};
+use crate::fv::solver::items_per_task;
 use crate::model::FluidModel;
 
 /// The real fluid.
@@ -172,7 +173,12 @@ impl RealFluid {
                     }
                 };
                 let u = &state.u[..n_cells * nvar];
-                (self.solver).install(|| u.par_chunks(VACUUM_RUN * nvar).enumerate().map(run).sum())
+                (self.solver).install(|| {
+                    (u.par_chunks(VACUUM_RUN * nvar).enumerate())
+                        .with_max_len(items_per_task(VACUUM_RUN))
+                        .map(run)
+                        .sum()
+                })
             }
             None => (self.solver).install(|| {
                 (0..n_cells)

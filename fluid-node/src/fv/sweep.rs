@@ -418,6 +418,16 @@ fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Ve
     blocks
 }
 
+/// Blocks of pencils a task of the sweep takes at most.
+///
+/// NOTE: rayon splits a parallel loop into about four pieces a thread and splits a piece
+/// further only when another thread steals it, so the piece a thread runs last is not split:
+/// on 2 threads, 128³, that was a quarter of a sweep's 1,024 blocks (about 11 ms), and the
+/// other thread slept up to that long at every sweep's end (5–16 ms a sweep in
+/// `perf sched timehist` of `fv_blast3d`). Tasks of 4 blocks (64 pencils, ≈ 0.2 ms) leave at
+/// most that much.
+const BLOCKS_PER_TASK: usize = 4;
+
 /// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states into `out` (the
 /// layout of `u_in`), one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
 /// the neighbours' planes of a sweep along the decomposed axis ([`SlabHalo::none`] otherwise).
@@ -479,6 +489,7 @@ pub fn sweep_axis(
         .par_chunks_mut(BLOCK_PENCILS)
         .zip(taps.par_iter_mut())
         .enumerate()
+        .with_max_len(BLOCKS_PER_TASK)
         .for_each(|(block, (rep_block, (offsets, kept)))| {
             let thread = rayon::current_thread_index().unwrap_or(0) % scratch.len();
             let mut guard = scratch[thread]

@@ -6,7 +6,7 @@ use crate::fv::comm::{bytes_f64, f64_bytes};
 use crate::fv::euler::sound_speed;
 use crate::fv::isa::Isa;
 use crate::fv::solver::FluidSolver;
-use crate::fv::solver::cell::{BLOCK_CELLS, to_full};
+use crate::fv::solver::cell::{BLOCK_CELLS, items_per_task, to_full};
 
 impl FluidSolver {
     /// Largest stable time step \[s\]: `cfl / max_cells max_axis (|u_axis| + c)/Δx_axis`, so that
@@ -31,6 +31,7 @@ impl FluidSolver {
         let (rate, cell) = self.pool.install(|| {
             u.par_chunks(nvar * BLOCK_CELLS)
                 .enumerate()
+                .with_max_len(items_per_task(BLOCK_CELLS))
                 .map(|(block, chunk)| fastest_cell(isa, nvar, &rates, chunk, block * BLOCK_CELLS))
                 .reduce(|| (0.0, usize::MAX), fastest)
         });

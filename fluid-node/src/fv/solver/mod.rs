@@ -23,6 +23,7 @@ mod step;
 mod totals;
 
 pub use build::{FluidSolver, SolverError};
+pub(crate) use cell::items_per_task;
 pub use checkpoint::CheckpointError;
 pub use hooks::{GhostFill, SplitHooks};
 pub use report::{

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use crate::fv::euler::NQ;
 use crate::fv::line::state_ok;
-use crate::fv::solver::cell::{BLOCK_CELLS, cell_primitive, to_full};
+use crate::fv::solver::cell::{BLOCK_CELLS, cell_primitive, items_per_task, to_full};
 use crate::fv::solver::{
     FluidSolver, MAX_TROUBLES, RefusedTimeStep, SplitHooks, StepReport, Trouble, TroubleKind,
 };
@@ -346,6 +346,7 @@ impl FluidSolver {
         self.pool.install(|| {
             pbar.par_chunks_mut(BLOCK_CELLS)
                 .zip(u.par_chunks(BLOCK_CELLS * nvar))
+                .with_max_len(items_per_task(BLOCK_CELLS))
                 .for_each(|(p, cells)| {
                     for (p, cell) in p.iter_mut().zip(cells.chunks_exact(nvar)) {
                         *p = cell_primitive(cell, dim, gamma).p;

@@ -8,7 +8,7 @@ use crate::fv::euler::NQ;
 use crate::fv::isa::{Isa, prefetch_line};
 use crate::fv::slab::{put_block, rank_of, take_block};
 use crate::fv::solver::cfl::{RATE_LANES, RateParams, fastest, fold_rates};
-use crate::fv::solver::{FluidSolver, Totals};
+use crate::fv::solver::{FluidSolver, Totals, items_per_task};
 use crate::fv::state::FluidState;
 
 /// Chunks of planes a block sums between the messages of the totals' chain (see
@@ -278,6 +278,7 @@ impl FluidSolver {
                 .zip(fast.par_iter_mut())
                 .zip(u.par_chunks(plane * nvar))
                 .enumerate()
+                .with_max_len(items_per_task(plane))
                 .for_each(|(k, ((acc, fast), cells))| {
                     let block = first + k;
                     match solid_fraction {
