@@ -97,7 +97,8 @@ pub struct CutGeometry {
 /// together in element order, their sub-face and vertex indices moved on by what came
 /// before: the same pieces and sub-faces, in the same order, on any number of threads. The
 /// clip was half of `compute`, which the loads of the semi-implicit scheme run on one thread
-/// (`clamped-beam-3d`: 9 % of the fluid node's main thread).
+/// (`clamped-beam-3d`: 9 % of the fluid node's main thread). A task takes at most 2 runs, so
+/// that no thread waits long for the other's last one.
 const CLIP_CHUNK: usize = 256;
 
 /// The pieces and sub-faces of one run of [`CLIP_CHUNK`] elements (indices within the run).
@@ -265,6 +266,7 @@ fn clip_surface(grid: &Grid, surface: &Surface, out: &mut CutGeometry) {
     out.clip_chunks[..n_chunks]
         .par_iter_mut()
         .enumerate()
+        .with_max_len(2)
         .for_each(|(c, chunk)| {
             chunk.pieces.clear();
             chunk.piece_subface.clear();

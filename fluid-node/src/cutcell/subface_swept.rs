@@ -69,7 +69,8 @@ pub struct SubfaceSwept {
 /// preimage), so runs of them are clipped in parallel on the pool the call runs in, each into
 /// its own buffers, and the entries are put together in sub-face order: the same entries, in
 /// the same order, whatever the thread count. In `cube-mobile-walls` on 50³ the prisms were
-/// half of the correct's time, on one thread while the other waited.
+/// half of the correct's time, on one thread while the other waited. A task takes at most 4
+/// runs, so that no thread waits long for the other's last one.
 const CHUNK: usize = 128;
 
 /// The entries, counters and scratch of one run of [`CHUNK`] sub-faces.
@@ -201,6 +202,7 @@ fn clip_prisms(
         .par_iter_mut()
         .zip(subfaces.par_chunks(CHUNK))
         .enumerate()
+        .with_max_len(4)
         .for_each(|(c, (chunk, run))| {
             chunk.entries.clear();
             chunk.n_pieces = 0;

@@ -49,8 +49,9 @@ pub struct CorrectReport {
     pub dropped: f64,
 }
 
-/// Near cells one task of [`Embedded::fluid_fluxes`] updates at least (any split gives the
-/// same bits).
+/// Near cells one task of [`Embedded::fluid_fluxes`] updates at least, and at most four times
+/// as many, so that no thread waits long for the other's last task (any split gives the same
+/// bits).
 const CELLS_PER_TASK: usize = 256;
 
 /// What the solid flux gave the fluid in one step.
@@ -244,6 +245,7 @@ impl Embedded {
             (this.near.own.range())
                 .into_par_iter()
                 .with_min_len(CELLS_PER_TASK)
+                .with_max_len(4 * CELLS_PER_TASK)
                 .filter(|&k| this.own_slot(k))
                 .filter_map(|k| {
                     let update = this.cell_update(k, dt, step, &flush, opening, cracking);

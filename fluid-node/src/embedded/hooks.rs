@@ -46,8 +46,9 @@ pub struct WallHooks {
     pub vacuum: Vec<u32>,
 }
 
-/// Cells' runs of sub-faces one task of [`HookGeometry::near_walls`] sums at least (any
-/// split gives the same walls).
+/// Cells' runs of sub-faces one task of [`HookGeometry::near_walls`] sums at least, and at
+/// most four times as many, so that no thread waits long for the other's last task (any split
+/// gives the same walls).
 const RUNS_PER_TASK: usize = 64;
 
 /// Cells of halo around a block whose geometry gives its [`WallHooks`] exactly, for sweeps with
@@ -418,6 +419,7 @@ impl HookGeometry<'_> {
         let (runs, shut): (Vec<NearWall>, Vec<bool>) = (0..n_runs)
             .into_par_iter()
             .with_min_len(RUNS_PER_TASK)
+            .with_max_len(4 * RUNS_PER_TASK)
             .map_init(OddSum::default, |sum, r| {
                 self.near_wall(current, &subfaces[bounds[r]..bounds[r + 1]], sum)
             })

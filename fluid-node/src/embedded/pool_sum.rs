@@ -25,9 +25,11 @@ pub(super) fn add_on_pool(sum: &mut OddSum, out: &mut [f64]) {
     let per_slot = n_terms.div_ceil(n);
     let (starts, by_slot) = sum.by_slot(n);
     let by_slot = &*by_slot;
+    let slots_per_task = (TERMS_PER_TASK / per_slot).max(1);
     out.par_iter_mut()
         .enumerate()
-        .with_min_len((TERMS_PER_TASK / per_slot).max(1))
+        .with_min_len(slots_per_task)
+        .with_max_len(4 * slots_per_task)
         .for_each_init(Vec::new, |run, (s, o)| {
             let terms = &by_slot[starts[s] as usize..starts[s + 1] as usize];
             if !terms.is_empty() {
