@@ -8,6 +8,12 @@ use rayon::prelude::*;
 /// every reduction runs serially in index order, so results do not depend on the thread count.
 pub(crate) const CHUNK: usize = 256;
 
+/// Chunks a rayon task takes at most. NOTE: rayon splits a loop into about four pieces a
+/// thread and splits one further only when it is stolen, so without a bound the piece a
+/// thread runs last (a quarter of the loop on 2 threads) is never split and the other thread
+/// waits for it.
+const CHUNKS_PER_TASK: usize = 4;
+
 /// [`par_fill`] runs serially below this many items: waking the pool, and its workers'
 /// spinning after the job, cost tens of µs per call, more than a few chunks of link or particle
 /// updates take (a 2-D beam of 728 particles and 1390 links spent most of its trial in futex
@@ -24,6 +30,7 @@ pub(crate) fn par_fill<T: Send>(
         Some(pool) if out.len() >= SERIAL_BELOW => pool.install(|| {
             out.par_chunks_mut(CHUNK)
                 .enumerate()
+                .with_max_len(CHUNKS_PER_TASK)
                 .for_each(|(c, chunk)| {
                     for (k, o) in chunk.iter_mut().enumerate() {
                         *o = f(c * CHUNK + k);
@@ -46,11 +53,14 @@ pub(crate) fn par_each<T: Send>(
 ) {
     match pool {
         Some(pool) => pool.install(|| {
-            items.par_chunks_mut(CHUNK).for_each(|chunk| {
-                for item in chunk {
-                    f(item);
-                }
-            })
+            items
+                .par_chunks_mut(CHUNK)
+                .with_max_len(CHUNKS_PER_TASK)
+                .for_each(|chunk| {
+                    for item in chunk {
+                        f(item);
+                    }
+                })
         }),
         None => items.iter_mut().for_each(f),
     }
