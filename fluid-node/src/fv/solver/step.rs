@@ -84,7 +84,7 @@ impl FluidSolver {
         &mut self,
         dt: f64,
         hooks: &mut SplitHooks,
-        covered: &dyn Fn(usize) -> bool,
+        covered: &(dyn Fn(usize) -> bool + Sync),
     ) -> StepReport {
         self.sweeps(dt, Some((hooks, covered)))
     }
@@ -92,7 +92,7 @@ impl FluidSolver {
     fn sweeps(
         &mut self,
         dt: f64,
-        mut hooks: Option<(&mut SplitHooks, &dyn Fn(usize) -> bool)>,
+        mut hooks: Option<(&mut SplitHooks, &(dyn Fn(usize) -> bool + Sync))>,
     ) -> StepReport {
         let order = sweep_order(self.grid.dim, self.step);
         let mut report = StepReport {
@@ -213,7 +213,7 @@ impl FluidSolver {
         &self,
         axis: usize,
         area: f64,
-        covered: Option<&dyn Fn(usize) -> bool>,
+        covered: Option<&(dyn Fn(usize) -> bool + Sync)>,
     ) -> SweepSummary {
         let count = self.grid.n_cells() / self.grid.cells[axis];
         let mut summary = SweepSummary::default();
@@ -300,7 +300,7 @@ impl FluidSolver {
         &self,
         axis: usize,
         idx: usize,
-        covered: &dyn Fn(usize) -> bool,
+        covered: &(dyn Fn(usize) -> bool + Sync),
     ) -> Option<usize> {
         let global = |c: usize| covered(self.slab.to_global(c));
         if !global(idx) {
