@@ -424,9 +424,11 @@ fn tap_blocks<'a>(offsets: &'a [u32], flux: &'a mut [State], count: usize) -> Ve
 /// further only when another thread steals it, so the piece a thread runs last is not split:
 /// on 2 threads, 128³, that was a quarter of a sweep's 1,024 blocks (about 11 ms), and the
 /// other thread slept up to that long at every sweep's end (5–16 ms a sweep in
-/// `perf sched timehist` of `fv_blast3d`). Tasks of 4 blocks (64 pencils, ≈ 0.2 ms) leave at
-/// most that much.
-const BLOCKS_PER_TASK: usize = 4;
+/// `perf sched timehist` of `fv_blast3d`). A task is one block (16 pencils, ≈ 45 µs at 128³):
+/// tasks of 4 blocks left small grids few tasks (the 2-D beam's 400 × 200 sweeps have 13 and 25
+/// blocks), and one block a task ran `clamped-beam-2d` 2 % faster (mean of 32 alternated runs)
+/// at no cost to the 128³ blast.
+const BLOCKS_PER_TASK: usize = 1;
 
 /// Sweeps `u_in` along `axis` with time step `dt` \[s\]; writes the new states into `out` (the
 /// layout of `u_in`), one [`PencilOut`] per pencil, and the fluxes of the faces `tap` names. `halo` holds
