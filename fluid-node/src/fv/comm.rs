@@ -56,10 +56,7 @@ pub trait Comm: Send {
         let mut counts = Vec::with_capacity(parts.len());
         for part in parts.iter() {
             counts.push(part.len() / 8);
-            out.extend(
-                part.chunks_exact(8)
-                    .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))),
-            );
+            out.extend(bytes_f64(part));
         }
         counts
     }

@@ -229,10 +229,9 @@ impl Mixing<'_> {
     ) -> Failure {
         let mut roots: Vec<usize> = groups.iter().map(|g| g.0).collect();
         roots.dedup();
-        for k in self.own.range() {
+        for k in self.own.iter() {
             let c = self.near[k];
             if kind[k] == CellKind::Predicted
-                || !self.own(k)
                 || self.new.lambda(c as usize) >= 1.0 - COVERED_TOLERANCE
                 || self.sources.binary_search(&k).is_ok()
                 || roots.binary_search(&(c as usize)).is_ok()

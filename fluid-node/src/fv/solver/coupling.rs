@@ -297,14 +297,11 @@ impl FluidSolver {
             return;
         }
         let slots = self.slots_by_rank(cells);
-        let by_rank = |counts: &[usize]| {
-            for (rank, slots) in slots.iter().enumerate() {
-                assert_eq!(counts[rank], slots.len() * nvar, "rank {rank}'s cells");
-            }
-        };
         let mut flat = Vec::new();
         let counts = self.comm.all_gather_f64_into(&mine, &mut flat);
-        by_rank(&counts);
+        for (rank, slots) in slots.iter().enumerate() {
+            assert_eq!(counts[rank], slots.len() * nvar, "rank {rank}'s cells");
+        }
         all.resize(cells.len() * nvar, 0.0);
         let mut at = 0;
         for slots in &slots {
