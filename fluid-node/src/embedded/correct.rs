@@ -13,7 +13,9 @@ use super::cells::{
     touches_gas,
 };
 use super::error::Reach;
-use super::gather::{CellUpdate, Updates, assemble_by_block, gather_swept, gather_updates};
+use super::gather::{
+    CellUpdate, Updates, assemble_by_block, gather_solid_flux, gather_swept, gather_updates,
+};
 use super::levers::Levers;
 use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
@@ -60,6 +62,16 @@ struct Exchanged {
     work: f64,
     /// Momentum [kg m/s].
     impulse: [f64; 3],
+}
+
+impl Exchanged {
+    /// Adds one sub-face's `[work, impulse]` (`dim` components of the impulse).
+    fn add(&mut self, dim: usize, exchange: &[f64; 4]) {
+        for a in 0..dim {
+            self.impulse[a] += exchange[1 + a];
+        }
+        self.work += exchange[0];
+    }
 }
 
 impl Embedded {
@@ -503,10 +515,14 @@ impl Embedded {
         Some((fl, fr))
     }
 
-    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`. On a
-    /// decomposed grid `gained` takes the terms of this rank's near cells only (each slot's
-    /// terms are all there, so its sum is one rank's: [`OddSum`]), while the work, the impulse
-    /// and `last_loads` are summed over every sub-face as one rank sums them.
+    /// Solid flux (eq. 26) into `gained`, and the loads it implies into `last_loads`.
+    ///
+    /// Collective on a decomposed grid: each rank takes the sub-faces of its own cells only,
+    /// so `gained` takes the terms of its own near cells (each slot's terms are all there, so
+    /// its sum is one rank's: [`OddSum`]); one all-gather of every rank's load terms and of
+    /// each sub-face's work and impulse ([`gather_solid_flux`]) gives every rank the loads of
+    /// one rank ([`OddSum`] again) and the work and impulse summed in the sub-faces' order, as
+    /// one rank sums them.
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
     /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
@@ -543,8 +559,14 @@ impl Embedded {
         let levers = Levers::new(start, &self.state.current, flux_frame);
         let mut sum = std::mem::take(&mut self.scratch.odd);
         sum.clear();
-        for s in &flux_geom.subfaces {
-            if !flux_frame.wet[s.element as usize]
+        // On a decomposed grid a rank takes the sub-faces of its own cells, whose near slots
+        // are its own, and keeps each one's work and impulse by its index, for the sums in the
+        // sub-faces' order once every rank's are gathered.
+        let block = self.config.block;
+        let mut by_subface: Vec<(u32, [f64; 4])> = Vec::new();
+        for (i, s) in flux_geom.subfaces.iter().enumerate() {
+            if block.is_some_and(|b| !b.contains(grid.ijk(s.cell as usize)))
+                || !flux_frame.wet[s.element as usize]
                 || domain_face(grid, s).is_some()
                 || self.opening(s, flux_frame)
                 || !touches_gas(grid, flux_geom, s)
@@ -552,7 +574,10 @@ impl Embedded {
                 continue;
             }
             let k = self.near.slot_of[s.cell as usize] as usize - 1;
-            let own = self.own_slot(k);
+            debug_assert!(
+                self.own_slot(k),
+                "a rank's sub-faces are in its own near cells"
+            );
             // The neighbour a face takes `p̄` from is near: one of the two holds F^n's wall.
             let kp = self.near.slot_of[pressure_cell(grid, &self.state.geom, s)] as usize - 1;
             let mut pi = [0.0; 3];
@@ -565,20 +590,25 @@ impl Embedded {
             let w = accepted.rigid_velocity(p, r);
             let power: f64 = (0..dim).map(|a| w[a] * pi[a]).sum();
             for a in 0..dim {
-                if own {
-                    gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
-                }
-                exchanged.impulse[a] += dt * pi[a];
+                gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
             }
-            if own {
-                gained.push(k * NQ + dim + 1, dt * power / volume);
+            gained.push(k * NQ + dim + 1, dt * power / volume);
+            let exchange = [dt * power, dt * pi[0], dt * pi[1], dt * pi[2]];
+            match block {
+                None => exchanged.add(dim, &exchange),
+                Some(_) => by_subface.push((i as u32, exchange)),
             }
-            exchanged.work += dt * power;
             let f = [-pi[0], -pi[1], -pi[2]];
             for a in 0..dim {
                 sum.push(p * dim + a, f[a]);
             }
             push_moment(&mut sum, np * dim, dim, p, r, f);
+        }
+        if block.is_some() {
+            gather_solid_flux(solver, dim, &mut by_subface, &mut sum);
+            for (_, exchange) in &by_subface {
+                exchanged.add(dim, exchange);
+            }
         }
         let last_loads = &mut self.state.last_loads;
         solver.install(|| add_loads(&mut sum, last_loads, np * dim));

@@ -4,6 +4,8 @@
 //! updated cells' contents when groups merge or widen. Each keeps the one-rank order, so what
 //! reads them computes one rank's bits.
 
+use protocol::sum::OddSum;
+
 use super::cells::CellKind;
 use super::held::Held;
 use super::{Embedded, EmbeddedError};
@@ -181,6 +183,54 @@ pub(super) fn gather_updates(
     // bytes) about log n times.
     all.sort_by_key(|u| u.0);
     all
+}
+
+/// Every rank's solid-flux terms ([`Embedded::solid_flux`](super::Embedded), the sub-faces of its
+/// own cells) on every rank (collective): `sum` gets every rank's load terms, in rank order (an
+/// [`OddSum`]: the sums do not depend on it), and `by_subface` every rank's `(sub-face index,
+/// [work, impulse])`, sorted by the index: the sub-faces' order, in which one rank sums them.
+/// Traffic: 12 bytes per load term, `4 + 8 (dim + 1)` per wet sub-face.
+pub(super) fn gather_solid_flux(
+    solver: &FluidSolver,
+    dim: usize,
+    by_subface: &mut Vec<(u32, [f64; 4])>,
+    sum: &mut OddSum,
+) {
+    let size = 4 + 8 * (dim + 1);
+    let terms = sum.terms();
+    let mut bytes = Vec::with_capacity(8 + size * by_subface.len() + 12 * terms.len());
+    bytes.extend((by_subface.len() as u64).to_le_bytes());
+    for (i, exchange) in by_subface.iter() {
+        bytes.extend(i.to_le_bytes());
+        for v in &exchange[..dim + 1] {
+            bytes.extend(v.to_bits().to_le_bytes());
+        }
+    }
+    for &(slot, value) in terms {
+        bytes.extend(slot.to_le_bytes());
+        bytes.extend(value.to_bits().to_le_bytes());
+    }
+    by_subface.clear();
+    sum.clear();
+    let u32_at = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().expect("4"));
+    let f64_at = |b: &[u8], at: usize| {
+        f64::from_bits(u64::from_le_bytes(b[at..at + 8].try_into().expect("8")))
+    };
+    for part in &solver.comm().all_gather(&bytes) {
+        let n = u64::from_le_bytes(part[..8].try_into().expect("8")) as usize;
+        let (exchange, terms) = part[8..].split_at(n * size);
+        by_subface.extend(exchange.chunks_exact(size).map(|t| {
+            let mut e = [0.0; 4];
+            for (q, v) in e[..dim + 1].iter_mut().enumerate() {
+                *v = f64_at(t, 4 + 8 * q);
+            }
+            (u32_at(t, 0), e)
+        }));
+        sum.extend(terms.chunks_exact(12).map(|t| (u32_at(t, 0), f64_at(t, 4))));
+    }
+    // Each sub-face is one rank's, and each rank's come in the sub-faces' order: a stable
+    // sort merges the runs.
+    by_subface.sort_by_key(|e| e.0);
 }
 
 /// Every rank's mixing sources (near slots, ascending), uncovered cells' count and largest
