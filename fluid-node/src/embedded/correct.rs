@@ -17,7 +17,7 @@ use super::gather::{
     CellUpdate, Updates, assemble_by_block, gather_solid_flux, gather_swept, gather_updates,
 };
 use super::levers::Levers;
-use super::loads::{add_loads, push_moment};
+use super::loads::{add_loads, add_loads_shared, push_moment};
 use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SolidFrame};
@@ -520,9 +520,9 @@ impl Embedded {
     /// Collective on a decomposed grid: each rank takes the sub-faces of its own cells only,
     /// so `gained` takes the terms of its own near cells (each slot's terms are all there, so
     /// its sum is one rank's: [`OddSum`]); one all-gather of every rank's load terms and of
-    /// each sub-face's work and impulse ([`gather_solid_flux`]) gives every rank the loads of
-    /// one rank ([`OddSum`] again) and the work and impulse summed in the sub-faces' order, as
-    /// one rank sums them.
+    /// each sub-face's work and impulse ([`gather_solid_flux`]) gives every rank the work and
+    /// impulse summed in the sub-faces' order, as one rank sums them, and the loads of one rank
+    /// ([`OddSum`] again), each rank adding up a share of the slots ([`add_loads_shared`]).
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
     /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
@@ -611,7 +611,10 @@ impl Embedded {
             }
         }
         let last_loads = &mut self.state.last_loads;
-        solver.install(|| add_loads(&mut sum, last_loads, np * dim));
+        match block {
+            None => solver.install(|| add_loads(&mut sum, last_loads, np * dim)),
+            Some(_) => add_loads_shared(solver, &mut sum, last_loads, np * dim),
+        }
         self.scratch.odd = sum;
         exchanged
     }
