@@ -1,5 +1,6 @@
-//! The embedded part's predict and correct per rank (issue 40 item 1, steps 2 and 4):
-//! `Embedded::predict` and `Embedded::correct` on K = 1, 2, 4 thread ranks
+//! The embedded part's predict, loads and correct per rank (issue 40 item 1, steps 2 to 4):
+//! `Embedded::predict`, `Embedded::loads` (on the trial surface) and `Embedded::correct` on K =
+//! 1, 2, 4 thread ranks
 //! (`fluid_node::ranks::threads`, one rayon thread each, cut as `protocol::decomp::choose` cuts
 //! the grid, and K = 4 also as `1 × 2 × 2`), each rank timing its own predicts and corrects (a rank's time includes its waits
 //! for the others at the collectives, and with more ranks than cores, for a core), and counting
@@ -112,6 +113,10 @@ struct RankTimes {
     /// solver pool's thread together.
     predict_cpu: Vec<f64>,
     correct_cpu: Vec<f64>,
+    /// Wall and CPU time of the loads on each step's trial surface \[s\] (`Embedded::loads`,
+    /// between the predict and the correct).
+    loads: Vec<f64>,
+    loads_cpu: Vec<f64>,
     /// CPU time of the fluid's step alone \[s\] (`FluidSolver::advance`, no body), one per
     /// step, taken before the coupled steps.
     fluid_cpu: Vec<f64>,
@@ -165,6 +170,8 @@ fn rank_times(
                     correct: Vec::new(),
                     predict_cpu: Vec::new(),
                     correct_cpu: Vec::new(),
+                    loads: Vec::new(),
+                    loads_cpu: Vec::new(),
                     subfaces: 0,
                     cells: 0,
                     merged_or_widened: 0,
@@ -178,6 +185,12 @@ fn rank_times(
                     times.predict_cpu.push(cpu() - c);
                     assert!(report.ok(), "step {n}: {:?}", report.troubles);
                     let next = moved(e.surface(), dt);
+                    // The loads on the trial surface, as each iteration of the fixed point
+                    // takes them.
+                    let (t, c) = (Instant::now(), cpu());
+                    e.loads(&s, &next).expect("loads");
+                    times.loads.push(t.elapsed().as_secs_f64());
+                    times.loads_cpu.push(cpu() - c);
                     let (t, c) = (Instant::now(), cpu());
                     let report = e.correct(&mut s, dt, next, n, false).expect("correct");
                     times.correct.push(t.elapsed().as_secs_f64());
@@ -222,7 +235,7 @@ fn main() {
         state.set_primitive(c, 1.2, [0.0; 3], 1e5, 1.4);
     }
     println!(
-        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict and correct per rank, ms (median of the steps after the first; wall, and CPU of the rank's threads); sub-faces of F^(n+1) in the rank's cells"
+        "opening-fracture-3d boxes, {n}^3, {steps} steps: predict, loads on the trial surface and correct per rank, ms (median of the steps after the first; wall, and CPU of the rank's threads); sub-faces of F^(n+1) in the rank's cells"
     );
     println!("| K | part | rank 0 | rank 1 | rank 2 | rank 3 |");
     println!("| --- | --- | --- | --- | --- | --- |");
@@ -242,6 +255,8 @@ fn main() {
         println!("| {k} | correct | {} |", row(&|t| ms(&t.correct)));
         println!("| {k} | predict, CPU | {} |", row(&|t| ms(&t.predict_cpu)));
         println!("| {k} | correct, CPU | {} |", row(&|t| ms(&t.correct_cpu)));
+        println!("| {k} | loads | {} |", row(&|t| ms(&t.loads)));
+        println!("| {k} | loads, CPU | {} |", row(&|t| ms(&t.loads_cpu)));
         println!(
             "| {k} | fluid step alone, CPU | {} |",
             row(&|t| ms(&t.fluid_cpu))
