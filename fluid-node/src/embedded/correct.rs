@@ -90,7 +90,7 @@ impl Embedded {
         explicit: bool,
     ) -> Result<CorrectReport, EmbeddedError> {
         let folded = self.sweep(solver, &accepted, step)?;
-        let opening = self.opening_cells(&accepted);
+        let opening = self.opening_cells(solver, &accepted);
         let swept_mass = self.displaced(solver, step, folded)?;
         let mut report = CorrectReport::default();
         let mut leaving = self.fluid_fluxes(solver, dt, step, explicit, &opening, &mut report)?;

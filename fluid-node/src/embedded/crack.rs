@@ -4,6 +4,7 @@
 use super::cells::{across, domain_face, dominant_axis, fluid_part, full_state, shifted};
 use super::{COVERED_TOLERANCE, Embedded, SolidFrame};
 use crate::cutcell::{CutGeometry, SubFace};
+use crate::fv::FluidSolver;
 use crate::fv::euler::NQ;
 
 impl Embedded {
@@ -46,12 +47,21 @@ impl Embedded {
     /// there, so their `U^n` is vacuum, and the faces between them and the fluid take the
     /// Lax–Friedrichs flux of that fluid against vacuum (paper 000 §3.2), not the sweeps' flux
     /// against a ghost state.
-    pub(super) fn opening_cells(&mut self, accepted: &SolidFrame) -> Vec<bool> {
+    ///
+    /// Collective on a decomposed grid: each rank finds the opening cells among its own near
+    /// cells (what decides a cell, its sub-faces, its neighbours' and Λ, is the same on every
+    /// rank), and one all-gather of their slots gives every rank the list of one rank.
+    pub(super) fn opening_cells(
+        &mut self,
+        solver: &FluidSolver,
+        accepted: &SolidFrame,
+    ) -> Vec<bool> {
         let nvar = self.config.grid.dim + 2;
         let mut opening = vec![false; self.near.cells.len()];
         for s in &self.scratch.trial.subfaces {
-            if self.opening(s, accepted)
-                && let Some(k) = self.near.slot(s.cell as usize)
+            if let Some(k) = self.near.slot(s.cell as usize)
+                && self.own_slot(k)
+                && self.opening(s, accepted)
             {
                 opening[k] = true;
             }
@@ -72,8 +82,8 @@ impl Embedded {
             }
         }
         // A sealed cell the solid uncovers holds vacuum, as a crack does.
-        for (k, &c) in self.near.cells.iter().enumerate() {
-            let c = c as usize;
+        for k in self.near.own.iter() {
+            let c = self.near.cells[k] as usize;
             if !opening[k]
                 && fluid_part(self.scratch.trial.lambda(c)) > COVERED_TOLERANCE
                 && self.sealed(c)
@@ -81,13 +91,16 @@ impl Embedded {
                 opening[k] = true;
             }
         }
+        if self.config.block.is_some() {
+            gather_opening(solver, &mut opening);
+        }
         for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {
             self.near.saved[k * nvar..(k + 1) * nvar].fill(0.0);
         }
         opening
     }
 
-    /// Near cells (by slot, ascending) between two faces of a crack in `geom`: a wet sub-face of
+    /// This rank's near cells (by slot, ascending) between two faces of a crack in `geom`: a wet sub-face of
     /// one particle and, in the same cell or in the cell it faces along its normal's largest
     /// component, a wet sub-face of another particle facing back along that axis (the tie rule
     /// puts the two faces of a crack on a grid plane into two cells).
@@ -129,7 +142,7 @@ impl Embedded {
             Err(_) => &[],
         };
         let mut crack: Vec<usize> = Vec::new();
-        for &(k, first, end) in &slots {
+        for &(k, first, end) in slots.iter().filter(|s| self.own_slot(s.0)) {
             let ijk = grid.ijk(near.cells[k] as usize);
             let cracked = faces[first..end].iter().any(|&(p, f)| {
                 let (a, back) = (f / 2, f ^ 1);
@@ -192,5 +205,19 @@ impl Embedded {
         );
         f.swap(1, 1 + axis);
         Some(f)
+    }
+}
+
+/// Every rank's opening cells (its own near slots marked in `opening`) marked on every rank
+/// (collective). Traffic: 4 bytes per opening cell.
+fn gather_opening(solver: &FluidSolver, opening: &mut [bool]) {
+    let mut bytes = Vec::new();
+    for (k, _) in opening.iter().enumerate().filter(|(_, o)| **o) {
+        bytes.extend((k as u32).to_le_bytes());
+    }
+    for part in &solver.comm().all_gather(&bytes) {
+        for k in part.chunks_exact(4) {
+            opening[u32::from_le_bytes(k.try_into().expect("4")) as usize] = true;
+        }
     }
 }

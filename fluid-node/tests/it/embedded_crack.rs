@@ -20,7 +20,12 @@ const Y1: f64 = 0.7075;
 /// Two squares side by side, split at `MID` (the crack), the left one moved by `-s`, the right
 /// one by `+s` along x, moving at `∓u`. Every face is wet: the link between them has broken.
 fn pair(s: f64, u: f64) -> SolidFrame {
-    let square = |a: f64, b: f64| [[a, Y0], [b, Y0], [b, Y1], [a, Y1]];
+    pair_between(Y0, Y1, s, u)
+}
+
+/// [`pair`] of rectangles from `y0` to `y1`.
+pub(crate) fn pair_between(y0: f64, y1: f64, s: f64, u: f64) -> SolidFrame {
+    let square = |a: f64, b: f64| [[a, y0], [b, y0], [b, y1], [a, y1]];
     let (l, r) = (square(X0 - s, MID - s), square(MID + s, X1 + s));
     let vertices: Vec<f64> = l.iter().chain(&r).flatten().copied().collect();
     let mut elements = Vec::new();
@@ -29,7 +34,7 @@ fn pair(s: f64, u: f64) -> SolidFrame {
             elements.extend([4 * p + i, 4 * p + (i + 1) % 4]);
         }
     }
-    let centre = |q: &[[f64; 2]; 4]| [(q[0][0] + q[1][0]) / 2.0, (Y0 + Y1) / 2.0];
+    let centre = |q: &[[f64; 2]; 4]| [(q[0][0] + q[1][0]) / 2.0, (y0 + y1) / 2.0];
     let (cl, cr) = (centre(&l), centre(&r));
     SolidFrame {
         dim: 2,

@@ -33,6 +33,7 @@ mod fv_common;
 mod fv_conservation;
 mod fv_mirror;
 mod fv_ranks;
+mod fv_ranks_crack;
 mod fv_ranks_hooks;
 mod fv_ranks_init;
 mod fv_ranks_refusals;
