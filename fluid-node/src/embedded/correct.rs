@@ -564,9 +564,8 @@ impl Embedded {
         // sub-faces' order once every rank's are gathered.
         let block = self.config.block;
         let mut by_subface: Vec<(u32, [f64; 4])> = Vec::new();
-        for (i, s) in flux_geom.subfaces.iter().enumerate() {
-            if block.is_some_and(|b| !b.contains(grid.ijk(s.cell as usize)))
-                || !flux_frame.wet[s.element as usize]
+        for (i, s) in self.own_subfaces(&flux_geom.subfaces) {
+            if !flux_frame.wet[s.element as usize]
                 || domain_face(grid, s).is_some()
                 || self.opening(s, flux_frame)
                 || !touches_gas(grid, flux_geom, s)

@@ -58,10 +58,9 @@ impl Embedded {
     ) -> Vec<bool> {
         let nvar = self.config.grid.dim + 2;
         let mut opening = vec![false; self.near.cells.len()];
-        for s in &self.scratch.trial.subfaces {
-            if let Some(k) = self.near.slot(s.cell as usize)
-                && self.own_slot(k)
-                && self.opening(s, accepted)
+        for (_, s) in self.own_subfaces(&self.scratch.trial.subfaces) {
+            if self.opening(s, accepted)
+                && let Some(k) = self.near.slot(s.cell as usize)
             {
                 opening[k] = true;
             }

@@ -10,8 +10,8 @@ use super::cells::CellKind;
 use super::held::Held;
 use super::{Embedded, EmbeddedError};
 use crate::cutcell::{
-    BlockGeometry, BlockSweep, CellBox, HeldFractions, SubfaceSwept, SubfaceSweptEntry, Surface,
-    block_part_shared,
+    BlockGeometry, BlockSweep, CellBox, HeldFractions, SubFace, SubfaceSwept, SubfaceSweptEntry,
+    Surface, block_part_shared,
 };
 use crate::fv::FluidSolver;
 use crate::fv::comm::HaloExchange;
@@ -42,6 +42,36 @@ impl Embedded {
     /// Whether near slot `k` is a cell of this rank (every slot on one rank).
     pub(super) fn own_slot(&self, k: usize) -> bool {
         self.near.own.contains(k)
+    }
+
+    /// The sub-faces of this rank's own cells in `subfaces` (sorted by cell), with their places
+    /// there, in order: all of them on one rank; on a block, those from its first cell to its
+    /// last (found by bisection) that lie in it, which on a slab (every axis but the last
+    /// whole) is all of them.
+    ///
+    /// NOTE: the loops over a rank's own sub-faces tested every sub-face of the whole surface
+    /// for its block (two divisions each) or looked up its near slot.
+    pub(super) fn own_subfaces<'a>(
+        &'a self,
+        subfaces: &'a [SubFace],
+    ) -> impl Iterator<Item = (usize, &'a SubFace)> + 'a {
+        let grid = &self.config.grid;
+        let (range, slab) = match self.config.block {
+            None => (0..subfaces.len(), true),
+            Some(b) => {
+                let first = grid.index(b.lo[0], b.lo[1], b.lo[2]);
+                let hi: [usize; 3] = std::array::from_fn(|a| b.hi[a].max(1) - 1);
+                let end = grid.index(hi[0], hi[1], hi[2]) + 1;
+                let at = |c: usize| subfaces.partition_point(|s| (s.cell as usize) < c);
+                let last = grid.dim - 1;
+                let slab = (0..last).all(|a| b.lo[a] == 0 && b.hi[a] == grid.cells[a]);
+                (at(first)..at(end), slab)
+            }
+        };
+        let block = self.config.block;
+        range.map(move |i| (i, &subfaces[i])).filter(move |(_, s)| {
+            slab || block.is_none_or(|b| b.contains(grid.ijk(s.cell as usize)))
+        })
     }
 
     /// The contents of every rank's updated near cells on every rank (collective): each rank

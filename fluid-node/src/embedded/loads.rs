@@ -77,12 +77,10 @@ impl Embedded {
                 let grid = &self.config.grid;
                 let reuse = std::mem::take(&mut self.scratch.block);
                 let mut terms = |subfaces: &[SubFace], lambda: &dyn Fn(usize) -> f64| {
-                    (subfaces.iter())
-                        .filter(|s| block.contains(grid.ijk(s.cell as usize)))
-                        .find_map(|s| {
-                            let pc = self.push_load(s, trial, &levers, lambda, &mut sum).err()?;
-                            Some((s.cell, s.element, pc))
-                        })
+                    (self.own_subfaces(subfaces)).find_map(|(_, s)| {
+                        let pc = self.push_load(s, trial, &levers, lambda, &mut sum).err()?;
+                        Some((s.cell, s.element, pc))
+                    })
                 };
                 // NOTE: as on one rank, loads on `F^n` take the geometry of `F^n` the last
                 // correct computed, which every rank holds whole: Λ and the sub-faces of the
