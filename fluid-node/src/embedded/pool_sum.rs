@@ -116,6 +116,23 @@ mod tests {
     use crate::ranks::threads::ThreadRanks;
     use protocol::sum::OddSum;
 
+    /// Sums of `n_slots` slots that start at +0, -0 and other values, and what
+    /// `OddSum::add_into` of `terms` makes of them.
+    fn start_and_add_into(terms: &[(u32, f64)], n_slots: usize) -> (Vec<f64>, Vec<f64>) {
+        let start: Vec<f64> = (0..n_slots)
+            .map(|i| [0.0, -0.0, i as f64 * 0.3][i % 3])
+            .collect();
+        let mut expected = start.clone();
+        let mut serial = OddSum::default();
+        serial.extend(terms.iter().copied());
+        serial.add_into(&mut expected);
+        (start, expected)
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
     /// On pools of 1, 2 and 5 threads, over few slots of many terms (the particles' loads)
     /// and many slots of few (the cells' contents), with zeros of both signs, equal
     /// magnitudes of both signs and a NaN, into sums that start at +0, -0 and other values:
@@ -147,14 +164,7 @@ mod tests {
                 terms.push((slot, v));
             }
             terms.push((1, f64::NAN));
-            let start: Vec<f64> = (0..n_slots)
-                .map(|i| [0.0, -0.0, i as f64 * 0.3][i % 3])
-                .collect();
-            let mut expected = start.clone();
-            let mut serial = OddSum::default();
-            serial.extend(terms.iter().copied());
-            serial.add_into(&mut expected);
-            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            let (start, expected) = start_and_add_into(&terms, n_slots);
             for threads in [1, 2, 5] {
                 let mut got = start.clone();
                 let mut sum = OddSum::default();
@@ -201,14 +211,7 @@ mod tests {
                     (slot, v)
                 })
                 .collect();
-            let start: Vec<f64> = (0..n_slots)
-                .map(|i| [0.0, -0.0, i as f64 * 0.3][i % 3])
-                .collect();
-            let mut expected = start.clone();
-            let mut serial = OddSum::default();
-            serial.extend(terms.iter().copied());
-            serial.add_into(&mut expected);
-            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            let (start, expected) = start_and_add_into(&terms, n_slots);
             for ranks in [1, 2, 3, 5] {
                 let comms = ThreadRanks::new(ranks);
                 let got: Vec<Vec<f64>> = std::thread::scope(|scope| {
