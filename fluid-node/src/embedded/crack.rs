@@ -99,10 +99,10 @@ impl Embedded {
         opening
     }
 
-    /// This rank's near cells (by slot, ascending) between two faces of a crack in `geom`: a wet sub-face of
-    /// one particle and, in the same cell or in the cell it faces along its normal's largest
-    /// component, a wet sub-face of another particle facing back along that axis (the tie rule
-    /// puts the two faces of a crack on a grid plane into two cells).
+    /// This rank's near cells (by slot, ascending) between two faces of a crack in `geom`: a
+    /// wet sub-face of one particle and, in the same cell or in the cell it faces along its
+    /// normal's largest component, a wet sub-face of another particle facing back along that
+    /// axis (the tie rule puts the two faces of a crack on a grid plane into two cells).
     ///
     /// NOTE: the faces are listed for the cells that hold wet sub-faces only, grouped by slot
     /// in the sub-faces' order (by cell, so by slot: the near cells are ascending), each face

@@ -3,9 +3,9 @@
 //! rectangles flying apart, their shared face just wet) meets the cuts: the crack plane x =
 //! 0.5075 lies in column 20 of 40, where `2 × 1` cuts x, and its lower mouth (a cut cell) in row
 //! 19, just below the cut of `1 × 2` at y = 0.5, so that the mouth (rank 0's) takes the
-//! Lax–Friedrichs flux against the covered cell above it that the crack opens (rank 1's). Every step's
-//! predict report, loads, correct report, totals, budget and solid-flux loads, and the final
-//! state, are one rank's, as bits.
+//! Lax–Friedrichs flux against the covered cell above it that the crack opens (rank 1's).
+//! Every step's predict report, loads, correct report, totals, budget and solid-flux loads, and
+//! the final state, are one rank's, as bits.
 
 use fluid_node::embedded::Embedded;
 use fluid_node::fv::{BoundaryKind, FluidSolver};
