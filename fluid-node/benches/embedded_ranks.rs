@@ -2,16 +2,16 @@
 //! `Embedded::predict`, `Embedded::loads` (on the trial surface) and `Embedded::correct` on K = 1,
 //! 2, 4 thread ranks (`fluid_node::ranks::threads`, one rayon thread each, cut as
 //! `protocol::decomp::choose` cuts the grid, and K = 4 also as `1 × 2 × 2`), each rank timing its
-//! own predicts, loads and corrects (a rank's time includes its waits for the others at the collectives,
-//! and with more ranks than cores, for a core), and counting the sub-faces of `F^{n+1}` in its own
-//! cells (whose prisms it clips) and its near cells (whose updates it makes), the work of the
-//! correct that is shared out by rank, the steps whose mixing groups merged or widened (the mixing
-//! then merges and mixes every group on every rank), and the heap bytes its `Embedded` holds after
-//! the last step, by part (`Embedded::memory`). Each rank also counts the CPU time of its predicts,
-//! loads and corrects: its own thread's and its solver pool's thread's (`/proc/self/task/TID/schedstat`,
-//! Linux), which leaves out the waits at the collectives (the thread ranks block in a channel's
-//! `recv`) and the waits for a core, so with more ranks than cores it is still each rank's own
-//! work.
+//! own predicts, loads and corrects (a rank's time includes its waits for the others at the
+//! collectives, and with more ranks than cores, for a core), and counting the sub-faces of
+//! `F^{n+1}` in its own cells (whose prisms it clips) and its near cells (whose updates it makes),
+//! the work of the correct that is shared out by rank, the steps whose mixing groups merged or
+//! widened (the mixing then merges and mixes every group on every rank), and the heap bytes its
+//! `Embedded` holds after the last step, by part (`Embedded::memory`). Each rank also counts the
+//! CPU time of its predicts, loads and corrects: its own thread's and its solver pool's thread's
+//! (`/proc/self/task/TID/schedstat`, Linux), which leaves out the waits at the collectives (the
+//! thread ranks block in a channel's `recv`) and the waits for a core, so with more ranks than
+//! cores it is still each rank's own work.
 //!
 //! ```text
 //! cargo bench -p fluid-node --no-default-features --bench embedded_ranks --no-run
