@@ -40,7 +40,7 @@ impl Embedded {
     /// on `F^n`, the whole grid's geometry it holds, as one rank does), and
     /// the terms of every rank are gathered on every rank, each rank adds up a share of the
     /// slots as one rank adds them ([`OddSum`]: the sums do not depend on the terms' order;
-    /// [`add_loads_shared`]) and one all-gather of the sums gives every rank the loads of one
+    /// `add_loads_shared`) and one all-gather of the sums gives every rank the loads of one
     /// rank.
     pub fn loads(
         &mut self,
