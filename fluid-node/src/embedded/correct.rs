@@ -17,7 +17,7 @@ use super::gather::{
     CellUpdate, Updates, assemble_by_block, gather_solid_flux, gather_swept, gather_updates,
 };
 use super::levers::Levers;
-use super::loads::{add_loads, add_loads_shared, push_moment};
+use super::loads::{add_loads, push_moment};
 use super::mix::{Mixed, WrittenCheck};
 use super::pool_sum::add_on_pool;
 use super::{COVERED_TOLERANCE, Embedded, EmbeddedError, SolidFrame};
@@ -522,7 +522,7 @@ impl Embedded {
     /// its sum is one rank's: [`OddSum`]); one all-gather of every rank's load terms and of
     /// each sub-face's work and impulse ([`gather_solid_flux`]) gives every rank the work and
     /// impulse summed in the sub-faces' order, as one rank sums them, and the loads of one rank
-    /// ([`OddSum`] again), each rank adding up a share of the slots ([`add_loads_shared`]).
+    /// ([`OddSum`] again), each rank adding up a share of the slots ([`add_loads`]).
     /// Semi-implicit: on the wet sub-faces of F^{n+1}, torques about X^{n+1} (paper 003 step
     /// 7), or with the levers at `t^n` of [`Levers`] (the same as the loads'). Explicit: on
     /// those of F^n about X^n (paper 000 eq. 11), the surface the solid's loads came from, so
@@ -559,10 +559,9 @@ impl Embedded {
         let levers = Levers::new(start, &self.state.current, flux_frame);
         let mut sum = std::mem::take(&mut self.scratch.odd);
         sum.clear();
-        // On a decomposed grid a rank takes the sub-faces of its own cells, whose near slots
-        // are its own, and keeps each one's work and impulse by its index, for the sums in the
-        // sub-faces' order once every rank's are gathered.
-        let block = self.config.block;
+        // A rank takes the sub-faces of its own cells, whose near slots are its own, and keeps
+        // each one's work and impulse by its index, summed in the sub-faces' order (once every
+        // rank's are gathered, on a decomposed grid).
         let mut by_subface: Vec<(u32, [f64; 4])> = Vec::new();
         for (i, s) in self.own_subfaces(&flux_geom.subfaces) {
             if !flux_frame.wet[s.element as usize]
@@ -592,28 +591,21 @@ impl Embedded {
                 gained.push(k * NQ + 1 + a, dt * pi[a] / volume);
             }
             gained.push(k * NQ + dim + 1, dt * power / volume);
-            let exchange = [dt * power, dt * pi[0], dt * pi[1], dt * pi[2]];
-            match block {
-                None => exchanged.add(dim, &exchange),
-                Some(_) => by_subface.push((i as u32, exchange)),
-            }
+            by_subface.push((i as u32, [dt * power, dt * pi[0], dt * pi[1], dt * pi[2]]));
             let f = [-pi[0], -pi[1], -pi[2]];
             for a in 0..dim {
                 sum.push(p * dim + a, f[a]);
             }
             push_moment(&mut sum, np * dim, dim, p, r, f);
         }
-        if block.is_some() {
+        if self.config.block.is_some() {
             gather_solid_flux(solver, dim, &mut by_subface, &mut sum);
-            for (_, exchange) in &by_subface {
-                exchanged.add(dim, exchange);
-            }
+        }
+        for (_, exchange) in &by_subface {
+            exchanged.add(dim, exchange);
         }
         let last_loads = &mut self.state.last_loads;
-        match block {
-            None => solver.install(|| add_loads(&mut sum, last_loads, np * dim)),
-            Some(_) => add_loads_shared(solver, &mut sum, last_loads, np * dim),
-        }
+        add_loads(solver, &mut sum, last_loads, np * dim);
         self.scratch.odd = sum;
         exchanged
     }

@@ -6,7 +6,7 @@ use protocol::sum::OddSum;
 use super::cells::{domain_face, pressure_cell, touches_gas_with};
 use super::error::Reach;
 use super::levers::Levers;
-use super::pool_sum::{add_on_pool, add_shared};
+use super::pool_sum::add_shared;
 use super::{Embedded, EmbeddedError, SolidFrame};
 use crate::cutcell::{SubFace, Surface, compute, compute_block_cells_reusing};
 use crate::fv::FluidSolver;
@@ -40,7 +40,7 @@ impl Embedded {
     /// on `F^n`, the whole grid's geometry it holds, as one rank does), and
     /// the terms of every rank are gathered on every rank, each rank adds up a share of the
     /// slots as one rank adds them ([`OddSum`]: the sums do not depend on the terms' order;
-    /// `add_loads_shared`) and one all-gather of the sums gives every rank the loads of one
+    /// `add_loads`) and one all-gather of the sums gives every rank the loads of one
     /// rank.
     pub fn loads(
         &mut self,
@@ -111,10 +111,7 @@ impl Embedded {
             force: vec![0.0; np * d],
             torque: vec![0.0; np * nr],
         };
-        match self.config.block {
-            None => solver.install(|| add_loads(&mut sum, &mut loads, np * d)),
-            Some(_) => add_loads_shared(solver, &mut sum, &mut loads, np * d),
-        }
+        add_loads(solver, &mut sum, &mut loads, np * d);
         self.scratch.odd = sum;
         Ok(loads)
     }
@@ -186,24 +183,11 @@ pub(super) fn push_moment(
     }
 }
 
-/// Adds the force slots (`0..n_force`) and torque slots (after them) of `sum` into `loads`, in
-/// parallel on the pool the call runs in ([`add_on_pool`]).
-pub(super) fn add_loads(sum: &mut OddSum, loads: &mut Loads, n_force: usize) {
-    let mut all = std::mem::take(&mut loads.force);
-    all.append(&mut loads.torque);
-    add_on_pool(sum, &mut all);
-    loads.torque = all.split_off(n_force);
-    loads.force = all;
-}
-
-/// [`add_loads`] on a decomposed grid: each rank sums a share of the slots ([`add_shared`],
-/// collective), and every rank gets every slot's sum, the bits of [`add_loads`].
-pub(super) fn add_loads_shared(
-    solver: &FluidSolver,
-    sum: &mut OddSum,
-    loads: &mut Loads,
-    n_force: usize,
-) {
+/// Adds the force slots (`0..n_force`) and torque slots (after them) of `sum` into `loads`
+/// ([`add_shared`]: on the solver's pool; on a decomposed grid each rank sums a share of the
+/// slots and one all-gather gives every rank every slot's sum, collective), the bits of one
+/// rank's [`OddSum::add_into`].
+pub(super) fn add_loads(solver: &FluidSolver, sum: &mut OddSum, loads: &mut Loads, n_force: usize) {
     let mut all = std::mem::take(&mut loads.force);
     all.append(&mut loads.torque);
     add_shared(solver, sum, &mut all);

@@ -44,9 +44,9 @@ pub(super) fn add_on_pool(sum: &mut OddSum, out: &mut [f64]) {
     sum.clear();
 }
 
-/// [`add_on_pool`] with the slots shared out among the ranks of `solver` (collective): every rank
-/// holds the same terms (gathered from every rank), each sums the slots of its share on the pool
-/// the call runs in, and one all-gather of those sums gives every rank every slot's sum, added
+/// [`add_on_pool`] on the pool of `solver` (one rank), or with the slots shared out among its
+/// ranks (collective): every rank holds the same terms (gathered from every rank), each sums the
+/// slots of its share on its pool, and one all-gather of those sums gives every rank every slot's sum, added
 /// to `out[slot]` as [`OddSum::add_into`] adds it: the same bits on any number of ranks and
 /// threads, and each rank sorts about `1 / K` of the terms.
 ///
