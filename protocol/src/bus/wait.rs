@@ -17,6 +17,9 @@ use crate::bus::run::{other, role_of};
 use crate::transport::TransportError;
 use crate::wire::NodeKind;
 
+/// The shortest wait [`Bus::block`] hands the listener (see the note there).
+const MIN_BLOCK: Duration = Duration::from_micros(1);
+
 impl Bus {
     /// Moves every frame waiting in the subscribers into `pending`.
     pub(super) fn drain(&mut self) -> Result<bool, TransportError> {
@@ -112,6 +115,13 @@ impl Bus {
         peer: Option<NodeKind>,
         timeout: Duration,
     ) -> Result<bool, TransportError> {
+        // NOTE: iceoryx2 0.10's listener sets the timeout as `SO_RCVTIMEO` in whole microseconds
+        // (`AsTimeval` drops the nanoseconds), and there 0 means no timeout: a slice under 1 µs
+        // (a deadline or a liveness check falling due within it) blocked until the next
+        // notification, which a peer that never came, or a dead one, never sends. A coupler
+        // shutting a run down after its fluid node failed to start waited so for 11 minutes
+        // and more, past a 60 s `--timeout-s`.
+        let timeout = timeout.max(MIN_BLOCK);
         let one = peer
             .and_then(|p| self.links.iter().position(|l| l.peer == p))
             .or_else(|| (self.links.len() == 1).then_some(0));
@@ -261,4 +271,35 @@ fn block_on_one(
     }
     link.seen_publisher |= seen;
     Ok(check_now)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bus::{Bus, cleanup_run};
+
+    /// A wait shorter than a microsecond on a silent peer returns (at once), as any bounded
+    /// wait must: without [`MIN_BLOCK`] the listener got no timeout and blocked for good.
+    #[test]
+    fn a_wait_under_a_microsecond_returns() {
+        let run = format!("tsubus{}", std::process::id());
+        let mut coupler = Bus::open(&run, NodeKind::Coupler, &[NodeKind::Fluid]).expect("open");
+        let fluid = Bus::open(&run, NodeKind::Fluid, &[NodeKind::Coupler]).expect("open");
+        let (tell, told) = std::sync::mpsc::channel();
+        let waiter = std::thread::spawn(move || {
+            for nanos in [0, 1, 500, 999] {
+                let waited = coupler.block(Some(NodeKind::Fluid), Duration::from_nanos(nanos));
+                tell.send((nanos, waited.is_ok())).expect("the test waits");
+            }
+            coupler
+        });
+        for _ in 0..4 {
+            let (nanos, ok) = told
+                .recv_timeout(Duration::from_secs(10))
+                .expect("a wait under a microsecond did not return within 10 s");
+            assert!(ok, "the wait of {nanos} ns failed");
+        }
+        drop((waiter.join().expect("the waiter"), fluid));
+        let _ = cleanup_run(&run);
+    }
 }
