@@ -248,6 +248,8 @@ pub enum DriverError {
 pub struct Abort {
     flag: Arc<AtomicBool>,
     reason: Arc<std::sync::Mutex<String>>,
+    /// The nodes whose process ended before the run did: no shutdown is sent to them.
+    exited: Arc<std::sync::Mutex<Vec<NodeKind>>>,
 }
 
 impl Abort {
@@ -255,6 +257,20 @@ impl Abort {
     pub fn raise(&self, reason: String) {
         *self.reason.lock().expect("abort reason lock") = reason;
         self.flag.store(true, Ordering::SeqCst);
+    }
+
+    /// [`Abort::raise`] for the process of `node`, which ended before the run did.
+    pub fn node_exited(&self, node: NodeKind, reason: String) {
+        self.exited.lock().expect("abort exited lock").push(node);
+        self.raise(reason);
+    }
+
+    /// Whether the process of `node` ended before the run did.
+    fn has_exited(&self, node: NodeKind) -> bool {
+        self.exited
+            .lock()
+            .expect("abort exited lock")
+            .contains(&node)
     }
 
     fn check(&self) -> Option<String> {
@@ -305,7 +321,7 @@ pub fn drive(
         Ok(Finish::MaxSteps) => ("max_steps".to_string(), None),
         // `run.record_max_bytes`: a clean end after a complete step, like `max_steps`.
         Err(DriverError::Record(SinkError::Limit(status))) => {
-            shut_down(transport, coupler, sink, ShutdownReason::Completed);
+            shut_down(transport, coupler, sink, abort, ShutdownReason::Completed);
             (status, None)
         }
         Err(err) => {
@@ -340,6 +356,7 @@ pub fn drive(
                 transport,
                 coupler,
                 sink,
+                abort,
                 ShutdownReason::Failure(reason.clone()),
             );
             (reason, Some(err))
@@ -371,12 +388,21 @@ pub fn drive(
     (summary, error)
 }
 
-/// Sends the nodes a shutdown with `reason` (recorded too), and makes the record's last step
-/// durable.
+/// How long [`shut_down`] waits for each node to take its shutdown.
+///
+/// NOTE: a node whose process failed before it subscribed (a missing library, `mpirun` refusing
+/// to run as root) never takes it: the transport's send timeout (the run's `--timeout-s`) kept
+/// the coupler 150 s after it had reported that node dead. A node that is alive and misses its
+/// shutdown is ended by the supervisor after its grace period.
+const SHUTDOWN_SEND_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Sends the nodes whose process has not ended a shutdown with `reason` (recorded too), waiting
+/// at most [`SHUTDOWN_SEND_TIMEOUT`] for each, and makes the record's last step durable.
 fn shut_down(
     transport: &mut dyn Transport,
     coupler: &Coupler,
     sink: &mut dyn RecordSink,
+    abort: &Abort,
     reason: ShutdownReason,
 ) {
     let stamp = Stamp::step(coupler.step());
@@ -398,7 +424,11 @@ fn shut_down(
             if let Err(err) = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame) {
                 tracing::warn!("the record lacks the shutdown sent to the {node} node: {err}");
             }
-            let _ = transport.send(node, &frame);
+            if abort.has_exited(node) {
+                tracing::debug!("no shutdown sent to the {node} node: its process ended");
+            } else if let Err(err) = transport.send_within(node, &frame, SHUTDOWN_SEND_TIMEOUT) {
+                tracing::debug!("the {node} node did not take its shutdown: {err}");
+            }
         }
     }
     if let Err(err) = sink.end_step() {

@@ -629,7 +629,7 @@ async fn supervise(
                 }
                 let reason = format!("{node} node exited before the end of the run ({})", info.text);
                 exits.push((node, info));
-                abort.raise(reason);
+                abort.node_exited(node, reason);
             }
         }
     };

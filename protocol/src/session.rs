@@ -115,13 +115,18 @@ fn node_loop<N: NodeModel + ?Sized>(
     mut open: impl FnMut(&mut N, &mut Link<'_>) -> Result<(), NodeError>,
     mut advance: impl FnMut(&mut N, &mut Link<'_>, &StepPlan) -> Result<(), NodeError>,
 ) -> Result<(), NodeError> {
-    link.greet(Hello {
+    let greeted = link.greet(Hello {
         node: kind,
         protocol_version: PROTOCOL_VERSION,
         scene_hash: cfg.scene_hash,
         implementation: node.implementation().to_string(),
         capabilities: vec!["checkpoint".into()],
-    })?;
+    });
+    if let Err(LinkError::ShutDown) = greeted {
+        debug!("shut down by the coupler before it welcomed this node");
+        return Ok(());
+    }
+    greeted?;
     debug!(
         "greeted the coupler: {} {kind}, protocol {PROTOCOL_VERSION}, scene hash {:016x}, {}",
         node.implementation(),

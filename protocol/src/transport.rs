@@ -40,6 +40,19 @@ pub trait Transport {
     /// Sends one frame to `to`.
     fn send(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError>;
 
+    /// [`Transport::send`], waiting at most `timeout` (not the transport's own send timeout) for
+    /// `to` to take the frame: for a frame that matters less than ending on time, such as the
+    /// shutdown of a run that failed, to a peer that may never have come or may be gone.
+    fn send_within(
+        &mut self,
+        to: NodeKind,
+        frame: &[u8],
+        timeout: Duration,
+    ) -> Result<(), TransportError> {
+        let _ = timeout;
+        self.send(to, frame)
+    }
+
     /// Sends one frame to `to` that another [`Transport::send`] to `to` follows at once: a
     /// transport that wakes its receiver per frame may leave that to the frame that follows
     /// (the receiver takes both at its wake-up). Nothing is lost if none follows: the frame is
@@ -155,6 +168,10 @@ pub enum LinkError {
     /// The coupler sent something that does not fit the handshake.
     #[error("unexpected message from the coupler: {0}")]
     Unexpected(String),
+    /// The coupler shut the run down before it welcomed this node (the other node failed to
+    /// start): the node ends cleanly.
+    #[error("shut down by the coupler before it welcomed this node")]
+    ShutDown,
 }
 
 /// A node's typed view of its transport to the coupler.
@@ -199,6 +216,7 @@ impl<'a> Link<'a> {
         match self.recv()? {
             crate::wire::Message::Welcome(w) if w.accepted => Ok(()),
             crate::wire::Message::Welcome(w) => Err(LinkError::Refused(w.reason)),
+            crate::wire::Message::Shutdown(_) => Err(LinkError::ShutDown),
             other => Err(LinkError::Unexpected(format!(
                 "{:?} instead of Welcome",
                 other.kind()

@@ -83,6 +83,42 @@ fn signal_ends_the_run_cleanly(signal: &str, group: bool) {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// A node whose process fails before it joins the bus (`false` here; `mpirun` refusing to run
+/// as root, or a missing library, in a user's run): the coupler names it and ends at once, the
+/// node that did start ends cleanly on its shutdown, and no node is left. Before, the shutdown
+/// the coupler sent the failed node waited for it for the transport's send timeout
+/// (`--timeout-s`, 60 s here), and the other node complained of a shutdown instead of a welcome.
+#[test]
+fn a_node_that_fails_before_it_joins_ends_the_run_at_once() {
+    let dir = out_dir("node-fails-at-start");
+    let scene = long_doubles_scene(&dir);
+    let out = dir.join("out");
+    let _start = shared_start();
+    let started = Instant::now();
+    let output = coupler()
+        .env("COSIM_FLUID_BIN", "false")
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .args(["--quiet", "--timeout-s", "60"])
+        .output()
+        .expect("coupler-node starts");
+    let took = started.elapsed();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    assert!(
+        took < Duration::from_secs(20),
+        "the run ended {took:?} after it started: {stderr}"
+    );
+    let s = summary(&out);
+    let status = s["status"].as_str().expect("status");
+    assert!(status.starts_with("fluid node died"), "{s}");
+    assert!(!stderr.contains("unexpected message"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn sigterm_to_the_coupler_ends_the_run_as_interrupted() {
     signal_ends_the_run_cleanly("TERM", false);

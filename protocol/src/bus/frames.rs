@@ -17,13 +17,22 @@ impl Transport for Bus {
     }
 
     fn send(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError> {
-        self.publish(to, frame, true)
+        self.publish(to, frame, true, self.send_timeout)
+    }
+
+    fn send_within(
+        &mut self,
+        to: NodeKind,
+        frame: &[u8],
+        timeout: Duration,
+    ) -> Result<(), TransportError> {
+        self.publish(to, frame, true, timeout.min(self.send_timeout))
     }
 
     fn send_more(&mut self, to: NodeKind, frame: &[u8]) -> Result<(), TransportError> {
         // NOTE: each notification is a datagram and a wake-up of the receiver (about 0.15 ms of
         // the sender's time on the project's machine); the frame that follows brings both.
-        self.publish(to, frame, false)
+        self.publish(to, frame, false, self.send_timeout)
     }
 
     fn recv(
@@ -71,8 +80,15 @@ impl Transport for Bus {
 }
 
 impl Bus {
-    /// [`Transport::send`], with the receiver's notification only if `notify`.
-    fn publish(&mut self, to: NodeKind, frame: &[u8], notify: bool) -> Result<(), TransportError> {
+    /// [`Transport::send`], with the receiver's notification only if `notify`, waiting at most
+    /// `timeout` for the receiver.
+    fn publish(
+        &mut self,
+        to: NodeKind,
+        frame: &[u8],
+        notify: bool,
+        timeout: Duration,
+    ) -> Result<(), TransportError> {
         let idx = self.link_index(to)?;
         if frame.len() > MAX_FRAME_LEN {
             return Err(TransportError::Other(format!(
@@ -81,7 +97,7 @@ impl Bus {
             )));
         }
         let started = Instant::now();
-        let deadline = started + self.send_timeout;
+        let deadline = started + timeout;
         loop {
             if self.links[idx].dead {
                 return Err(TransportError::PeerDead(to));
