@@ -7,14 +7,16 @@
 //!
 //! Logs: each node's greeting and each step at debug, each fixed-point decision at trace.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use protocol::codec::{self, DecodeError};
 use protocol::transport::{Transport, TransportError};
 use protocol::wire::{Message, MessageKind, NodeKind, Shutdown, ShutdownReason, Stamp};
 use serde::Serialize;
+
+mod abort;
+
+pub use abort::Abort;
 
 use crate::ledger::LedgerEntry;
 use crate::progress::Progress;
@@ -243,43 +245,6 @@ pub enum DriverError {
     },
 }
 
-/// What the supervisor can tell the loop while it waits.
-#[derive(Clone, Debug, Default)]
-pub struct Abort {
-    flag: Arc<AtomicBool>,
-    reason: Arc<std::sync::Mutex<String>>,
-    /// The nodes whose process ended before the run did: no shutdown is sent to them.
-    exited: Arc<std::sync::Mutex<Vec<NodeKind>>>,
-}
-
-impl Abort {
-    /// Asks the loop to stop with `reason`.
-    pub fn raise(&self, reason: String) {
-        *self.reason.lock().expect("abort reason lock") = reason;
-        self.flag.store(true, Ordering::SeqCst);
-    }
-
-    /// [`Abort::raise`] for the process of `node`, which ended before the run did.
-    pub fn node_exited(&self, node: NodeKind, reason: String) {
-        self.exited.lock().expect("abort exited lock").push(node);
-        self.raise(reason);
-    }
-
-    /// Whether the process of `node` ended before the run did.
-    fn has_exited(&self, node: NodeKind) -> bool {
-        self.exited
-            .lock()
-            .expect("abort exited lock")
-            .contains(&node)
-    }
-
-    fn check(&self) -> Option<String> {
-        self.flag
-            .load(Ordering::SeqCst)
-            .then(|| self.reason.lock().expect("abort reason lock").clone())
-    }
-}
-
 fn wall_ns() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -420,14 +385,18 @@ fn shut_down(
                     reason: reason.clone(),
                 }),
             );
-            tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step);
             if let Err(err) = sink.frame(NodeKind::Coupler, node, t, wall_ns(), &frame) {
                 tracing::warn!("the record lacks the shutdown sent to the {node} node: {err}");
             }
             if abort.has_exited(node) {
                 tracing::debug!("no shutdown sent to the {node} node: its process ended");
-            } else if let Err(err) = transport.send_within(node, &frame, SHUTDOWN_SEND_TIMEOUT) {
-                tracing::debug!("the {node} node did not take its shutdown: {err}");
+            } else {
+                match transport.send_within(node, &frame, SHUTDOWN_SEND_TIMEOUT) {
+                    Ok(()) => {
+                        tracing::debug!("shutdown sent to the {node} node at step {}", stamp.step)
+                    }
+                    Err(err) => tracing::debug!("the {node} node did not take its shutdown: {err}"),
+                }
             }
         }
     }
@@ -644,7 +613,7 @@ fn receive(
             Ok(got) => break got,
             Err(TransportError::Timeout { .. }) if waiting_since.elapsed() < cfg.timeout => {}
             Err(TransportError::Timeout { .. }) => {
-                let who: Vec<&str> = coupler.waiting_for().iter().map(|n| n.name()).collect();
+                let who: Vec<&str> = coupler.silent().iter().map(|n| n.name()).collect();
                 return Err(DriverError::Silent {
                     who: who.join(" and "),
                     timeout: cfg.timeout,

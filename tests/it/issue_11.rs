@@ -119,6 +119,39 @@ fn a_node_that_fails_before_it_joins_ends_the_run_at_once() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// A node that starts and never greets (a process that hangs at its start): the run stops at
+/// the deadline naming that node alone. Before, the status named "fluid and solid": the solid,
+/// which had greeted, waited for the step plan that comes once both have, and was blamed too.
+#[test]
+fn a_node_that_never_greets_is_named_alone() {
+    let dir = out_dir("node-never-greets");
+    let scene = long_doubles_scene(&dir);
+    let out = dir.join("out");
+    let hang = dir.join("hang.sh");
+    std::fs::write(&hang, "#!/bin/sh\nexec sleep 60\n").expect("write");
+    std::fs::set_permissions(&hang, std::os::unix::fs::PermissionsExt::from_mode(0o755))
+        .expect("chmod");
+    let _start = shared_start();
+    let output = coupler()
+        .env("COSIM_FLUID_BIN", &hang)
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .args(["--quiet", "--timeout-s", "2"])
+        .output()
+        .expect("coupler-node starts");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let s = summary(&out);
+    let status = s["status"].as_str().expect("status");
+    assert!(
+        status.starts_with("fluid node stopped answering: no message within 2s at step 0"),
+        "{s}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn sigterm_to_the_coupler_ends_the_run_as_interrupted() {
     signal_ends_the_run_cleanly("TERM", false);

@@ -136,7 +136,22 @@ impl Coupler {
         (mean, self.iteration_max)
     }
 
-    /// The nodes the coupler is waiting for now (for deadline messages).
+    /// The nodes to name when the wait for [`Coupler::waiting_for`] times out: at the greeting,
+    /// those that have not said hello, if any (a node that has waits for what the coupler sends
+    /// once every node has greeted, so it is not the silent one), else those waited for.
+    pub fn silent(&self) -> Vec<NodeKind> {
+        if let Phase::Greeting { hello, .. } = &self.phase {
+            let unheard: Vec<NodeKind> = (self.cfg.nodes().into_iter())
+                .filter(|n| !hello.contains(n))
+                .collect();
+            if !unheard.is_empty() {
+                return unheard;
+            }
+        }
+        self.waiting_for()
+    }
+
+    /// The nodes the coupler is waiting for now (the peers a receive takes frames from).
     pub fn waiting_for(&self) -> Vec<NodeKind> {
         match &self.phase {
             Phase::Greeting {
