@@ -83,6 +83,25 @@ fn signal_ends_the_run_cleanly(signal: &str, group: bool) {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// `coupler-node run scene --out out --timeout-s timeout_s` with `fluid` as the fluid node.
+fn run_with_fluid(
+    fluid: &std::ffi::OsStr,
+    scene: &Path,
+    out: &Path,
+    timeout_s: &str,
+) -> std::process::Output {
+    let _start = shared_start();
+    coupler()
+        .env("COSIM_FLUID_BIN", fluid)
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(["--quiet", "--timeout-s", timeout_s])
+        .output()
+        .expect("coupler-node starts")
+}
+
 /// A node whose process fails before it joins the bus (`false` here; `mpirun` refusing to run
 /// as root, or a missing library, in a user's run): the coupler names it and ends at once, the
 /// node that did start ends cleanly on its shutdown, and no node is left. Before, the shutdown
@@ -93,17 +112,8 @@ fn a_node_that_fails_before_it_joins_ends_the_run_at_once() {
     let dir = out_dir("node-fails-at-start");
     let scene = long_doubles_scene(&dir);
     let out = dir.join("out");
-    let _start = shared_start();
     let started = Instant::now();
-    let output = coupler()
-        .env("COSIM_FLUID_BIN", "false")
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .args(["--quiet", "--timeout-s", "60"])
-        .output()
-        .expect("coupler-node starts");
+    let output = run_with_fluid("false".as_ref(), &scene, &out, "60");
     let took = started.elapsed();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
@@ -131,16 +141,7 @@ fn a_node_that_never_greets_is_named_alone() {
     std::fs::write(&hang, "#!/bin/sh\nexec sleep 60\n").expect("write");
     std::fs::set_permissions(&hang, std::os::unix::fs::PermissionsExt::from_mode(0o755))
         .expect("chmod");
-    let _start = shared_start();
-    let output = coupler()
-        .env("COSIM_FLUID_BIN", &hang)
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .args(["--quiet", "--timeout-s", "2"])
-        .output()
-        .expect("coupler-node starts");
+    let output = run_with_fluid(hang.as_os_str(), &scene, &out, "2");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     let s = summary(&out);
