@@ -356,9 +356,10 @@ pub fn drive(
 /// How long [`shut_down`] waits for each node to take its shutdown.
 ///
 /// NOTE: a node whose process failed before it subscribed (a missing library, `mpirun` refusing
-/// to run as root) never takes it: the transport's send timeout (the run's `--timeout-s`) kept
-/// the coupler 150 s after it had reported that node dead. A node that is alive and misses its
-/// shutdown is ended by the supervisor after its grace period.
+/// to run as root) never takes it: the coupler, having reported that node dead, waited for it
+/// for the transport's whole send timeout (30 s; for good when the last slice of that wait fell
+/// under 1 µs, see `Bus::block`). A node that is alive and misses its shutdown is ended by the
+/// supervisor after its grace period.
 const SHUTDOWN_SEND_TIMEOUT: Duration = Duration::from_secs(1);
 
 /// Sends the nodes whose process has not ended a shutdown with `reason` (recorded too), waiting
