@@ -51,6 +51,8 @@ struct ChainRow {
     done: bool,
     /// `above` on the block's lower face (NaN where none), once known.
     above_lo: f64,
+    /// The sweep's state on the block's upper face, once the up pass has swept the row.
+    up_state: f64,
 }
 
 /// What a cut axis of the block has to finish.
@@ -134,7 +136,42 @@ impl BlockSweep {
     /// grid's lower end, else [`BlockSweep::up_in`] values); returns the message to the block
     /// above (the sweep's state on the block's upper face, for each row whose cell above it is
     /// cut). Writes the faces of the rows that need nothing from above.
+    /// [`BlockSweep::up_first`] then [`BlockSweep::up_rest`].
     pub fn up(&mut self, axis: usize, from_below: &[f64]) -> Vec<f64> {
+        self.up_first(axis);
+        self.up_rest(axis, from_below)
+    }
+
+    /// The rows of [`BlockSweep::up`] that the message from below does not enter (their entry
+    /// is Λ of their first cell in the block, or 0 at the grid's lower end): a rank sweeps them
+    /// before it waits for that message, while the block below sweeps its own.
+    ///
+    /// NOTE: a row's sweep reads only its own entry and cells, so the rows may be swept in any
+    /// order with the same bits. Entered all after the message, the two ranks of `1 × 1 × 2`
+    /// swept their rows one after the other: 5.4–5.8 ms of a rank's step at 128³ in the passes,
+    /// against 6.5–6.8 ms for the block's whole local part.
+    pub fn up_first(&mut self, axis: usize) {
+        let lo = self.geom.block.lo[axis];
+        let mut rows = std::mem::take(&mut self.axes[axis].rows);
+        for r in &mut rows {
+            if lo > 0 && r.cells.first().is_some_and(|c| c.0 == lo as i32) {
+                continue;
+            }
+            r.entry = if lo == 0 {
+                0.0
+            } else {
+                let mut at = row_ijk(&self.grid, axis, r.row, lo as i32);
+                at[axis] = lo;
+                self.geom.solid_fraction_at(at)
+            };
+            self.sweep_up(axis, r);
+        }
+        self.axes[axis].rows = rows;
+    }
+
+    /// The rest of [`BlockSweep::up`] after [`BlockSweep::up_first`]: sweeps the rows
+    /// `from_below` enters and returns the message to the block above, in the rows' order.
+    pub fn up_rest(&mut self, axis: usize, from_below: &[f64]) -> Vec<f64> {
         assert_eq!(
             from_below.len(),
             self.up_in(axis),
@@ -143,26 +180,28 @@ impl BlockSweep {
         let lo = self.geom.block.lo[axis];
         let mut incoming = from_below.iter();
         let mut rows = std::mem::take(&mut self.axes[axis].rows);
-        let mut out = Vec::new();
-        for r in &mut rows {
-            r.entry = if lo == 0 {
-                0.0
-            } else if r.cells.first().is_some_and(|c| c.0 == lo as i32) {
-                *incoming.next().expect("counted")
-            } else {
-                let mut at = row_ijk(&self.grid, axis, r.row, lo as i32);
-                at[axis] = lo;
-                self.geom.solid_fraction_at(at)
-            };
-            let crosses = self.crosses_top(axis, r);
-            let (state, above_lo) = self.sweep_row(axis, r, None, !crosses);
-            (r.done, r.above_lo) = (!crosses, above_lo);
-            if r.above_cut {
-                out.push(state);
+        if lo > 0 {
+            for r in &mut rows {
+                if r.cells.first().is_some_and(|c| c.0 == lo as i32) {
+                    r.entry = *incoming.next().expect("counted");
+                    self.sweep_up(axis, r);
+                }
             }
         }
+        let out = rows
+            .iter()
+            .filter(|r| r.above_cut)
+            .map(|r| r.up_state)
+            .collect();
         self.axes[axis].rows = rows;
         out
+    }
+
+    /// The up pass's sweep of row `r` from its entry.
+    fn sweep_up(&mut self, axis: usize, r: &mut ChainRow) {
+        let crosses = self.crosses_top(axis, r);
+        let (state, above_lo) = self.sweep_row(axis, r, None, !crosses);
+        (r.done, r.above_lo, r.up_state) = (!crosses, above_lo, state);
     }
 
     /// The down pass of `axis`: `from_above` is the message of the block above (empty at the
@@ -347,6 +386,7 @@ fn axis_rows(
             entry: 0.0,
             done: false,
             above_lo: f64::NAN,
+            up_state: f64::NAN,
         };
         for cell in row_records.chunk_by(|x, y| x.pos == y.pos) {
             let pos = cell[0].pos;

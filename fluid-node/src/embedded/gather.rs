@@ -407,9 +407,11 @@ pub(super) fn chained_block_part(
         });
     };
     for axis in 1..grid.dim {
+        // The rows that need nothing from below first, while the block below sweeps its own.
+        sweep.up_first(axis);
         let mut from_below = vec![0.0; sweep.up_in(axis)];
         transfer(axis, true, &mut from_below, None);
-        let up = sweep.up(axis, &from_below);
+        let up = sweep.up_rest(axis, &from_below);
         transfer(axis, true, &mut [], Some(&up));
         let mut from_above = vec![0.0; sweep.down_in(axis)];
         transfer(axis, false, &mut from_above, None);
