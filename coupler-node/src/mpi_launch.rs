@@ -59,9 +59,6 @@ impl MpiLaunch {
             anyhow::ensure!(file.is_file(), "host file {} not found", file.display());
         }
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if open_mpi && hostfile.is_none() && ranks as usize > cores {
-            tracing::info!("{ranks} fluid ranks on {cores} cores: mpirun --oversubscribe");
-        }
         let pml_chosen = std::env::var_os("OMPI_MCA_pml").is_some();
         let args = launcher_args(ranks, hostfile, open_mpi, cores, pml_chosen);
         Ok(MpiLaunch { program, args })
@@ -98,6 +95,7 @@ fn launcher_args(
     }
     if open_mpi && hostfile.is_none() {
         if ranks as usize > cores {
+            tracing::info!("{ranks} fluid ranks on {cores} cores: mpirun --oversubscribe");
             args.push("--oversubscribe".into());
         }
         if !pml_chosen {

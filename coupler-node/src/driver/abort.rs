@@ -1,18 +1,20 @@
 //! What the supervisor tells the coupler's loop while it waits: stop, why, and which nodes'
 //! processes ended.
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use protocol::wire::NodeKind;
 
 /// What the supervisor can tell the loop while it waits.
 #[derive(Clone, Debug, Default)]
-pub struct Abort {
-    flag: Arc<AtomicBool>,
-    reason: Arc<std::sync::Mutex<String>>,
+pub struct Abort(Arc<Mutex<Raised>>);
+
+#[derive(Debug, Default)]
+struct Raised {
+    /// Why the loop is to stop; the first reason raised.
+    reason: Option<String>,
     /// The nodes whose process ended before the run did: no shutdown is sent to them.
-    exited: Arc<std::sync::Mutex<Vec<NodeKind>>>,
+    exited: Vec<NodeKind>,
 }
 
 impl Abort {
@@ -20,31 +22,29 @@ impl Abort {
     /// failing at their start raise one each, and the status named the first node to exit with
     /// the second's reason).
     pub fn raise(&self, reason: String) {
-        let mut kept = self.reason.lock().expect("abort reason lock");
-        if !self.flag.load(Ordering::SeqCst) {
-            *kept = reason;
-            self.flag.store(true, Ordering::SeqCst);
-        }
+        self.lock().reason.get_or_insert(reason);
     }
 
     /// [`Abort::raise`] for the process of `node`, which ended before the run did.
     pub fn node_exited(&self, node: NodeKind, reason: String) {
-        self.exited.lock().expect("abort exited lock").push(node);
-        self.raise(reason);
+        let mut raised = self.lock();
+        raised.exited.push(node);
+        raised.reason.get_or_insert(reason);
     }
 
     /// Whether the process of `node` ended before the run did.
     pub(super) fn has_exited(&self, node: NodeKind) -> bool {
-        self.exited
-            .lock()
-            .expect("abort exited lock")
-            .contains(&node)
+        self.lock().exited.contains(&node)
     }
 
     pub(super) fn check(&self) -> Option<String> {
-        self.flag
-            .load(Ordering::SeqCst)
-            .then(|| self.reason.lock().expect("abort reason lock").clone())
+        self.lock().reason.clone()
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Raised> {
+        self.0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 }
 

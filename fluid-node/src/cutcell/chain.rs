@@ -113,14 +113,17 @@ impl BlockSweep {
 
     /// Rows of `axis` the message from the block below carries (its length).
     pub fn up_in(&self, axis: usize) -> usize {
-        let lo = self.geom.block.lo[axis] as i32;
         let rows = &self.axes[axis].rows;
-        let first_cut = |r: &ChainRow| r.cells.first().is_some_and(|c| c.0 == lo);
-        if lo == 0 {
-            0
-        } else {
-            rows.iter().filter(|r| first_cut(r)).count()
-        }
+        rows.iter()
+            .filter(|r| self.entered_from_below(axis, r))
+            .count()
+    }
+
+    /// Whether the message from the block below enters row `r` of `axis`: the block is not the
+    /// grid's lowest along `axis` and the row's first cell in it is cut.
+    fn entered_from_below(&self, axis: usize, r: &ChainRow) -> bool {
+        let lo = self.geom.block.lo[axis] as i32;
+        lo > 0 && r.cells.first().is_some_and(|c| c.0 == lo)
     }
 
     /// Rows of `axis` the message from the block above carries (its length).
@@ -154,7 +157,7 @@ impl BlockSweep {
         let lo = self.geom.block.lo[axis];
         let mut rows = std::mem::take(&mut self.axes[axis].rows);
         for r in &mut rows {
-            if lo > 0 && r.cells.first().is_some_and(|c| c.0 == lo as i32) {
+            if self.entered_from_below(axis, r) {
                 continue;
             }
             r.entry = if lo == 0 {
@@ -177,15 +180,12 @@ impl BlockSweep {
             self.up_in(axis),
             "up message of axis {axis}"
         );
-        let lo = self.geom.block.lo[axis];
         let mut incoming = from_below.iter();
         let mut rows = std::mem::take(&mut self.axes[axis].rows);
-        if lo > 0 {
-            for r in &mut rows {
-                if r.cells.first().is_some_and(|c| c.0 == lo as i32) {
-                    r.entry = *incoming.next().expect("counted");
-                    self.sweep_up(axis, r);
-                }
+        for r in &mut rows {
+            if self.entered_from_below(axis, r) {
+                r.entry = *incoming.next().expect("counted");
+                self.sweep_up(axis, r);
             }
         }
         let out = rows
@@ -216,7 +216,6 @@ impl BlockSweep {
         );
         let mut incoming = from_above.iter();
         let mut rows = std::mem::take(&mut self.axes[axis].rows);
-        let lo = self.geom.block.lo[axis] as i32;
         let mut out = Vec::new();
         for r in &mut rows {
             if !r.done {
@@ -224,7 +223,7 @@ impl BlockSweep {
                 r.above_lo = self.sweep_row(axis, r, Some(top), true).1;
                 r.done = true;
             }
-            if lo > 0 && r.below_cut && r.cells.first().is_some_and(|c| c.0 == lo) {
+            if r.below_cut && self.entered_from_below(axis, r) {
                 out.push(r.above_lo);
             }
         }

@@ -45,10 +45,10 @@ pub(super) fn add_on_pool(sum: &mut OddSum, out: &mut [f64]) {
 }
 
 /// [`add_on_pool`] on the pool of `solver` (one rank), or with the slots shared out among its
-/// ranks (collective): every rank holds the same terms (gathered from every rank), each sums the
-/// slots of its share on its pool, and one all-gather of those sums gives every rank every slot's sum, added
-/// to `out[slot]` as [`OddSum::add_into`] adds it: the same bits on any number of ranks and
-/// threads, and each rank sorts about `1 / K` of the terms.
+/// ranks (collective): every rank holds the same terms (gathered from every rank), each sums
+/// the slots of its share on its pool, and one all-gather of those sums gives every rank every
+/// slot's sum, added to `out[slot]` as [`OddSum::add_into`] adds it: the same bits on any
+/// number of ranks and threads, and each rank sorts about `1 / K` of the terms.
 ///
 /// The shares are consecutive runs of slots that take about as many terms each (slot `s` is
 /// rank `r`'s where `r` is the rank whose part of the terms its first term falls in), so that
