@@ -27,7 +27,7 @@
 
 use rayon::prelude::*;
 
-use crate::cutcell::clip::{Polygon, clip_polygon, clip_segment};
+use crate::cutcell::clip::{Polygon, clip_polygon, clip_polygon_in, clip_segment};
 use crate::cutcell::geometry::{CutGeometry, SubFace, domain_cell};
 use crate::cutcell::measure::triangle_normal;
 use crate::cutcell::prism::{PrismScratch, prism_volumes};
@@ -152,9 +152,10 @@ pub fn subface_swept_volumes(
 /// [`subface_swept_volumes`] of the sub-faces `keep` accepts only (a rank's share of a
 /// decomposed grid, issue 40): the entries of those sub-faces, with their bits and in their order,
 /// and the count of those skipped; the others have no entries and are not counted. The
-/// preimages are lifted from the elements of the kept sub-faces only (each element clipped again,
-/// its pieces' vertices put at its kept sub-faces' by cell, `lift_preimages_of`), so the cost is that of the
-/// kept sub-faces' prisms and of their elements' second clip.
+/// preimages are lifted from the elements of the kept sub-faces only (each element clipped again
+/// within the box of its kept sub-faces' cells, with the bits of the whole element's pieces
+/// there, its pieces' vertices put at its kept sub-faces' by cell, `lift_preimages_of`), so the
+/// cost is that of the kept sub-faces' prisms and of their pieces' second clip.
 ///
 /// The entries of a partition of the sub-faces, put together in sub-face order (a stable sort by
 /// sub-face), are those of [`subface_swept_volumes`] for a geometry computed from `after`
@@ -298,7 +299,8 @@ fn lift_preimages_of(
         let (mine, taken) = (&targets[from..to], &mut used[from..to]);
         // The target of the piece being stored: its first vertex and count.
         let mut at: Option<(usize, usize)> = None;
-        n_pieces += clip_lifted(grid, before, after, e as usize, &mut |cell, i, x| {
+        let window = Some(targets_window(grid, mine));
+        let mut store = |cell, i, x: &[f64; 6]| {
             if i == 0 {
                 let first = mine.partition_point(|t| t.1 < cell);
                 at = (first..mine.len())
@@ -314,7 +316,8 @@ fn lift_preimages_of(
             {
                 put_preimage(stored, preimages, first + i, x);
             }
-        });
+        };
+        n_pieces += clip_lifted(grid, before, after, e as usize, window, &mut store);
         from = to;
     }
     n_pieces
@@ -330,15 +333,35 @@ fn put_preimage(stored: &[[f64; 3]], preimages: &mut [[f64; 3]], at: usize, x: &
     }
 }
 
+/// The cells of `targets` (an element's kept sub-faces, as [`lift_preimages_of`] lists them):
+/// their bounding box, as the slabs of [`clip_polygon_in`]'s window.
+///
+/// NOTE (issue 40 item 1): on a decomposed grid a rank keeps the sub-faces of its own cells,
+/// and an element crossing the blocks was clipped whole on every rank that holds one of its
+/// sub-faces: each of `opening-fracture-3d`'s side faces, two triangles across the whole box,
+/// on both ranks of `1 × 1 × 2`.
+fn targets_window(grid: &Grid, targets: &[(u32, u32, u32, u32)]) -> [(i32, i32); 3] {
+    let mut window = [(i32::MAX, i32::MIN); 3];
+    for t in targets {
+        let ijk = grid.ijk(t.1 as usize);
+        for (w, c) in window.iter_mut().zip(ijk) {
+            *w = (w.0.min(c as i32), w.1.max(c as i32));
+        }
+    }
+    window
+}
+
 /// Clips element `e` of `after` again (none when `compute` skips it), each vertex carrying its
 /// position in `before` (NaN where `before` has none), and hands the vertices of its pieces in
 /// the domain to `store` in the order `compute` stores them, each with its piece's cell and its
-/// place in the piece. Returns the pieces clipped.
+/// place in the piece. Returns the pieces clipped. `window`: in 3-D, only the pieces in these
+/// slabs (`clip_polygon_in`: the same bits and order as the whole element's pieces there).
 fn clip_lifted(
     grid: &Grid,
     before: &Surface,
     after: &Surface,
     e: usize,
+    window: Option<[(i32, i32); 3]>,
     store: &mut impl FnMut(u32, usize, &[f64; 6]),
 ) -> usize {
     let Some(t1) = after.element(e) else {
@@ -349,14 +372,18 @@ fn clip_lifted(
     let mut n_pieces = 0;
     if grid.dim == 3 {
         let poly: Polygon<6> = Polygon::from_slice(&[lift(0), lift(1), lift(2)]);
-        clip_polygon(grid, &poly, &mut |cell, piece| {
+        let mut emit = |cell, piece: &Polygon<6>| {
             n_pieces += 1;
             if let Some(c) = domain_cell(grid, cell) {
                 for (i, x) in piece.vertices().iter().enumerate() {
                     store(c, i, x);
                 }
             }
-        });
+        };
+        match window {
+            None => clip_polygon(grid, &poly, &mut emit),
+            Some(w) => clip_polygon_in(grid, &poly, w, &mut emit),
+        }
     } else {
         clip_segment(grid, lift(0), lift(1), &mut |cell, a, b| {
             n_pieces += 1;
@@ -391,7 +418,7 @@ fn lift_preimages(
     for e in 0..after.n_elements() {
         // NOTE: the same elements as `compute` skips, in the same order, so `cursor` follows
         // `subface_vertices`.
-        n_pieces += clip_lifted(grid, before, after, e, &mut store);
+        n_pieces += clip_lifted(grid, before, after, e, None, &mut store);
     }
     n_pieces
 }

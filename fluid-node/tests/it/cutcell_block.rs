@@ -252,6 +252,7 @@ fn check_prisms(
         for dims in decomps {
             let ranks: usize = dims.iter().product();
             let mut gathered: Vec<SubfaceSweptEntry> = Vec::new();
+            let mut pieces = 0;
             for r in 0..ranks {
                 let what = format!("{name}, move {k}, {dims:?} rank {r}");
                 let block = CellBox::of_rank(grid, *dims, r);
@@ -277,9 +278,18 @@ fn check_prisms(
                     "{what}: entries"
                 );
                 fewer += usize::from(part.n_pieces < whole.n_pieces);
+                pieces += part.n_pieces;
                 blocks += 1;
                 gathered.extend_from_slice(&part.entries);
             }
+            // Each rank clips a triangle again only in the box of its own cells, so a triangle
+            // across the blocks is not clipped whole on each of them (2-D segments, a few cells
+            // long, are).
+            assert!(
+                grid.dim == 2 || pieces <= whole.n_pieces,
+                "{name}, move {k}, {dims:?}: {pieces} pieces on the ranks, {} on one",
+                whole.n_pieces
+            );
             gathered.sort_by_key(|e| e.subface);
             assert_eq!(
                 entry_bits(&gathered),
