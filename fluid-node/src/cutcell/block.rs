@@ -36,7 +36,7 @@ use crate::cutcell::geometry::{
 };
 use crate::cutcell::measure::Piece;
 use crate::cutcell::surface::Surface;
-use crate::cutcell::sweep::{Record, SweepSink, sort_records, sweep_rows_from};
+use crate::cutcell::sweep::{Record, SweepSink, sort_records_in_rows, sweep_rows_from};
 use crate::cutcell::written::WrittenRows;
 use crate::grid::Grid;
 use crate::memory::vec_bytes;
@@ -438,7 +438,7 @@ fn sweep_x(
             });
         }
     }
-    sort_records(&mut records);
+    sort_records_in_rows(&mut records);
     let mut covered_runs = Vec::new();
     let mut sink = BlockSink {
         grid,
@@ -507,7 +507,7 @@ fn sweep_cut_axis(
             ));
         }
     }
-    sort_records(&mut records);
+    sort_records_in_rows(&mut records);
     // Per row: where its sweep is entered, or whether it is swept whole.
     let mut starts: HashMap<u64, (i32, f64)> = HashMap::new();
     let mut whole: HashSet<u64> = HashSet::new();
@@ -622,7 +622,7 @@ fn sweep_whole_rows(
             ));
         }
     }
-    sort_records(&mut records);
+    sort_records_in_rows(&mut records);
     let mut no_runs = Vec::new();
     let mut sink = BlockSink {
         grid,

@@ -32,7 +32,7 @@ use crate::cutcell::block::{
 };
 use crate::cutcell::geometry::{SNAP_TOLERANCE, face_area, other_axes, row_ijk};
 use crate::cutcell::surface::Surface;
-use crate::cutcell::sweep::sort_records;
+use crate::cutcell::sweep::sort_records_in_rows;
 use crate::grid::Grid;
 
 /// One row of a cut axis with cut cells in the block (or on its boundary).
@@ -373,7 +373,7 @@ fn axis_rows(
             records.push(record(row, p, order, piece.area_vector[axis]));
         }
     }
-    sort_records(&mut records);
+    sort_records_in_rows(&mut records);
     let mut rows = Vec::new();
     let mut terms = Vec::new();
     for row_records in records.chunk_by(|x, y| x.row == y.row) {
