@@ -110,12 +110,21 @@ pub fn wall_hooks_in(
         block,
         CellBox::whole(grid),
         &geom.solid_fraction,
+        None,
     )
 }
 
 /// [`wall_hooks_in`] from the Λ a rank of a decomposed grid holds (`embedded::held`: dense in
 /// its block and the halo of [`hook_halo`] cells, the window the hooks read) and the whole
-/// grid's sub-faces and cut cells of `geom` (its dense arrays unused): the same bits.
+/// grid's sub-faces and cut cells of `geom` (its dense arrays unused): the same bits. `near`:
+/// the near cells of `geom` the rank lists, their slots over the held box (else the window's
+/// are found from its cut cells).
+///
+/// NOTE (issue 40 item 4): the window's near cells are the rank's near cells there, but in the
+/// window's outer [`NEAR_RADIUS`] cells, which may also be near a cut cell beyond it; a hook
+/// from those cells lies [`hook_halo`] − [`NEAR_RADIUS`] cells or more from the block, and
+/// [`WallHooks::restricted`] drops it. Finding them again from the window's cut cells
+/// (`NearOfView::new`) was about 1 ms of a rank's step at 128³ on 2 ranks.
 pub(super) fn wall_hooks_held(
     grid: &Grid,
     ng: usize,
@@ -123,6 +132,7 @@ pub(super) fn wall_hooks_held(
     fractions: &HeldFractions,
     geom: &CutGeometry,
     block: CellBox,
+    near: Option<&NearView>,
 ) -> WallHooks {
     let window = block.grown(grid, hook_halo(ng));
     assert!(
@@ -138,12 +148,15 @@ pub(super) fn wall_hooks_held(
         block,
         fractions.held,
         &fractions.solid_fraction,
+        near,
     )
 }
 
 /// The hooks of `block` from the sub-faces and cut cells of `geom` in the window of
 /// [`hook_halo`] cells around it and Λ of the cells of `held` (`solid_fraction`, by
-/// [`CellBox::index`]), which holds that window.
+/// [`CellBox::index`]), which holds that window; with `near` (see [`wall_hooks_held`]), the
+/// near cells it gives, else the window's.
+#[allow(clippy::too_many_arguments)]
 fn window_hooks(
     grid: &Grid,
     ng: usize,
@@ -152,6 +165,7 @@ fn window_hooks(
     block: CellBox,
     held: CellBox,
     solid_fraction: &[f64],
+    near: Option<&NearView>,
 ) -> WallHooks {
     let window = block.grown(grid, hook_halo(ng));
     let inside = |c: u32| window.contains(grid.ijk(c as usize));
@@ -162,9 +176,6 @@ fn window_hooks(
         .filter(|s| inside(s.cell))
         .copied()
         .collect();
-    let cut_cells: Vec<u32> = (geom.cut_cells.iter().copied())
-        .filter(|&c| inside(c))
-        .collect();
     let view = HookGeometry {
         grid,
         window,
@@ -172,6 +183,12 @@ fn window_hooks(
         solid_fraction,
         subfaces: &subfaces,
     };
+    if let Some(near) = near {
+        return view.wall_hooks(near, frame, ng, block);
+    }
+    let cut_cells: Vec<u32> = (geom.cut_cells.iter().copied())
+        .filter(|&c| inside(c))
+        .collect();
     let near = NearOfView::new(&view, &cut_cells);
     view.wall_hooks(&near.as_ref(), frame, ng, block)
 }

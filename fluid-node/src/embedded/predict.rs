@@ -113,7 +113,7 @@ impl Embedded {
     fn wall_hooks(&mut self, solver: &FluidSolver) {
         let (grid, ng) = (&self.config.grid, self.config.ng);
         let (geom, current) = (&self.state.geom, &self.state.current);
-        let (block, near) = (self.config.block, &self.near);
+        let (block, near, held) = (self.config.block, &self.near, self.config.held_box());
         let hooks = solver.install(|| match block {
             None => {
                 let view = HookGeometry {
@@ -131,7 +131,16 @@ impl Embedded {
                 view.wall_hooks(&near, current, ng, CellBox::whole(grid))
             }
             Some(block) => match &geom.fractions {
-                Some(f) => wall_hooks_held(grid, ng, current, f, &geom.cut, block),
+                Some(f) => {
+                    // The slots are dense over the held box, as Λ is.
+                    debug_assert_eq!(f.held, held);
+                    let near = NearView {
+                        cells: &near.cells,
+                        slot_of: near.slot_of.held_dense(),
+                        slot_box: held,
+                    };
+                    wall_hooks_held(grid, ng, current, f, &geom.cut, block, Some(&near))
+                }
                 None => wall_hooks_in(grid, ng, current, geom, block),
             },
         });

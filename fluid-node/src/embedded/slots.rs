@@ -181,6 +181,12 @@ impl SlotOf {
         &self.dense
     }
 
+    /// `slot + 1` of each cell of the held box, by `CellBox::index` of that box (0 where it is
+    /// no near cell): what a [`super::hooks::NearView`] of the held box reads.
+    pub(super) fn held_dense(&self) -> &[u32] {
+        &self.dense
+    }
+
     /// Heap bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         crate::memory::vec_bytes(&self.dense) + crate::memory::vec_bytes(&self.beyond)
