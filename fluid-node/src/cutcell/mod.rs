@@ -81,6 +81,7 @@ mod block;
 mod chain;
 pub(crate) mod clip;
 mod geometry;
+mod held_fractions;
 mod measure;
 mod prism;
 pub mod stl;
@@ -92,7 +93,7 @@ mod swept;
 mod tests;
 mod written;
 
-pub use assemble::{HeldFractions, block_part, block_part_shared};
+pub use assemble::{block_part, block_part_shared};
 pub use block::{
     BlockGeometry, CellBox, compute_block, compute_block_cells, compute_block_cells_reusing,
     compute_block_reusing,
@@ -101,6 +102,7 @@ pub use chain::{BlockSweep, compute_blocks, pass_messages};
 pub use geometry::{
     CutDiagnostics, CutGeometry, SNAP_TOLERANCE, SubFace, compute, face_index, n_faces,
 };
+pub use held_fractions::HeldFractions;
 pub use subface_swept::{
     SubfaceSwept, SubfaceSweptEntry, subface_swept_volumes, subface_swept_volumes_of,
 };
