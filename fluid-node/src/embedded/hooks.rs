@@ -117,8 +117,7 @@ pub fn wall_hooks_in(
 /// [`wall_hooks_in`] from the Λ a rank of a decomposed grid holds (`embedded::held`: dense in
 /// its block and the halo of [`hook_halo`] cells, the window the hooks read) and the whole
 /// grid's sub-faces and cut cells of `geom` (its dense arrays unused): the same bits. `near`:
-/// the near cells of `geom` the rank lists, their slots over the held box (else the window's
-/// are found from its cut cells).
+/// the near cells of `geom` the rank lists, their slots over the held box.
 ///
 /// NOTE (issue 40 item 4): the window's near cells are the rank's near cells there, but in the
 /// window's outer [`NEAR_RADIUS`] cells, which may also be near a cut cell beyond it; a hook
@@ -132,7 +131,7 @@ pub(super) fn wall_hooks_held(
     fractions: &HeldFractions,
     geom: &CutGeometry,
     block: CellBox,
-    near: Option<&NearView>,
+    near: &NearView,
 ) -> WallHooks {
     let window = block.grown(grid, hook_halo(ng));
     assert!(
@@ -148,7 +147,7 @@ pub(super) fn wall_hooks_held(
         block,
         fractions.held,
         &fractions.solid_fraction,
-        near,
+        Some(near),
     )
 }
 

@@ -139,7 +139,7 @@ impl Embedded {
                         slot_of: near.slot_of.held_dense(),
                         slot_box: held,
                     };
-                    wall_hooks_held(grid, ng, current, f, &geom.cut, block, Some(&near))
+                    wall_hooks_held(grid, ng, current, f, &geom.cut, block, &near)
                 }
                 None => wall_hooks_in(grid, ng, current, geom, block),
             },
