@@ -366,6 +366,12 @@ pub struct Checkpoint {
     /// Whose state it is.
     pub node: NodeKind,
     /// The node's bytes.
+    ///
+    /// NOTE: encoded through serde's bytes methods (`serde_bytes`): bincode writes the same
+    /// wire bytes as for a sequence of `u8` (the length, then the bytes) but copies them whole,
+    /// where a sequence went a byte at a time (about 1 ns a byte each way: a fluid checkpoint of
+    /// 2.6 MB took 2.6 ms to encode and 4 ms to decode, 0.26 and 0.23 ms now; issue 39 item 4).
+    #[serde(with = "serde_bytes")]
     pub bytes: Vec<u8>,
 }
 

@@ -247,3 +247,38 @@ proptest! {
         let _ = codec::decode(&frame);
     }
 }
+
+/// `Checkpoint` as it was declared before its bytes went through serde's bytes methods: a plain
+/// `Vec<u8>`, which serde encodes one `u8` at a time.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CheckpointAsSequence {
+    stamp: Stamp,
+    node: NodeKind,
+    bytes: Vec<u8>,
+}
+
+proptest! {
+    /// A checkpoint's bytes copied whole are the same wire bytes as the sequence of `u8` they
+    /// were encoded as before, both ways: the protocol did not change, and records written
+    /// before read as they did.
+    #[test]
+    fn checkpoint_bytes_encode_as_the_sequence_of_u8_they_were(
+        bytes in proptest::collection::vec(any::<u8>(), 0..600),
+        step in any::<u64>(),
+    ) {
+        let stamp = Stamp { step, iteration: 0 };
+        let now = Checkpoint { stamp, node: NodeKind::Solid, bytes: bytes.clone() };
+        let before = CheckpointAsSequence { stamp, node: NodeKind::Solid, bytes };
+        let wire = codec::encode_blob(&now);
+        prop_assert_eq!(&wire, &codec::encode_blob(&before));
+        let back: Checkpoint = codec::decode_blob(&wire).expect("decodes");
+        prop_assert_eq!(back, now);
+        let frame = codec::encode(NodeKind::Fluid, &Message::Checkpoint(Checkpoint {
+            stamp,
+            node: NodeKind::Fluid,
+            bytes: before.bytes.clone(),
+        }));
+        let (_, msg) = codec::decode(&frame).expect("a frame decodes");
+        prop_assert!(matches!(msg, Message::Checkpoint(c) if c.bytes == before.bytes));
+    }
+}
