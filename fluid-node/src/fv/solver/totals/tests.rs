@@ -218,3 +218,74 @@ fn a_line_summed_in_one_pass_gives_the_bits_of_its_planes() {
         }
     }
 }
+
+/// The totals weighted by a fluid fraction, on every instruction set, are to the bit (a NaN's
+/// sign aside) those of the scalar loop they replace (`acc[q].add((1 − Λ) × value)` value by value, the cells of a
+/// fraction ≤ 0 left out), in 1, 2 and 3-D: random cells with NaN, infinities and −0, and
+/// fractions covered, cut, empty, beyond 1, below 0 and NaN, from running sums that do not
+/// start at zero.
+#[test]
+fn weighted_sums_are_the_scalar_loops_to_the_bit() {
+    let mut x = 7u64;
+    let mut unit = move || {
+        x = x
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    // A NaN's sign is not kept by the compiler (it may swap an addition's operands), so every
+    // NaN is one value here; every other value is compared to the bit.
+    let key = |v: f64| {
+        if v.is_nan() {
+            f64::NAN.to_bits()
+        } else {
+            v.to_bits()
+        }
+    };
+    let bits = |a: &[CompensatedSum; NQ]| a.map(|c| (key(c.sum), key(c.comp)));
+    let mut left_out = 0;
+    for dim in 1..=3 {
+        let nv = dim + 2;
+        for seed in 0..30 {
+            let cells = random_cells(nv, 61, 100 + seed);
+            let lambda: Vec<f64> = (0..61)
+                .map(|_| match (unit() * 10.0) as u32 {
+                    0 => 1.0,
+                    1 => 0.0,
+                    2 => 1.0 + unit(),
+                    3 => -unit(),
+                    4 if seed % 3 == 0 => f64::NAN,
+                    5 => 1.0 - 1e-17,
+                    _ => unit(),
+                })
+                .collect();
+            left_out += lambda.iter().filter(|&&l| 1.0 - l <= 0.0).count();
+            let start: [CompensatedSum; NQ] = std::array::from_fn(|q| CompensatedSum {
+                sum: 3.0 * q as f64 - 1.25,
+                comp: 1e-17 * q as f64,
+            });
+            let mut want = start;
+            for (cell, l) in cells.chunks_exact(nv).zip(&lambda) {
+                let alpha = 1.0 - l;
+                if alpha <= 0.0 {
+                    continue;
+                }
+                want[0].add(alpha * cell[0]);
+                for a in 0..dim {
+                    want[1 + a].add(alpha * cell[1 + a]);
+                }
+                want[4].add(alpha * cell[dim + 1]);
+            }
+            for isa in Isa::available() {
+                let mut acc = start;
+                match nv {
+                    3 => sum_weighted_on::<3>(isa, &mut acc, &cells, &lambda),
+                    4 => sum_weighted_on::<4>(isa, &mut acc, &cells, &lambda),
+                    _ => sum_weighted_on::<5>(isa, &mut acc, &cells, &lambda),
+                }
+                assert_eq!(bits(&acc), bits(&want), "{isa:?}, {dim}-D, seed {seed}");
+            }
+        }
+    }
+    assert!(left_out > 100, "{left_out} cells left out");
+}
