@@ -243,8 +243,7 @@ impl BlockGeometry {
 
     /// Heap bytes (capacities).
     pub fn memory_bytes(&self) -> usize {
-        vec_bytes(&self.solid_fraction)
-            + self.face_fraction.iter().map(vec_bytes).sum::<usize>()
+        self.dense_bytes()
             + vec_bytes(&self.subfaces)
             + vec_bytes(&self.subface_vertices)
             + vec_bytes(&self.cut_cells)

@@ -591,6 +591,13 @@ mod lanes {
         /// The lanes that hold a cell's values.
         const MASK: __mmask8 = ((1u16 << NV) - 1) as __mmask8;
 
+        /// A cell's `NV` values in the first lanes, zeros in the others.
+        #[inline(always)]
+        fn load(cell: &[f64; NV]) -> __m512d {
+            // SAFETY: the caller runs on AVX-512F; the masked load reads the `NV` values alone.
+            unsafe { _mm512_maskz_loadu_pd(Self::MASK, cell.as_ptr()) }
+        }
+
         /// [`CompensatedSum::add`] of each lane of `x` into its sum.
         #[inline(always)]
         fn add_lanes(&mut self, x: __m512d) {
@@ -626,20 +633,13 @@ mod lanes {
 
         #[inline(always)]
         fn add(&mut self, cell: &[f64; NV]) {
-            // SAFETY: the caller runs on AVX-512F; the masked load reads the `NV` values alone.
-            let x = unsafe { _mm512_maskz_loadu_pd(Self::MASK, cell.as_ptr()) };
-            self.add_lanes(x);
+            self.add_lanes(Self::load(cell));
         }
 
         #[inline(always)]
         fn add_scaled(&mut self, cell: &[f64; NV], alpha: f64) {
-            // SAFETY: the caller runs on AVX-512F; the masked load reads the `NV` values alone.
-            let x = unsafe {
-                _mm512_mul_pd(
-                    _mm512_set1_pd(alpha),
-                    _mm512_maskz_loadu_pd(Self::MASK, cell.as_ptr()),
-                )
-            };
+            // SAFETY: the caller runs on AVX-512F.
+            let x = unsafe { _mm512_mul_pd(_mm512_set1_pd(alpha), Self::load(cell)) };
             self.add_lanes(x);
         }
 
@@ -670,6 +670,17 @@ mod lanes {
     impl<const NV: usize> Avx2<NV> {
         /// The lanes that hold a cell's values (the sign bit set), of the first four.
         const MASK: [i64; 4] = [-1, -1, -1, if NV > 3 { -1 } else { 0 }];
+
+        /// A cell's first `min(NV, 4)` values in the lanes, zeros in the others.
+        #[inline(always)]
+        fn load(cell: &[f64; NV]) -> __m256d {
+            // SAFETY: the caller runs on AVX2; the masked load reads the first `min(NV, 4)`
+            // values alone.
+            unsafe {
+                let mask = _mm256_loadu_si256(Self::MASK.as_ptr().cast());
+                _mm256_maskload_pd(cell.as_ptr(), mask)
+            }
+        }
 
         /// [`CompensatedSum::add`] of each lane of `x` into its sum.
         #[inline(always)]
@@ -711,13 +722,7 @@ mod lanes {
 
         #[inline(always)]
         fn add(&mut self, cell: &[f64; NV]) {
-            // SAFETY: the caller runs on AVX2; the masked load reads the first `min(NV, 4)`
-            // values alone.
-            let x = unsafe {
-                let mask = _mm256_loadu_si256(Self::MASK.as_ptr().cast());
-                _mm256_maskload_pd(cell.as_ptr(), mask)
-            };
-            self.add_lanes(x);
+            self.add_lanes(Self::load(cell));
             if NV > 4 {
                 self.fifth.add(cell[4.min(NV - 1)]);
             }
@@ -725,15 +730,8 @@ mod lanes {
 
         #[inline(always)]
         fn add_scaled(&mut self, cell: &[f64; NV], alpha: f64) {
-            // SAFETY: the caller runs on AVX2; the masked load reads the first `min(NV, 4)`
-            // values alone.
-            let x = unsafe {
-                let mask = _mm256_loadu_si256(Self::MASK.as_ptr().cast());
-                _mm256_mul_pd(
-                    _mm256_set1_pd(alpha),
-                    _mm256_maskload_pd(cell.as_ptr(), mask),
-                )
-            };
+            // SAFETY: the caller runs on AVX2.
+            let x = unsafe { _mm256_mul_pd(_mm256_set1_pd(alpha), Self::load(cell)) };
             self.add_lanes(x);
             if NV > 4 {
                 self.fifth.add(alpha * cell[4.min(NV - 1)]);
