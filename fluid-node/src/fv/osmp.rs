@@ -319,6 +319,40 @@ impl<V: Line> WaveLine<V> {
     }
 }
 
+/// Which side is upwind at every interface of a run ([`psi_line`]).
+///
+/// NOTE: where every face of a strip has its upwind side on one side, each of `Ψ`'s ten
+/// upwind values is one load of that side; elsewhere both sides are loaded and blended by a
+/// mask. The acoustic waves of a subsonic flow, and the entropy and shear waves of gas at rest
+/// or of a flow that does not turn back along the strip, have one side over whole strips: on
+/// the 3-D blast this took 12 % of the `Ψ` code's instructions off (AVX2, docs/performance.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Upwind {
+    /// λ > 0 at every interface: the upwind values are at `f + m`.
+    Above,
+    /// λ > 0 at none (λ ≤ 0, or NaN): the upwind values are at `f − m`.
+    Below,
+    /// Some of each (right for any speeds: both sides are loaded and blended face by face).
+    Mixed,
+}
+
+impl Upwind {
+    /// The side of the speeds `lam` (the test `λ > 0` of each face, as `Ψ` takes it).
+    #[inline(always)]
+    pub fn of(lam: &[f64]) -> Upwind {
+        let (mut all, mut any) = (true, false);
+        for &l in lam {
+            all &= l > 0.0;
+            any |= l > 0.0;
+        }
+        match (all, any) {
+            (true, _) if !lam.is_empty() => Upwind::Above,
+            (_, false) => Upwind::Below,
+            _ => Upwind::Mixed,
+        }
+    }
+}
+
 /// `nf` consecutive interfaces from `f0` on, read at offsets up to `r` either side.
 #[derive(Clone, Copy)]
 struct Window {
@@ -363,12 +397,16 @@ impl Window {
 /// strength (Suresh–Huynh/MITgcm form, Note 2), which needs no division by `α_0`; (d) the UL
 /// bound `2 (1−ν_up) α_up / max(ν_up, ν_0)` (see the note in the loop). Orders are
 /// checked numerically in `fv::tests` (scalar) and the integration test `fv_accuracy` (Euler).
+///
+/// `side` is [`Upwind::of`] the speeds at those interfaces (`speed.lam[f0 .. f0 + out.len()]`),
+/// which the waves of one speed share.
 #[inline(always)]
 pub fn psi_line<const ORDER: u32, const LIMITED: bool, V: Line>(
     speed: &SpeedLine<V>,
     wave: &WaveLine<V>,
     f0: usize,
     out: &mut [f64],
+    side: Upwind,
 ) {
     let nf = out.len();
     let win = Window {
@@ -398,61 +436,89 @@ pub fn psi_line<const ORDER: u32, const LIMITED: bool, V: Line>(
     let (d4_0, d4_m, d4_p, d4_mm, d4_pp) = (at(4, 0), at(4, -1), at(4, 1), at(4, -o2), at(4, o2));
     let (d5_0, d5_m, d5_p, d5_mm, d5_pp) = (at(5, 0), at(5, -1), at(5, 1), at(5, -o2), at(5, o2));
     let (d5_mmm, d5_ppp) = (at(5, -o3), at(5, o3));
-    for j in 0..nf {
-        // Upwind orientation: D_m is at f + m for λ > 0, at f − m otherwise.
+    // One face `j`, its upwind values read through `$up` (module NOTE below).
+    macro_rules! face {
+        ($j:expr, $up:ident) => {{
+            let j = $j;
+            let up = |a: &[f64], b: &[f64]| $up(a, b, j);
+            let mut p = d0[j] - (d1_0[j] - up(d1_m, d1_p));
+            if ORDER >= 5 {
+                let (dm1, dm2) = (up(d2_m, d2_p), up(d2_mm, d2_pp));
+                p += d2_0[j] - 2.0 * dm1 + dm2;
+                let (dp1, dm1, dm2) = (up(d3_p, d3_m), up(d3_m, d3_p), up(d3_mm, d3_pp));
+                p -= dp1 - 3.0 * d3_0[j] + 3.0 * dm1 - dm2;
+            }
+            if ORDER >= 7 {
+                let (dp2, dp1) = (up(d4_pp, d4_mm), up(d4_p, d4_m));
+                let (dm1, dm2) = (up(d4_m, d4_p), up(d4_mm, d4_pp));
+                p += dp2 - 4.0 * dp1 + 6.0 * d4_0[j] - 4.0 * dm1 + dm2;
+                let (dp2, dp1) = (up(d5_pp, d5_mm), up(d5_p, d5_m));
+                let (dm1, dm2, dm3) = (up(d5_m, d5_p), up(d5_mm, d5_pp), up(d5_mmm, d5_ppp));
+                p -= dp2 - 5.0 * dp1 + 10.0 * d5_0[j] - 10.0 * dm1 + 5.0 * dm2 - dm3;
+            }
+            if !LIMITED {
+                out[j] = p;
+            } else {
+                let nu_up = up(nu_m, nu_p);
+                let w0 = al[j];
+                let w_up = up(al_m, al_p);
+                let inv_a0 = inv_lam[j];
+                // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD,
+                // b_ul ↔ u^UL, b_lc ↔ u^LC.
+                // NOTE: b_ul divides by max(ν_up, ν_0), not by ν_up alone: where a wave stagnates at
+                // the upwind interface (λ_up → 0, a symmetry plane or a stagnation point) α_up is
+                // round-off there and α_up/ν_up is round-off over round-off, which let 1e-14 of noise
+                // move a face's flux by 2e-4 beside the cylinder's symmetry axis (`fv::tests`,
+                // `osmp_bounds_are_well_conditioned_at_a_stagnation_point`). The bound is tighter, so
+                // still TVD; where ν_up ≥ ν_0 (every scalar test) it is Tenaud's.
+                let b_max = 2.0 * w0;
+                let b_ul = 2.0 * (1.0 - nu_up) * w_up * fmin(up(inv_nu_m, inv_nu_p), inv_nu[j]);
+                let b_md = w0 - dm4[j] * inv_a0;
+                let b_lc = (1.0 - nu_up) * inv_nu[j] * (w_up + up(dm4_m, dm4_p) * inv_a0);
+                let lo1 = fmin(fmin(0.0, b_max), b_md);
+                let hi1 = fmax(fmax(0.0, b_max), b_md);
+                let lo2 = fmin(fmin(0.0, b_ul), b_lc);
+                let hi2 = fmax(fmax(0.0, b_ul), b_lc);
+                let psi_min = fmax(lo1, lo2);
+                let psi_max = fmin(hi1, hi2);
+                out[j] = fmax(psi_min, fmin(p, psi_max));
+            }
+        }};
+    }
+    // Upwind orientation: D_m is at f + m for λ > 0, at f − m otherwise. Where the speeds of
+    // some faces are positive and of others not, both sides are loaded and their bits blended
+    // by the mask of λ > 0: the value of `if λ > 0 { a } else { b }`, bit for bit.
+    // NOTE: written as that `if`, the select of two loads became one load from a selected
+    // address, which LLVM vectorised as a gather (`vgatherqpd`, 8 lanes loaded one by one, ten
+    // a wave's face in AVX-512) and left scalar for AVX2 and SSE2; as a blend of bits it is
+    // two contiguous loads (the second masked) in every instruction set.
+    let blend = |a: &[f64], b: &[f64], j: usize| {
         let pos = u64::from(lam[j] > 0.0).wrapping_neg();
-        // Both loads, then a blend of their bits by the mask `pos` (all ones where λ > 0):
-        // the value of `if λ > 0 { x } else { y }`, bit for bit.
-        // NOTE: written as that `if`, the select of two loads became one load from a selected
-        // address, which LLVM vectorised as a gather (`vgatherqpd`, 8 lanes loaded one by
-        // one, ten a wave's face in AVX-512) and left scalar for AVX2 and SSE2; as a blend of
-        // bits it is two contiguous loads (the second masked) in every instruction set.
-        let up = |a: &[f64], b: &[f64]| {
-            let (x, y) = (a[j].to_bits(), b[j].to_bits());
-            f64::from_bits((x & pos) | (y & !pos))
-        };
-        let mut p = d0[j] - (d1_0[j] - up(d1_m, d1_p));
-        if ORDER >= 5 {
-            let (dm1, dm2) = (up(d2_m, d2_p), up(d2_mm, d2_pp));
-            p += d2_0[j] - 2.0 * dm1 + dm2;
-            let (dp1, dm1, dm2) = (up(d3_p, d3_m), up(d3_m, d3_p), up(d3_mm, d3_pp));
-            p -= dp1 - 3.0 * d3_0[j] + 3.0 * dm1 - dm2;
+        let (x, y) = (a[j].to_bits(), b[j].to_bits());
+        f64::from_bits((x & pos) | (y & !pos))
+    };
+    let above = |a: &[f64], _: &[f64], j: usize| a[j];
+    let below = |_: &[f64], b: &[f64], j: usize| b[j];
+    debug_assert!(
+        side == Upwind::Mixed || side == Upwind::of(lam),
+        "the side of other speeds"
+    );
+    match side {
+        Upwind::Above => {
+            for j in 0..nf {
+                face!(j, above);
+            }
         }
-        if ORDER >= 7 {
-            let (dp2, dp1) = (up(d4_pp, d4_mm), up(d4_p, d4_m));
-            let (dm1, dm2) = (up(d4_m, d4_p), up(d4_mm, d4_pp));
-            p += dp2 - 4.0 * dp1 + 6.0 * d4_0[j] - 4.0 * dm1 + dm2;
-            let (dp2, dp1) = (up(d5_pp, d5_mm), up(d5_p, d5_m));
-            let (dm1, dm2, dm3) = (up(d5_m, d5_p), up(d5_mm, d5_pp), up(d5_mmm, d5_ppp));
-            p -= dp2 - 5.0 * dp1 + 10.0 * d5_0[j] - 10.0 * dm1 + 5.0 * dm2 - dm3;
+        Upwind::Below => {
+            for j in 0..nf {
+                face!(j, below);
+            }
         }
-        if !LIMITED {
-            out[j] = p;
-            continue;
+        Upwind::Mixed => {
+            for j in 0..nf {
+                face!(j, blend);
+            }
         }
-        let nu_up = up(nu_m, nu_p);
-        let w0 = al[j];
-        let w_up = up(al_m, al_p);
-        let inv_a0 = inv_lam[j];
-        // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD,
-        // b_ul ↔ u^UL, b_lc ↔ u^LC.
-        // NOTE: b_ul divides by max(ν_up, ν_0), not by ν_up alone: where a wave stagnates at
-        // the upwind interface (λ_up → 0, a symmetry plane or a stagnation point) α_up is
-        // round-off there and α_up/ν_up is round-off over round-off, which let 1e-14 of noise
-        // move a face's flux by 2e-4 beside the cylinder's symmetry axis (`fv::tests`,
-        // `osmp_bounds_are_well_conditioned_at_a_stagnation_point`). The bound is tighter, so
-        // still TVD; where ν_up ≥ ν_0 (every scalar test) it is Tenaud's.
-        let b_max = 2.0 * w0;
-        let b_ul = 2.0 * (1.0 - nu_up) * w_up * fmin(up(inv_nu_m, inv_nu_p), inv_nu[j]);
-        let b_md = w0 - dm4[j] * inv_a0;
-        let b_lc = (1.0 - nu_up) * inv_nu[j] * (w_up + up(dm4_m, dm4_p) * inv_a0);
-        let lo1 = fmin(fmin(0.0, b_max), b_md);
-        let hi1 = fmax(fmax(0.0, b_max), b_md);
-        let lo2 = fmin(fmin(0.0, b_ul), b_lc);
-        let hi2 = fmax(fmax(0.0, b_ul), b_lc);
-        let psi_min = fmax(lo1, lo2);
-        let psi_max = fmin(hi1, hi2);
-        out[j] = fmax(psi_min, fmin(p, psi_max));
     }
 }
 
@@ -466,13 +532,14 @@ pub(crate) fn psi_line_dyn(
     f0: usize,
     out: &mut [f64],
 ) {
+    let side = Upwind::of(&speed.lam[f0..f0 + out.len()]);
     match (order, limited) {
-        (3, true) => psi_line::<3, true, _>(speed, wave, f0, out),
-        (3, false) => psi_line::<3, false, _>(speed, wave, f0, out),
-        (5, true) => psi_line::<5, true, _>(speed, wave, f0, out),
-        (5, false) => psi_line::<5, false, _>(speed, wave, f0, out),
-        (7, true) => psi_line::<7, true, _>(speed, wave, f0, out),
-        (7, false) => psi_line::<7, false, _>(speed, wave, f0, out),
+        (3, true) => psi_line::<3, true, _>(speed, wave, f0, out, side),
+        (3, false) => psi_line::<3, false, _>(speed, wave, f0, out, side),
+        (5, true) => psi_line::<5, true, _>(speed, wave, f0, out, side),
+        (5, false) => psi_line::<5, false, _>(speed, wave, f0, out, side),
+        (7, true) => psi_line::<7, true, _>(speed, wave, f0, out, side),
+        (7, false) => psi_line::<7, false, _>(speed, wave, f0, out, side),
         _ => panic!("osmp order {order} (3, 5 or 7)"),
     }
 }

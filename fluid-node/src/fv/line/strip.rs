@@ -36,7 +36,7 @@ use crate::fv::euler::{
 };
 use crate::fv::isa::FixedVec;
 use crate::fv::osmp::{
-    INTERFACE_PAD, SpeedLine, WaveLine, n_coefficients, psi_line, stencil_radius,
+    INTERFACE_PAD, SpeedLine, Upwind, WaveLine, n_coefficients, psi_line, stencil_radius,
 };
 use face::{FaceInputs, face_loop_on};
 
@@ -587,6 +587,7 @@ fn strip_faces<const ORDER: u32>(
     // Wave k travels at speed [u−c, u+c, u, u, u][k] (`Ψ` into `psi`, whose inactive waves'
     // entries stay 0).
     let nw = n_waves(setup);
+    let sides = (st.speeds.each_ref()).map(|sp| Upwind::of(&sp.lam[f0..f0 + faces.len()]));
     for k in 0..nw {
         let speed = &st.speeds[k.min(2)];
         st.waves[k].fill_products_curvatures(CARRY - 1, nc, ORDER, speed);
@@ -595,6 +596,7 @@ fn strip_faces<const ORDER: u32>(
             &st.waves[k],
             f0,
             &mut psi[k][first..first + faces.len()],
+            sides[k.min(2)],
         );
     }
     // Regular (OSMP) flux at those faces, and whether their linearised star states are
