@@ -85,6 +85,8 @@ mod tests;
 #[cfg(test)]
 mod tests_isa;
 #[cfg(test)]
+mod tests_upwind;
+#[cfg(test)]
 mod tests_vacuum;
 
 pub use comm::{Comm, Serial};
