@@ -436,7 +436,8 @@ pub fn psi_line<const ORDER: u32, const LIMITED: bool, V: Line>(
     let (d4_0, d4_m, d4_p, d4_mm, d4_pp) = (at(4, 0), at(4, -1), at(4, 1), at(4, -o2), at(4, o2));
     let (d5_0, d5_m, d5_p, d5_mm, d5_pp) = (at(5, 0), at(5, -1), at(5, 1), at(5, -o2), at(5, o2));
     let (d5_mmm, d5_ppp) = (at(5, -o3), at(5, o3));
-    // One face `j`, its upwind values read through `$up` (module NOTE below).
+    // `Ψ` at face `j`, its upwind values read through `$up` (`blend`, `above` or `below`,
+    // below).
     macro_rules! face {
         ($j:expr, $up:ident) => {{
             let j = $j;
@@ -465,12 +466,13 @@ pub fn psi_line<const ORDER: u32, const LIMITED: bool, V: Line>(
                 let inv_a0 = inv_lam[j];
                 // Bounds in Ψ space (numerics.md §1.5): 0 ↔ u_j, 2α0 ↔ u_{j+1}, b_md ↔ u^MD,
                 // b_ul ↔ u^UL, b_lc ↔ u^LC.
-                // NOTE: b_ul divides by max(ν_up, ν_0), not by ν_up alone: where a wave stagnates at
-                // the upwind interface (λ_up → 0, a symmetry plane or a stagnation point) α_up is
-                // round-off there and α_up/ν_up is round-off over round-off, which let 1e-14 of noise
-                // move a face's flux by 2e-4 beside the cylinder's symmetry axis (`fv::tests`,
-                // `osmp_bounds_are_well_conditioned_at_a_stagnation_point`). The bound is tighter, so
-                // still TVD; where ν_up ≥ ν_0 (every scalar test) it is Tenaud's.
+                // NOTE: b_ul divides by max(ν_up, ν_0), not by ν_up alone: where a wave
+                // stagnates at the upwind interface (λ_up → 0, a symmetry plane or a stagnation
+                // point) α_up is round-off there and α_up/ν_up is round-off over round-off, which
+                // let 1e-14 of noise move a face's flux by 2e-4 beside the cylinder's symmetry
+                // axis (`fv::tests`, `osmp_bounds_are_well_conditioned_at_a_stagnation_point`).
+                // The bound is tighter, so still TVD; where ν_up ≥ ν_0 (every scalar test) it is
+                // Tenaud's.
                 let b_max = 2.0 * w0;
                 let b_ul = 2.0 * (1.0 - nu_up) * w_up * fmin(up(inv_nu_m, inv_nu_p), inv_nu[j]);
                 let b_md = w0 - dm4[j] * inv_a0;
