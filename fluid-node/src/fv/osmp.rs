@@ -325,7 +325,7 @@ impl<V: Line> WaveLine<V> {
 /// upwind values is one load of that side; elsewhere both sides are loaded and blended by a
 /// mask. The acoustic waves of a subsonic flow, and the entropy and shear waves of gas at rest
 /// or of a flow that does not turn back along the strip, have one side over whole strips: on
-/// the 3-D blast this took 12 % of the `Ψ` code's instructions off (AVX2, docs/performance.md).
+/// the 3-D blast this took 13 % of `osmp.rs`'s instructions off (AVX2, docs/performance.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Upwind {
     /// λ > 0 at every interface: the upwind values are at `f + m`.

@@ -220,10 +220,10 @@ fn a_line_summed_in_one_pass_gives_the_bits_of_its_planes() {
 }
 
 /// The totals weighted by a fluid fraction, on every instruction set, are to the bit (a NaN's
-/// sign aside) those of the scalar loop they replace (`acc[q].add((1 − Λ) × value)` value by value, the cells of a
-/// fraction ≤ 0 left out), in 1, 2 and 3-D: random cells with NaN, infinities and −0, and
-/// fractions covered, cut, empty, beyond 1, below 0 and NaN, from running sums that do not
-/// start at zero.
+/// sign aside) those of the scalar loop they replace (`acc[q].add((1 − Λ) × value)` value by
+/// value, the cells of a fraction ≤ 0 left out), in 1, 2 and 3-D: random cells with NaN,
+/// infinities and −0, and fractions covered, cut, empty, beyond 1, below 0 and NaN, from
+/// running sums that do not start at zero.
 #[test]
 fn weighted_sums_are_the_scalar_loops_to_the_bit() {
     let mut x = 7u64;
